@@ -1,0 +1,150 @@
+"""Planet and Atmosphere objects, and the sampled optical profile that solvers consume.
+
+An atmosphere is a spherical shell of constituents (air, ozone, aerosol, ...). Each constituent
+is separable: coefficient(h, lambda) = density(h) * per_density(lambda), where density(h) is the
+constituent's profile (a number density in m^-3, or a dimensionless relative density) and
+per_density(lambda) an extinction/scattering cross-section (m^2 when the density is a number
+density, m^-1 when it is relative). Separability lets solvers integrate wavelength-free column
+densities along rays and apply all wavelengths at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skyscatter.optics.phase import PhaseFunction
+from skyscatter.spectrum.star import Star
+from skyscatter.spectrum.tabulated import SpectralParameter
+
+__all__ = [
+    "Atmosphere",
+    "Constituent",
+    "ConstituentOptics",
+    "DensityProfile",
+    "OpticalProfile",
+    "Planet",
+]
+
+
+class DensityProfile(Protocol):
+    """Density of one constituent as a function of altitude above the ground."""
+
+    def density(self, altitude_m: ArrayLike) -> np.ndarray:
+        """Density at `altitude_m` [m]; same shape as the input. [m^-3 or relative]"""
+        ...
+
+
+class ConstituentOptics(Protocol):
+    """Optical cross-sections of one unit of a constituent's density."""
+
+    phase: PhaseFunction | None  # None for pure absorbers
+
+    def extinction_per_density(self, wavelengths_nm: np.ndarray) -> np.ndarray:
+        """Extinction per unit density, shape (n_wl,). [m^2 or m^-1]"""
+        ...
+
+    def scattering_per_density(self, wavelengths_nm: np.ndarray) -> np.ndarray:
+        """Scattering per unit density, shape (n_wl,). [m^2 or m^-1]"""
+        ...
+
+
+@dataclass(frozen=True)
+class Constituent:
+    """One constituent: a name, a density profile and its optics."""
+
+    name: str
+    profile: DensityProfile
+    optics: ConstituentOptics
+
+
+@dataclass(frozen=True)
+class Planet:
+    """A spherical planet lit by one star."""
+
+    name: str
+    radius_m: float
+    ground_albedo: SpectralParameter  # Lambertian reflectance [-]
+    star: Star
+
+
+@dataclass(frozen=True)
+class Atmosphere:
+    """A planet with a shell atmosphere from the ground up to `top_altitude_m`."""
+
+    planet: Planet
+    top_altitude_m: float
+    constituents: tuple[Constituent, ...]
+    name: str = "atmosphere"
+    description: str = ""
+    source: str = ""  # file or preset it came from, for messages
+
+    @property
+    def bottom_radius_m(self) -> float:
+        return self.planet.radius_m
+
+    @property
+    def top_radius_m(self) -> float:
+        return self.planet.radius_m + self.top_altitude_m
+
+    def optical_profile(self, wavelengths_nm: ArrayLike,
+                        n_levels: int = 2001) -> OpticalProfile:
+        """Sample every constituent on a uniform altitude grid and a wavelength grid."""
+        wl = np.atleast_1d(np.asarray(wavelengths_nm, dtype=np.float64))
+        altitudes = np.linspace(0.0, self.top_altitude_m, n_levels)
+        density = np.array([c.profile.density(altitudes) for c in self.constituents],
+                           dtype=np.float64).reshape(len(self.constituents), n_levels)
+        extinction = np.array([c.optics.extinction_per_density(wl) for c in self.constituents],
+                              dtype=np.float64).reshape(len(self.constituents), wl.size)
+        scattering = np.array([c.optics.scattering_per_density(wl) for c in self.constituents],
+                              dtype=np.float64).reshape(len(self.constituents), wl.size)
+        return OpticalProfile(
+            wavelengths_nm=wl,
+            bottom_radius_m=self.bottom_radius_m,
+            top_radius_m=self.top_radius_m,
+            altitudes_m=altitudes,
+            density=density,
+            extinction_per_density=extinction,
+            scattering_per_density=scattering,
+            phases=tuple(c.optics.phase for c in self.constituents),
+            names=tuple(c.name for c in self.constituents),
+            ground_albedo=self.planet.ground_albedo.at(wl),
+            toa_irradiance=self.planet.star.irradiance_toa(wl),
+            sun_angular_radius_rad=self.planet.star.angular_radius_rad,
+        )
+
+
+@dataclass(frozen=True)
+class OpticalProfile:
+    """An atmosphere sampled for the solvers: arrays only, SI units, wavelength last.
+
+    extinction(h, lambda) = sum_c density[c, h] * extinction_per_density[c, lambda]  [m^-1]
+    Densities are linearly interpolated between the uniform `altitudes_m` levels.
+    """
+
+    wavelengths_nm: np.ndarray  # (n_wl,) [nm]
+    bottom_radius_m: float
+    top_radius_m: float
+    altitudes_m: np.ndarray  # (n_z,) uniform, from 0 to top [m]
+    density: np.ndarray  # (n_c, n_z) [m^-3 or relative]
+    extinction_per_density: np.ndarray  # (n_c, n_wl) [m^2 or m^-1]
+    scattering_per_density: np.ndarray  # (n_c, n_wl) [m^2 or m^-1]
+    phases: tuple[PhaseFunction | None, ...]  # (n_c,)
+    names: tuple[str, ...]  # (n_c,)
+    ground_albedo: np.ndarray  # (n_wl,) [-]
+    toa_irradiance: np.ndarray  # (n_wl,) normal to the beam at the top [W m^-2 nm^-1]
+    sun_angular_radius_rad: float
+
+    @property
+    def n_wavelengths(self) -> int:
+        return self.wavelengths_nm.size
+
+    def extinction_at(self, altitude_m: ArrayLike) -> np.ndarray:
+        """Total extinction coefficient at `altitude_m`, shape S + (n_wl,). [m^-1]"""
+        h = np.asarray(altitude_m, dtype=np.float64)
+        dens = np.stack([np.interp(h, self.altitudes_m, d, right=0.0) for d in self.density],
+                        axis=-1)
+        return dens @ self.extinction_per_density

@@ -1,0 +1,1 @@
+"""skyscatter.spectrum"""
