@@ -1,0 +1,414 @@
+"""Read an atmosphere from a TOML file or a named preset; docs/config.md documents the schema.
+
+Every value is checked: an unknown key, a wrong type or an out-of-range value raises
+`ConfigError` naming the file, the key, the value and what is allowed.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import difflib
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skyscatter.atmosphere.model import Atmosphere, Constituent, Planet
+from skyscatter.atmosphere.profiles import (
+    ExponentialProfile,
+    LayeredProfile,
+    ProfileLayer,
+    ScaledProfile,
+    TabulatedProfile,
+    vertical_column,
+)
+from skyscatter.errors import ConfigError, InputError
+from skyscatter.optics.absorption import DOBSON_UNIT_M2, AbsorberOptics
+from skyscatter.optics.aerosol import AngstromOptics
+from skyscatter.optics.phase import (
+    CornetteShanksPhase,
+    DoubleHenyeyGreensteinPhase,
+    HenyeyGreensteinPhase,
+    PenndorfPhase,
+    RayleighPhase,
+)
+from skyscatter.optics.rayleigh import RayleighOptics, TabulatedScatteringOptics
+from skyscatter.spectrum.star import AU_M, Star
+from skyscatter.spectrum.tabulated import SpectralParameter
+
+__all__ = ["PRESETS_DIR", "list_presets", "load_atmosphere", "parse_atmosphere"]
+
+PRESETS_DIR = Path(__file__).parent / "presets"
+
+
+def list_presets() -> dict[str, str]:
+    """Preset name -> one-line description, sorted by name."""
+    result = {}
+    for path in sorted(PRESETS_DIR.glob("*.toml")):
+        with path.open("rb") as handle:
+            result[path.stem] = str(tomllib.load(handle).get("description", ""))
+    return result
+
+
+def load_atmosphere(name_or_path: str | Path) -> Atmosphere:
+    """Load a preset by name (`skyscatter presets` lists them) or a TOML file by path."""
+    text = str(name_or_path)
+    path = Path(text)
+    if not path.suffix and not path.exists():
+        path = PRESETS_DIR / f"{text}.toml"
+        if not path.exists():
+            names = sorted(p.stem for p in PRESETS_DIR.glob("*.toml"))
+            close = difflib.get_close_matches(text, names, n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise InputError(f"unknown preset '{text}'{hint} (`skyscatter presets` lists them; "
+                             "or give the path of a .toml file)", key="preset", value=text,
+                             allowed=", ".join(names))
+    if not path.is_file():
+        raise InputError(f"config file '{path}' does not exist", key="config", value=text)
+    try:
+        with path.open("rb") as handle:
+            raw = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(f"not valid TOML: {error}", path=path) from None
+    except OSError as error:
+        raise ConfigError(f"cannot read: {error.strerror}", path=path) from None
+    return parse_atmosphere(raw, path)
+
+
+@dataclasses.dataclass
+class _Table:
+    """One TOML table being read: hands out checked values, then rejects the keys left over."""
+
+    data: dict[str, Any]
+    path: Path
+    prefix: str
+
+    def _key(self, key: str) -> str:
+        return f"{self.prefix}.{key}" if self.prefix else key
+
+    def error(self, key: str, value: Any, allowed: str) -> ConfigError:
+        return ConfigError(f"{self._key(key)} = {value!r} is not allowed: {allowed}",
+                           path=self.path, key=self._key(key), value=value, allowed=allowed)
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def number(self, key: str, default: float | None = None, *, low: float | None = None,
+               high: float | None = None, low_open: bool = False) -> float:
+        if key not in self.data:
+            if default is None:
+                raise ConfigError(f"{self._key(key)} is missing (a number is required)",
+                                  path=self.path, key=self._key(key))
+            return default
+        value = self.data.pop(key)
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(
+                value):
+            raise self.error(key, value, "a finite number")
+        if (low is not None and (value < low or (low_open and value == low))) or (
+                high is not None and value > high):
+            relation = ">" if low_open else ">="
+            parts = ([f"{relation} {low}"] if low is not None else []) + (
+                [f"<= {high}"] if high is not None else [])
+            raise self.error(key, value, "must be " + " and ".join(parts))
+        return float(value)
+
+    def text(self, key: str, default: str | None = None, choices: tuple[str, ...] = ()) -> str:
+        if key not in self.data:
+            if default is None:
+                allowed = f" (one of: {', '.join(choices)})" if choices else ""
+                raise ConfigError(f"{self._key(key)} is missing{allowed}", path=self.path,
+                                  key=self._key(key))
+            return default
+        value = self.data.pop(key)
+        if not isinstance(value, str):
+            raise self.error(key, value, "a string")
+        if choices and value not in choices:
+            raise self.error(key, value, "one of: " + ", ".join(choices))
+        return value
+
+    def flag(self, key: str, default: bool) -> bool:
+        if key not in self.data:
+            return default
+        value = self.data.pop(key)
+        if not isinstance(value, bool):
+            raise self.error(key, value, "true or false")
+        return value
+
+    def table(self, key: str, required: bool = True) -> _Table | None:
+        if key not in self.data:
+            if required:
+                raise ConfigError(f"[{self._key(key)}] is missing", path=self.path,
+                                  key=self._key(key))
+            return None
+        value = self.data.pop(key)
+        if not isinstance(value, dict):
+            raise self.error(key, value, "a table")
+        return _Table(dict(value), self.path, self._key(key))
+
+    def numbers(self, key: str, *, low: float | None = None) -> np.ndarray:
+        value = self.data.pop(key, None)
+        if (not isinstance(value, list) or not value or not all(
+                isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                for v in value)):
+            raise self.error(key, value, "a non-empty list of finite numbers")
+        array = np.asarray(value, dtype=np.float64)
+        if low is not None and np.any(array < low):
+            raise self.error(key, value, f"every value must be >= {low}")
+        return array
+
+    def spectral(self, key: str, default: float | None = None, *, low: float = -math.inf,
+                 high: float = math.inf) -> SpectralParameter:
+        """A number, or {wavelength_nm = [...], value = [...]}."""
+        if key not in self.data:
+            if default is None:
+                raise ConfigError(f"{self._key(key)} is missing", path=self.path,
+                                  key=self._key(key))
+            return SpectralParameter.constant(default)
+        if isinstance(self.data[key], dict):
+            sub = self.table(key)
+            wavelengths = sub.numbers("wavelength_nm", low=1e-9)
+            values = sub.numbers("value")
+            sub.finish()
+            if wavelengths.size != values.size:
+                raise self.error(key, {"wavelength_nm": list(wavelengths),
+                                       "value": list(values)},
+                                 "wavelength_nm and value of the same length")
+            if np.any(values < low) or np.any(values > high):
+                raise self.error(key, list(values), f"values in [{low}, {high}]")
+            return SpectralParameter.table(wavelengths, values)
+        return SpectralParameter.constant(self.number(key, low=low, high=high))
+
+    def finish(self) -> None:
+        """Reject keys nobody asked for, suggesting the closest known one."""
+        for key in self.data:
+            raise ConfigError(f"unknown key {self._key(key)!r}", path=self.path,
+                              key=self._key(key), value=self.data[key])
+
+
+KNOWN_TOP_LEVEL = ("name", "description", "sources", "planet", "star", "atmosphere",
+                   "constituent")
+
+
+def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
+    """Build an Atmosphere from a parsed TOML document (`path` is named in messages and is the
+    base of relative data file paths)."""
+    root = _Table(dict(raw), path, "")
+    name = root.text("name", path.stem)
+    description = root.text("description", "")
+    root.data.pop("sources", None)  # free-form citations, for people
+    planet_table = root.table("planet")
+    radius = planet_table.number("radius_m", low=1.0, low_open=True)
+    albedo = planet_table.spectral("ground_albedo", 0.1, low=0.0, high=1.0)
+    planet_table.finish()
+    star = _parse_star(root.table("star"))
+    atmosphere_table = root.table("atmosphere")
+    top = atmosphere_table.number("top_altitude_m", low=0.0, low_open=True)
+    atmosphere_table.finish()
+    constituents_raw = root.data.pop("constituent", None)
+    if not isinstance(constituents_raw, list) or not constituents_raw:
+        raise ConfigError("[[constituent]] is missing: an atmosphere needs at least one",
+                          path=path, key="constituent")
+    constituents = []
+    for index, item in enumerate(constituents_raw):
+        if not isinstance(item, dict):
+            raise ConfigError(f"constituent[{index}] must be a table", path=path,
+                              key=f"constituent[{index}]")
+        constituents.append(_parse_constituent(_Table(dict(item), path,
+                                                      f"constituent[{index}]"), top))
+    names = [c.name for c in constituents]
+    if len(set(names)) != len(names):
+        raise ConfigError(f"constituent names must be unique, got {names}", path=path,
+                          key="constituent.name")
+    if root.data:
+        key = next(iter(root.data))
+        close = difflib.get_close_matches(key, KNOWN_TOP_LEVEL, n=1)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        raise ConfigError(f"unknown key {key!r}{hint}", path=path, key=key)
+    planet = Planet(name=name, radius_m=radius, ground_albedo=albedo, star=star)
+    return Atmosphere(planet=planet, top_altitude_m=top, constituents=tuple(constituents),
+                      name=name, description=description, source=str(path))
+
+
+def _parse_star(table: _Table) -> Star:
+    kind = table.text("type", "sun", ("sun", "blackbody"))
+    if table.has("distance_au") and table.has("distance_m"):
+        raise table.error("distance_m", table.data["distance_m"],
+                          "give distance_au or distance_m, not both")
+    if table.has("distance_m"):
+        distance = table.number("distance_m", low=0.0, low_open=True)
+    else:
+        distance = table.number("distance_au", 1.0, low=0.0, low_open=True) * AU_M
+    limb = table.flag("limb_darkening", True)
+    try:
+        if kind == "sun":
+            star = Star.sun(distance / AU_M)
+        else:
+            star = Star.blackbody(table.text("name", "star"),
+                                  table.number("temperature_k", low=0.0, low_open=True),
+                                  table.number("radius_m", low=0.0, low_open=True), distance)
+    except InputError as error:
+        raise ConfigError(f"[{table.prefix}] {error}", path=table.path,
+                          key=f"{table.prefix}.{error.key}", value=error.value,
+                          allowed=error.allowed) from None
+    table.finish()
+    return dataclasses.replace(star, limb_darkening=limb)
+
+
+def _parse_constituent(table: _Table, top_m: float) -> Constituent:
+    name = table.text("name")
+    profile = _parse_profile(table.table("density"), top_m)
+    optics_table = table.table("optics")
+    kind = optics_table.text("type", choices=("rayleigh", "absorber", "angstrom", "coefficients"))
+    if kind == "absorber" and table.has("column_dobson"):
+        column = vertical_column(profile, top_m)
+        if column <= 0.0:
+            raise table.error("column_dobson", table.data["column_dobson"],
+                              "the density profile is zero everywhere")
+        target = table.number("column_dobson", low=0.0) * DOBSON_UNIT_M2
+        profile = ScaledProfile(profile, target / column)
+    if kind == "angstrom" and optics_table.has("optical_depth"):
+        column = vertical_column(profile, top_m)
+        if column <= 0.0:
+            raise optics_table.error("optical_depth", optics_table.data["optical_depth"],
+                                     "the density profile is zero everywhere")
+        profile = ScaledProfile(profile, 1.0 / column)  # unit column: per density = tau
+    optics = _parse_optics(kind, optics_table)
+    table.finish()
+    return Constituent(name=name, profile=profile, optics=optics)
+
+
+def _parse_profile(table: _Table, top_m: float) -> object:
+    kind = table.text("type", choices=("exponential", "layers", "table"))
+    if kind == "exponential":
+        profile = ExponentialProfile(table.number("scale_height_m", low=0.0, low_open=True),
+                                     table.number("surface_density", 1.0, low=0.0))
+    elif kind == "layers":
+        layers_raw = table.data.pop("layers", None)
+        if not isinstance(layers_raw, list) or not layers_raw:
+            raise table.error("layers", layers_raw, "a non-empty list of layer tables")
+        layers = []
+        for index, item in enumerate(layers_raw):
+            if not isinstance(item, dict):
+                raise table.error(f"layers[{index}]", item, "a table")
+            layer = _Table(dict(item), table.path, f"{table.prefix}.layers[{index}]")
+            layers.append(ProfileLayer(
+                top_altitude_m=layer.number("top_altitude_m", math.inf),
+                exp_term=layer.number("exp_term", 0.0),
+                exp_scale_per_m=layer.number("exp_scale_per_m", 0.0),
+                linear_per_m=layer.number("linear_per_m", 0.0),
+                constant=layer.number("constant", 0.0)))
+            layer.finish()
+        profile = ScaledProfile(LayeredProfile(tuple(layers)),
+                                table.number("peak_density", 1.0, low=0.0))
+    else:
+        altitudes, values = _profile_table(table)
+        interpolation = table.text("interpolation", "log", ("log", "linear"))
+        profile = TabulatedProfile(tuple(altitudes), tuple(values), interpolation)
+    table.finish()
+    return profile
+
+
+def _profile_table(table: _Table) -> tuple[np.ndarray, np.ndarray]:
+    """Altitude [m] and density columns, inline or from a CSV next to the config."""
+    if table.has("file"):
+        name = table.text("file")
+        csv_path = (table.path.parent / name).resolve()
+        try:
+            with csv_path.open(newline="") as handle:
+                rows = [row for row in csv.reader(handle)
+                        if row and not row[0].lstrip().startswith("#")]
+            header, body = rows[0], rows[1:]
+            altitude_column = header.index("altitude_m")
+            density_column = 1 - altitude_column if len(header) == 2 else header.index(
+                table.text("column", "number_density_m3"))
+            altitudes = np.array([float(r[altitude_column]) for r in body])
+            values = np.array([float(r[density_column]) for r in body])
+        except OSError as error:
+            raise table.error("file", name, f"a readable CSV file ({error.strerror})") from None
+        except (ValueError, IndexError):
+            raise table.error("file", name, "a CSV with a header 'altitude_m,<density column>' "
+                              "and numeric rows") from None
+    else:
+        altitudes = table.numbers("altitude_m")
+        values = table.numbers("value", low=0.0)
+    if altitudes.size != values.size or altitudes.size < 2 or np.any(np.diff(altitudes) <= 0):
+        raise table.error("altitude_m", list(altitudes),
+                          "at least 2 strictly increasing altitudes, one value each")
+    if np.any(values < 0) or not np.all(np.isfinite(values)):
+        raise table.error("value", list(values), "finite densities >= 0")
+    return altitudes, values
+
+
+def _parse_phase(table: _Table | None, default: str | None = None) -> object:
+    if table is None:
+        if default is None:
+            return None
+        return {"rayleigh": RayleighPhase, "penndorf": PenndorfPhase}[default]()
+    kind = table.text("type", choices=("rayleigh", "penndorf", "henyey-greenstein",
+                                       "double-henyey-greenstein", "cornette-shanks"))
+    open_unit = {"low": -0.999999, "high": 0.999999}
+    if kind == "rayleigh":
+        phase = RayleighPhase()
+    elif kind == "penndorf":
+        phase = PenndorfPhase()
+    elif kind == "henyey-greenstein":
+        phase = HenyeyGreensteinPhase(table.spectral("g", **open_unit))
+    elif kind == "cornette-shanks":
+        phase = CornetteShanksPhase(table.spectral("g", **open_unit))
+    else:
+        phase = DoubleHenyeyGreensteinPhase(table.spectral("g1", **open_unit),
+                                            table.spectral("g2", **open_unit),
+                                            table.spectral("alpha", low=0.0, high=1.0))
+    table.finish()
+    return phase
+
+
+def _parse_optics(kind: str, table: _Table) -> object:
+    try:
+        if kind == "rayleigh":
+            depolarization = (table.number("depolarization", low=0.0, high=0.5)
+                              if table.has("depolarization") else None)
+            optics = RayleighOptics(
+                gas=table.text("gas", "air"),
+                king=table.text("king_factor", "bodhaine-1999"),
+                depolarization=depolarization,
+                co2_ppm=table.number("co2_ppm", 360.0, low=0.0),
+                phase=table.text("phase", "rayleigh", ("rayleigh", "penndorf")))
+        elif kind == "absorber":
+            if table.has("cross_section") and isinstance(table.data["cross_section"], str):
+                cross_section = table.text("cross_section")
+            else:
+                cross_section = table.spectral("cross_section", low=0.0)
+            optics = AbsorberOptics(cross_section)
+        elif kind == "angstrom":
+            if table.has("optical_depth") == table.has("extinction_per_m"):
+                raise ConfigError(f"{table.prefix}: give exactly one of optical_depth "
+                                  "(vertical, at the reference wavelength) or extinction_per_m "
+                                  "(at density 1)", path=table.path,
+                                  key=f"{table.prefix}.optical_depth")
+            extinction = (table.number("optical_depth", low=0.0) if table.has("optical_depth")
+                          else table.number("extinction_per_m", low=0.0))
+            optics = AngstromOptics(
+                extinction_at_reference=extinction,
+                reference_wavelength_nm=table.number("reference_wavelength_nm", 550.0, low=0.0,
+                                                     low_open=True),
+                angstrom_exponent=table.number("angstrom_exponent", 0.0),
+                single_scattering_albedo=table.spectral("single_scattering_albedo", 1.0,
+                                                        low=0.0, high=1.0),
+                phase=_parse_phase(table.table("phase", required=False), "rayleigh"))
+        else:
+            scattering = table.spectral("scattering_per_m", low=0.0)
+            extinction = (table.spectral("extinction_per_m", low=0.0)
+                          if table.has("extinction_per_m") else None)
+            optics = TabulatedScatteringOptics(
+                scattering, extinction, _parse_phase(table.table("phase", required=False),
+                                                     "rayleigh"))
+    except InputError as error:
+        raise ConfigError(f"{table.prefix}: {error}", path=table.path,
+                          key=f"{table.prefix}.{error.key}", value=error.value,
+                          allowed=error.allowed) from None
+    table.finish()
+    return optics

@@ -1,0 +1,196 @@
+"""Image files: OpenEXR for linear HDR data, PNG for display images.
+
+EXR goes through the OpenEXR 3.x Python bindings (`OpenEXR.File`), never imageio: each
+channel is written as its own scanline channel ("R", "G", "B" or "Y", ...), ZIP-compressed,
+float32 (float16 arrays stay half), so other tools see a standard RGB or luminance image.
+PNG goes through Pillow. No timestamps are written: the same image gives the same bytes.
+
+Every writer is atomic: it writes a temporary file in the target directory
+(`tempfile.mkstemp`), then `os.replace`s it onto the target, so a reader never sees a partial
+file and a failed write leaves the previous file as it was. Missing parent directories are
+created. A path that cannot be written raises `InputError("cannot write <path>: <reason>")`.
+
+Sources: OpenEXR file layout and standard attributes, "Reading and Writing OpenEXR Image
+Files with the OpenEXR Library" (openexr.com); PNG, ISO/IEC 15948:2004.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import tempfile
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+from numpy.typing import ArrayLike
+from PIL import Image, PngImagePlugin
+
+from skyscatter.errors import InputError
+
+__all__ = ["read_exr", "read_exr_attributes", "write_exr", "write_png"]
+
+_DEFAULT_CHANNELS = {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}
+# Channels read back in this order; any others follow in the file's (alphabetical) order.
+_CANONICAL_ORDER = ("R", "G", "B", "A")
+# Header entries OpenEXR manages itself; user attributes may not replace them.
+_RESERVED_ATTRIBUTES = frozenset({
+    "channels", "compression", "dataWindow", "displayWindow", "lineOrder", "pixelAspectRatio",
+    "screenWindowCenter", "screenWindowWidth", "type", "tiles", "name", "version", "chunkCount",
+})
+
+
+@functools.cache
+def _umask() -> int:
+    """The process umask (read once; there is no way to read it without setting it)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _atomic_write(path: str | os.PathLike[str], write: Callable[[str], None]) -> Path:
+    """Call `write(temporary_path)`, then rename the result onto `path`; clean up on failure."""
+    target = Path(path)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(suffix=target.suffix, prefix=f".{target.name}.",
+                                   dir=target.parent)
+    except OSError as exc:
+        raise InputError(f"cannot write {target}: {exc.strerror or exc}", key="path",
+                         value=str(target)) from exc
+    os.close(fd)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual file mode
+        os.replace(tmp, target)
+    except BaseException as exc:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        if isinstance(exc, (OSError, RuntimeError)):
+            reason = getattr(exc, "strerror", None) or str(exc)
+            raise InputError(f"cannot write {target}: {reason}", key="path",
+                             value=str(target)) from exc
+        raise
+    return target
+
+
+def write_exr(path: str | os.PathLike[str], image: ArrayLike,
+              channel_names: Sequence[str] | None = None,
+              attributes: Mapping[str, str] | None = None) -> Path:
+    """Write a linear image to an OpenEXR file (scanline, ZIP), atomically.
+
+    Parameters
+    ----------
+    path : path-like
+        Target file; parent directories are created.
+    image : array_like, shape (h, w, c)
+        Pixel values, stored as float32 (float16 input stays half). Linear units of the
+        caller's choice, e.g. radiance [W m⁻² sr⁻¹] or luminance [cd m⁻²]; say which in
+        `attributes`.
+    channel_names : sequence of str, length c, optional
+        Default ("Y",), ("R", "G", "B") or ("R", "G", "B", "A") for c = 1, 3, 4.
+    attributes : mapping of str to str, optional
+        Extra string attributes for the header (e.g. {"units": "cd/m^2"}).
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    arr = np.asarray(image)
+    if arr.ndim != 3 or arr.shape[0] < 1 or arr.shape[1] < 1 or arr.shape[2] < 1:
+        raise InputError(f"an EXR image must have shape (height, width, channels), got "
+                         f"{arr.shape}", key="image", value=arr.shape)
+    if not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
+        raise InputError(f"an EXR image must hold numbers, got dtype {arr.dtype}",
+                         key="image", value=str(arr.dtype))
+    arr = arr if arr.dtype == np.float16 else arr.astype(np.float32, copy=False)
+    if channel_names is None:
+        if arr.shape[2] not in _DEFAULT_CHANNELS:
+            raise InputError(f"give channel_names for an image with {arr.shape[2]} channels",
+                             key="channel_names", value=None)
+        channel_names = _DEFAULT_CHANNELS[arr.shape[2]]
+    names = tuple(channel_names)
+    if (len(names) != arr.shape[2] or len(set(names)) != len(names)
+            or not all(isinstance(n, str) and n for n in names)):
+        raise InputError(f"channel_names {names!r} must be {arr.shape[2]} distinct non-empty "
+                         "strings, one per channel", key="channel_names", value=names)
+    header: dict[str, object] = {"compression": OpenEXR.ZIP_COMPRESSION,
+                                 "type": OpenEXR.scanlineimage}
+    for key, value in (attributes or {}).items():
+        if not isinstance(key, str) or not isinstance(value, str) or key in _RESERVED_ATTRIBUTES:
+            raise InputError(f"EXR attribute {key!r}: {value!r} must map a string that is not a "
+                             f"standard header name to a string", key="attributes", value=key)
+        header[key] = value
+    channels = {name: np.ascontiguousarray(arr[..., k]) for k, name in enumerate(names)}
+    return _atomic_write(path, lambda tmp: OpenEXR.File(header, channels).write(tmp))
+
+
+def _open_exr(path: str | os.PathLike[str]) -> OpenEXR.File:
+    source = Path(path)
+    if not source.is_file():
+        raise InputError(f"cannot read {source}: no such file", key="path", value=str(source))
+    try:
+        return OpenEXR.File(str(source), separate_channels=True)
+    except RuntimeError as exc:
+        raise InputError(f"cannot read {source}: not a readable OpenEXR file ({exc})",
+                         key="path", value=str(source)) from exc
+
+
+def read_exr(path: str | os.PathLike[str]) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Read the first part of an OpenEXR file.
+
+    Returns
+    -------
+    image : ndarray, shape (h, w, c), float32
+        Channel values as stored (half channels are widened to float32).
+    channel_names : tuple of str, length c
+        R, G, B, A first in that order when present, then the others in file order
+        (OpenEXR stores channels alphabetically).
+    """
+    exr = _open_exr(path)
+    channels = exr.channels()
+    names = tuple([n for n in _CANONICAL_ORDER if n in channels]
+                  + [n for n in channels if n not in _CANONICAL_ORDER])
+    planes = [np.asarray(channels[n].pixels) for n in names]
+    if any(p.shape != planes[0].shape or p.ndim != 2 for p in planes):
+        raise InputError(f"cannot read {path}: subsampled or non-scalar channels are not "
+                         "supported", key="path", value=str(path))
+    return np.stack(planes, axis=-1).astype(np.float32, copy=False), names
+
+
+def read_exr_attributes(path: str | os.PathLike[str]) -> dict[str, str]:
+    """String attributes of an OpenEXR file's header (those `write_exr` stores)."""
+    header = _open_exr(path).header()
+    return {k: v for k, v in header.items() if isinstance(v, str) and k not in _RESERVED_ATTRIBUTES}
+
+
+def write_png(path: str | os.PathLike[str], rgb8: ArrayLike,
+              text: Mapping[str, str] | None = None) -> Path:
+    """Write an 8-bit sRGB image to a PNG file, atomically.
+
+    Parameters
+    ----------
+    path : path-like
+        Target file; parent directories are created.
+    rgb8 : array_like of uint8, shape (h, w, 3) or (h, w, 4)
+        sRGB-encoded codes (see `tonemap.to_srgb8`); a 4th channel is alpha.
+    text : mapping of str to str, optional
+        PNG tEXt chunks (e.g. {"Software": "skyscatter", "Description": ...}).
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    arr = np.asarray(rgb8)
+    if arr.dtype != np.uint8 or arr.ndim != 3 or arr.shape[2] not in (3, 4) or 0 in arr.shape:
+        raise InputError(f"a PNG image must be uint8 of shape (height, width, 3 or 4), got "
+                         f"{arr.dtype} {arr.shape}", key="rgb8", value=(str(arr.dtype), arr.shape))
+    info = PngImagePlugin.PngInfo()
+    for key, value in (text or {}).items():
+        info.add_text(str(key), str(value))
+    picture = Image.fromarray(np.ascontiguousarray(arr))  # uint8 (h, w, 3|4) -> RGB|RGBA
+    return _atomic_write(path, lambda tmp: picture.save(tmp, format="PNG", pnginfo=info))

@@ -1,0 +1,194 @@
+"""Exposure, tone mapping and 8-bit sRGB encoding of linear RGB images.
+
+The chain is: linear RGB in absolute units (luminance Y in cd m⁻²)
+  × `exposure_scale(ev100)` (photographic exposure: 1 at the sensor's clipping level)
+  → `tonemap(..., operator)` (compress [0, ∞) into display-linear [0, 1])
+  → `to_srgb8` (sRGB transfer function, 8-bit quantisation).
+
+Sources:
+
+* Exposure from EV100, saturation-based sensitivity: L_max = 78 / (q S) · N² / t with lens
+  and vignetting factor q = 0.65 and S = 100 ISO, so L_max = 1.2 · 2^EV100 [cd m⁻²] and the
+  exposure scale is 1 / L_max. Lagarde & de Rousiers (2014), "Moving Frostbite to Physically
+  Based Rendering 3.0", SIGGRAPH course notes, section on the physically based camera;
+  ISO 12232 (saturation-based speed).
+* Automatic exposure: a reflected-light meter sets N² / t = L S / K with calibration constant
+  K = 12.5 cd s m⁻² (ISO 2720:1974 allows 10.6–13.4; 12.5 is the usual maker's choice), so
+  EV100 = log2(L_avg · 100 / 12.5). The metered scene luminance then lands at
+  K q / 78 = 12.5 · 0.65 / 78 = 1/9.6 ≈ 0.104 of the clipping level.
+  L_avg is the log-average (geometric mean) luminance of Reinhard et al. (2002), "Photographic
+  tone reproduction for digital images", ACM TOG 21(3), 267, eq. 1, doi:10.1145/566654.566575;
+  departure: pixels with zero luminance are left out instead of adding a small δ, so the
+  result does not depend on δ.
+* Operators: `exponential` 1 − exp(−x) (Bruneton 2017, precomputed_atmospheric_scattering demo,
+  without its 1/2.2 gamma); `aces` x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14) clipped to
+  [0, 1] (Narkowicz 2016, "ACES Filmic Tone Mapping Curve", blog post of 2016-01-06, a fit to
+  the ACES RRT + Rec.709 ODT); `reinhard` x / (1 + x) (Reinhard et al. 2002, eq. 3);
+  `clamp` min(x, 1).
+* sRGB transfer function (OETF): V = 12.92 L for L ≤ 0.0031308, else 1.055 L^(1/2.4) − 0.055
+  (IEC 61966-2-1:1999, sRGB encoding); 8-bit code = round(255 V).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skyscatter.errors import InputError
+
+__all__ = [
+    "OPERATORS",
+    "METER_CALIBRATION_K",
+    "aces_narkowicz2016",
+    "auto_ev100",
+    "clamp",
+    "encode_srgb_transfer",
+    "exponential",
+    "exposure_scale",
+    "reinhard",
+    "to_srgb8",
+    "tonemap",
+]
+
+METER_CALIBRATION_K = 12.5  # cd s m⁻², reflected-light meter calibration constant (ISO 2720)
+_ISO_SPEED = 100.0  # EV100 is defined for ISO 100
+_SATURATION_FACTOR = 78.0 / (0.65 * _ISO_SPEED)  # = 1.2; 78/(q S), q = 0.65 (Lagarde 2014)
+_LARGEST_INPUT = 1e150  # inputs are clipped here so x² stays finite in float64
+
+
+def exposure_scale(ev100: float, compensation_ev: float = 0.0) -> float:
+    """Factor that takes luminance [cd m⁻²] to exposure relative to clipping [-].
+
+    scale = 2^compensation / (1.2 · 2^EV100)   (Lagarde & de Rousiers 2014)
+
+    Parameters
+    ----------
+    ev100 : float
+        Exposure value at ISO 100; higher for brighter scenes (≈ 15 for a sunny day). [EV]
+    compensation_ev : float
+        Exposure compensation; +1 doubles the output (one stop brighter). [EV]
+    """
+    ev100 = float(ev100)
+    compensation_ev = float(compensation_ev)
+    if not (np.isfinite(ev100) and np.isfinite(compensation_ev)):
+        raise InputError(f"ev100 = {ev100!r} and compensation_ev = {compensation_ev!r} must be "
+                         "finite", key="ev100", value=ev100)
+    return float(2.0 ** (compensation_ev - ev100) / _SATURATION_FACTOR)
+
+
+def auto_ev100(luminance: ArrayLike, valid: ArrayLike | None = None) -> float:
+    """EV100 a reflected-light meter would choose for the scene. [EV]
+
+    EV100 = log2(L_avg · S / K), S = 100, K = 12.5 (ISO 2720), with L_avg the geometric mean
+    of the finite, positive luminances where `valid` is True. With `exposure_scale`, a uniform
+    scene of luminance L maps to 1/9.6 ≈ 0.104 whatever L is.
+
+    Parameters
+    ----------
+    luminance : array_like, any shape
+        Luminance, e.g. an image (h, w). [cd m⁻²]
+    valid : array_like of bool, broadcastable to `luminance`, optional
+        Pixels to meter (e.g. the fisheye circle); all pixels when None.
+    """
+    lum = np.asarray(luminance, dtype=np.float64)
+    use = np.isfinite(lum) & (lum > 0.0)
+    if valid is not None:
+        use &= np.broadcast_to(np.asarray(valid, dtype=bool), lum.shape)
+    if not np.any(use):
+        raise InputError("cannot meter the exposure: no valid pixel has a positive luminance; "
+                         "give an explicit EV100 instead", key="luminance")
+    log_average = float(np.exp(np.mean(np.log(lum[use]))))
+    return float(np.log2(log_average * _ISO_SPEED / METER_CALIBRATION_K))
+
+
+def exponential(x: ArrayLike) -> np.ndarray:
+    """1 − exp(−x) [-] (Bruneton 2017 demo); x ≥ 0 exposed linear values, same shape out."""
+    return -np.expm1(-np.asarray(x, dtype=np.float64))
+
+
+def aces_narkowicz2016(x: ArrayLike) -> np.ndarray:
+    """Narkowicz (2016) fit of the ACES filmic curve, clipped to [0, 1] [-]; same shape out.
+
+    f(x) = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14); f(0) = 0, f(1) ≈ 0.804,
+    f(∞) = 2.51 / 2.43 > 1, hence the clip. Meant for x ≥ 0.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    return np.clip(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0)
+
+
+def reinhard(x: ArrayLike) -> np.ndarray:
+    """x / (1 + x) [-] (Reinhard et al. 2002, eq. 3); x ≥ 0, same shape out."""
+    x = np.asarray(x, dtype=np.float64)
+    return x / (1.0 + x)
+
+
+def clamp(x: ArrayLike) -> np.ndarray:
+    """Linear, clipped to [0, 1] [-]; same shape out."""
+    return np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
+
+
+OPERATORS: dict[str, Callable[[ArrayLike], np.ndarray]] = {
+    "aces": aces_narkowicz2016,
+    "clamp": clamp,
+    "exponential": exponential,
+    "reinhard": reinhard,
+}
+
+
+def tonemap(linear_rgb: ArrayLike, operator: str = "aces", exposure: float = 1.0) -> np.ndarray:
+    """Display-linear values in [0, 1] from exposed linear RGB, channel by channel.
+
+    Parameters
+    ----------
+    linear_rgb : array_like, shape (..., 3) (any shape works)
+        Linear RGB; usually luminance-scaled values times `exposure_scale(...)`. Negative
+        values (colours outside the RGB gamut) are clipped to 0 first. [-]
+    operator : str
+        One of `OPERATORS`: "aces", "clamp", "exponential", "reinhard".
+    exposure : float
+        Extra factor applied before the operator. [-]
+
+    Returns
+    -------
+    ndarray, float64, same shape
+        Display-linear values in [0, 1] (NaN stays NaN). [-]
+    """
+    try:
+        curve = OPERATORS[operator]
+    except (KeyError, TypeError):
+        names = ", ".join(sorted(OPERATORS))
+        raise InputError(f"unknown tone-mapping operator {operator!r}; choose one of: {names}",
+                         key="operator", value=operator, allowed=names) from None
+    x = np.asarray(linear_rgb, dtype=np.float64) * float(exposure)
+    return curve(np.clip(x, 0.0, _LARGEST_INPUT))
+
+
+def encode_srgb_transfer(linear: ArrayLike) -> np.ndarray:
+    """sRGB OETF (IEC 61966-2-1): display-linear [0, 1] → encoded [0, 1]; same shape out.
+
+    V = 12.92 L for L ≤ 0.0031308, else 1.055 L^(1/2.4) − 0.055. Inputs are clipped to [0, 1].
+    """
+    lin = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
+    return np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * lin ** (1.0 / 2.4) - 0.055)
+
+
+def to_srgb8(display_linear_rgb: ArrayLike) -> np.ndarray:
+    """8-bit sRGB codes round(255 · OETF(L)) from display-linear values in [0, 1].
+
+    Parameters
+    ----------
+    display_linear_rgb : array_like, shape (h, w, 3) (any shape works)
+        Output of `tonemap`; values outside [0, 1] are clipped. [-]
+
+    Returns
+    -------
+    ndarray of uint8, same shape
+    """
+    lin = np.asarray(display_linear_rgb, dtype=np.float64)
+    bad = np.count_nonzero(np.isnan(lin))
+    if bad:
+        raise InputError(f"cannot encode an image with {bad} NaN values to 8-bit sRGB",
+                         key="display_linear_rgb", value=f"{bad} NaN")
+    return np.rint(encode_srgb_transfer(lin) * 255.0).astype(np.uint8)

@@ -1,0 +1,290 @@
+"""Numba kernels of the single-scattering solver: column densities and in-scattering.
+
+Conventions (docs/physics/single_scattering.md):
+- A constituent's density is linearly interpolated between uniform altitude levels
+  h_k = k * h_step, k = 0..n_z-1, and is zero above the top.
+- Along a ray, samples are dense near the lowest point of the segment (the tangent point, or
+  an end): the segment is split at the tangent point and each part is sampled at
+  t = t_low +- length * (k / m)^2, so exponential profiles are resolved near the ground for
+  observers on the ground and in space alike. Integrals use the trapezoid rule on these samples.
+- Columns to the sun are read from a table over (r, mu_s) in Bruneton's transmittance
+  parameterisation (x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min); Bruneton 2017,
+  functions.glsl `GetTransmittanceTextureUvFromRMu`), built once per atmosphere.
+Kernels take arrays and floats only; `transport/reference_numpy.py` holds slow literal twins.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skyscatter.transport.geometry import (
+    atmosphere_segment,
+    distance_to_sphere,
+    horizon_cos_zenith,
+    sun_visible_fraction,
+)
+
+
+@njit(cache=True)
+def density_at(altitude, h_step, density, out):
+    """Densities of all constituents at `altitude` [m] into out (n_c,)."""
+    n_z = density.shape[1]
+    x = altitude / h_step
+    if x <= 0.0:
+        for c in range(density.shape[0]):
+            out[c] = density[c, 0]
+        return
+    k = int(x)
+    if k >= n_z - 1:
+        for c in range(density.shape[0]):
+            out[c] = density[c, n_z - 1] if x <= n_z - 1 + 1e-9 else 0.0
+        return
+    f = x - k
+    for c in range(density.shape[0]):
+        out[c] = density[c, k] * (1.0 - f) + density[c, k + 1] * f
+
+
+@njit(cache=True)
+def split_sample_count(r, mu, t_start, t_end, n_samples):
+    """(t_split, m1, m2): the segment [t_start, t_end] is split at the tangent point -r mu when
+    it lies inside; m1 and m2 samples (intervals) go to the parts before and after it."""
+    t_tangent = -r * mu
+    if t_tangent <= t_start or t_tangent >= t_end:
+        return (t_start if t_tangent <= t_start else t_end), 0, 0
+    m1 = max(2, int(round(n_samples * (t_tangent - t_start) / (t_end - t_start))))
+    m2 = max(2, n_samples - m1)
+    return t_tangent, m1, m2
+
+
+@njit(cache=True)
+def sample_distance(j, r, mu, t_start, t_end, n_samples, t_split, m1, m2):
+    """Distance of sample j (0..n_total-1, increasing) along the segment; see module doc."""
+    if m1 > 0:
+        if j <= m1:
+            k = m1 - j
+            return t_split - (t_split - t_start) * (k / m1) ** 2
+        k = j - m1
+        return t_split + (t_end - t_split) * (k / m2) ** 2
+    if t_split <= t_start:  # lowest point at the start: dense near the start
+        return t_start + (t_end - t_start) * (j / n_samples) ** 2
+    k = n_samples - j  # lowest point at the end: dense near the end
+    return t_end - (t_end - t_start) * (k / n_samples) ** 2
+
+
+@njit(cache=True)
+def sample_total(m1, m2, n_samples):
+    """Number of sample points for a segment split as returned by `split_sample_count`."""
+    return (m1 + m2 + 1) if m1 > 0 else (n_samples + 1)
+
+
+@njit(cache=True)
+def columns_along_segment(r, mu, t_start, t_end, n_samples, bottom_radius, h_step, density,
+                          out):
+    """Column densities [density x m] of each constituent along the ray (r, mu) between
+    t_start and t_end, into out (n_c,)."""
+    n_c = density.shape[0]
+    for c in range(n_c):
+        out[c] = 0.0
+    if t_end <= t_start:
+        return
+    t_split, m1, m2 = split_sample_count(r, mu, t_start, t_end, n_samples)
+    total = sample_total(m1, m2, n_samples)
+    previous = np.empty(n_c)
+    current = np.empty(n_c)
+    t_prev = 0.0
+    for j in range(total):
+        t = sample_distance(j, r, mu, t_start, t_end, n_samples, t_split, m1, m2)
+        radius = math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
+        density_at(radius - bottom_radius, h_step, density, current)
+        if j > 0:
+            dt = t - t_prev
+            for c in range(n_c):
+                out[c] += 0.5 * (previous[c] + current[c]) * dt
+        for c in range(n_c):
+            previous[c] = current[c]
+        t_prev = t
+
+
+@njit(cache=True)
+def sun_table_mu(x_r, x_mu, bottom_radius, top_radius):
+    """Inverse of the transmittance parameterisation: (x_r, x_mu) in [0, 1] -> (r, mu)."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = big_h * x_r
+    r = math.sqrt(rho * rho + bottom_radius * bottom_radius)
+    d_min = top_radius - r
+    d_max = rho + big_h
+    d = d_min + x_mu * (d_max - d_min)
+    if d <= 0.0:
+        return r, 1.0
+    mu = (big_h * big_h - rho * rho - d * d) / (2.0 * r * d)
+    return r, min(1.0, max(-1.0, mu))
+
+
+@njit(cache=True)
+def sun_table_coordinates(r, mu, bottom_radius, top_radius):
+    """(r, mu) -> (x_r, x_mu) in [0, 1], for rays that do not hit the ground."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
+    d = max(distance_to_sphere(r, mu, top_radius, True), 0.0)
+    d_min = top_radius - r
+    d_max = rho + big_h
+    x_mu = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
+    return min(1.0, max(0.0, rho / big_h)), min(1.0, max(0.0, x_mu))
+
+
+@njit(parallel=True, cache=True)
+def build_sun_column_table(n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density):
+    """Columns to the top of the atmosphere, table (n_c, n_r, n_mu) on the (x_r, x_mu) grid."""
+    n_c = density.shape[0]
+    table = np.empty((n_c, n_r, n_mu))
+    for index in prange(n_r * n_mu):
+        i = index // n_mu
+        j = index % n_mu
+        r, mu = sun_table_mu(i / (n_r - 1), j / (n_mu - 1), bottom_radius, top_radius)
+        t_end = distance_to_sphere(r, mu, top_radius, True)
+        out = np.empty(n_c)
+        columns_along_segment(r, mu, 0.0, max(t_end, 0.0), n_samples, bottom_radius, h_step,
+                              density, out)
+        for c in range(n_c):
+            table[c, i, j] = out[c]
+    return table
+
+
+@njit(cache=True)
+def sun_columns(r, mu_s, bottom_radius, top_radius, table, out):
+    """Columns from radius r towards the sun (zenith cosine mu_s) to the top, into out (n_c,).
+    Below the horizon the horizon ray's column is used; `sun_visible_fraction` cuts the light."""
+    mu = max(mu_s, horizon_cos_zenith(r, bottom_radius))
+    x_r, x_mu = sun_table_coordinates(r, mu, bottom_radius, top_radius)
+    n_r = table.shape[1]
+    n_mu = table.shape[2]
+    fr = x_r * (n_r - 1)
+    fm = x_mu * (n_mu - 1)
+    i = min(int(fr), n_r - 2)
+    j = min(int(fm), n_mu - 2)
+    a = fr - i
+    b = fm - j
+    for c in range(table.shape[0]):
+        out[c] = ((1.0 - a) * ((1.0 - b) * table[c, i, j] + b * table[c, i, j + 1])
+                  + a * ((1.0 - b) * table[c, i + 1, j] + b * table[c, i + 1, j + 1]))
+
+
+RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loop
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def single_scattering(origins, directions, sun_direction, n_samples, bottom_radius, top_radius,
+                      h_step, density, extinction, sun_table, sun_angular_radius):
+    """Single scattering along many rays with one sun direction.
+
+    Returns
+    - inscatter (n_ray, n_c, n_wl): integral over the ray of T(x, p) density_c(p) T_sun(p) ds
+      [density x m]; radiance = E_sun * sum_c scattering_c * phase_c(nu) * inscatter_c.
+    - transmittance (n_ray, n_wl): along the whole segment inside the atmosphere [-].
+    - ground (n_ray, n_wl): T(x, g) T_sun(g) max(mu_s(g), 0) at the ground hit g (0 if the ray
+      misses the ground); Lambertian radiance = E_sun * albedo / pi * ground.
+    """
+    n_ray = origins.shape[0]
+    n_c, n_wl = extinction.shape
+    inscatter = np.zeros((n_ray, n_c, n_wl))
+    transmittance = np.ones((n_ray, n_wl))
+    ground = np.zeros((n_ray, n_wl))
+    n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
+    for block in prange(n_blocks):
+        view_column = np.empty(n_c)
+        dens_prev = np.empty(n_c)
+        dens = np.empty(n_c)
+        sun_col = np.empty(n_c)
+        tau = np.empty(n_wl)
+        attenuation = np.empty(n_wl)
+        integrand_prev = np.empty((n_c, n_wl))
+        for i in range(block * RAYS_PER_BLOCK, min(n_ray, (block + 1) * RAYS_PER_BLOCK)):
+            ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
+            dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
+            r = math.sqrt(ox * ox + oy * oy + oz * oz)
+            mu = (ox * dx + oy * dy + oz * dz) / r
+            mu_s0 = (ox * sun_direction[0] + oy * sun_direction[1] + oz * sun_direction[2]) / r
+            nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
+            t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+            if t_end <= t_start:
+                continue
+            t_split, m1, m2 = split_sample_count(r, mu, t_start, t_end, n_samples)
+            total = sample_total(m1, m2, n_samples)
+            view_column[:] = 0.0
+            sun_col[:] = 0.0
+            integrand_prev[:, :] = 0.0
+            t_prev = 0.0
+            mu_s = mu_s0
+            for j in range(total):
+                t = sample_distance(j, r, mu, t_start, t_end, n_samples, t_split, m1, m2)
+                radius = math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
+                density_at(radius - bottom_radius, h_step, density, dens)
+                dt = t - t_prev
+                if j > 0:
+                    for c in range(n_c):
+                        view_column[c] += 0.5 * (dens_prev[c] + dens[c]) * dt
+                mu_s = (r * mu_s0 + t * nu) / radius
+                visible = sun_visible_fraction(radius, mu_s, bottom_radius, sun_angular_radius)
+                if visible > 0.0:
+                    sun_columns(radius, mu_s, bottom_radius, top_radius, sun_table, sun_col)
+                tau[:] = 0.0
+                for c in range(n_c):
+                    column = view_column[c] + sun_col[c]
+                    for w in range(n_wl):
+                        tau[w] += extinction[c, w] * column
+                for w in range(n_wl):
+                    attenuation[w] = math.exp(-tau[w]) * visible
+                for c in range(n_c):
+                    weight = 0.5 * dt if j > 0 else 0.0
+                    for w in range(n_wl):
+                        value = dens[c] * attenuation[w]
+                        inscatter[i, c, w] += weight * (integrand_prev[c, w] + value)
+                        integrand_prev[c, w] = value
+                for c in range(n_c):
+                    dens_prev[c] = dens[c]
+                t_prev = t
+            for w in range(n_wl):
+                tau_view = 0.0
+                for c in range(n_c):
+                    tau_view += extinction[c, w] * view_column[c]
+                transmittance[i, w] = math.exp(-tau_view)
+                if hits_ground:
+                    ground[i, w] = attenuation[w] * max(mu_s, 0.0)
+    return inscatter, transmittance, ground
+
+
+@njit(parallel=True, cache=True)
+def transmittance_rays(origins, directions, distances, n_samples, bottom_radius, top_radius,
+                       h_step, density, extinction):
+    """Transmittance (n_ray, n_wl) from each origin along its direction over `distances` [m]
+    (inf: to the ground or out of the atmosphere; a ray blocked by the ground before the
+    distance gets 0)."""
+    n_ray = origins.shape[0]
+    n_c, n_wl = extinction.shape
+    result = np.ones((n_ray, n_wl))
+    for i in prange(n_ray):
+        ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
+        r = math.sqrt(ox * ox + oy * oy + oz * oz)
+        mu = (ox * directions[i, 0] + oy * directions[i, 1] + oz * directions[i, 2]) / r
+        t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+        blocked = hits_ground and distances[i] > t_end * (1.0 + 1e-12) and math.isfinite(
+            distances[i])
+        if blocked:
+            for w in range(n_wl):
+                result[i, w] = 0.0
+            continue
+        t_end = min(t_end, distances[i])
+        if t_end <= t_start:
+            continue
+        column = np.empty(n_c)
+        columns_along_segment(r, mu, t_start, t_end, n_samples, bottom_radius, h_step, density,
+                              column)
+        for w in range(n_wl):
+            tau = 0.0
+            for c in range(n_c):
+                tau += extinction[c, w] * column[c]
+            result[i, w] = math.exp(-tau)
+    return result

@@ -1,0 +1,94 @@
+"""Ray geometry in a spherical shell atmosphere, robust at the horizon and from space.
+
+A ray starts at distance r from the planet centre with mu = cos(angle between the ray and the
+local zenith). The distance along the ray to a sphere of radius R solves
+t^2 + 2 r mu t + r^2 - R^2 = 0, so t = -r mu +- sqrt(r^2 (mu^2 - 1) + R^2)
+(Bruneton 2017, functions.glsl `DistanceToTopAtmosphereBoundary`; docs/physics/geometry.md).
+All functions are numba kernels that work on floats; numpy wrappers broadcast.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "atmosphere_segment",
+    "distance_to_sphere",
+    "horizon_cos_zenith",
+    "local_frame_directions",
+    "sun_visible_fraction",
+]
+
+
+@njit(cache=True)
+def distance_to_sphere(r, mu, radius, far):
+    """Distance [m] along the ray (r, mu) to the sphere `radius`: the far root if `far`, else
+    the near one. NaN when the ray's line misses the sphere."""
+    discriminant = r * r * (mu * mu - 1.0) + radius * radius
+    if discriminant < 0.0:
+        return math.nan
+    root = math.sqrt(discriminant)
+    return -r * mu + root if far else -r * mu - root
+
+
+@njit(cache=True)
+def atmosphere_segment(r, mu, bottom_radius, top_radius):
+    """Part of the ray (r, mu) inside the atmosphere: (t_start, t_end, hits_ground) [m].
+
+    t_start > 0 for observers in space. t_end is the ground hit when the ray meets the
+    ground before leaving the atmosphere. t_end <= t_start means the ray misses the shell."""
+    t_top_far = distance_to_sphere(r, mu, top_radius, True)
+    if math.isnan(t_top_far) or t_top_far <= 0.0:
+        return 0.0, 0.0, False
+    t_start = max(0.0, distance_to_sphere(r, mu, top_radius, False))
+    t_end = t_top_far
+    hits_ground = False
+    if mu < 0.0:
+        t_ground = distance_to_sphere(r, mu, bottom_radius, False)
+        if not math.isnan(t_ground) and t_ground >= 0.0 and t_ground < t_end:
+            t_end = t_ground
+            hits_ground = True
+    return t_start, t_end, hits_ground
+
+
+@njit(cache=True)
+def horizon_cos_zenith(r, bottom_radius):
+    """cos of the zenith angle of the geometric horizon seen from radius r [-] (<= 0)."""
+    if r <= bottom_radius:
+        return 0.0
+    return -math.sqrt(r * r - bottom_radius * bottom_radius) / r
+
+
+@njit(cache=True)
+def sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius):
+    """Fraction of a uniform sun disk above the geometric horizon seen from radius r [-].
+
+    With x = (elevation of the disk centre above the horizon) / (angular radius), the visible
+    part of a disk cut by a straight edge is 1/2 + (x sqrt(1 - x^2) + asin x) / pi (circular
+    segment area). A point sun (radius 0) is visible when above the horizon."""
+    mu_h = horizon_cos_zenith(r, bottom_radius)
+    sin_h = math.sqrt(1.0 - mu_h * mu_h)
+    # Fast exit well above the horizon: mu_s >= cos(theta_h - radius) (no inverse cosines).
+    if mu_s >= mu_h * math.cos(sun_angular_radius) + sin_h * math.sin(sun_angular_radius):
+        return 1.0
+    elevation = math.acos(mu_h) - math.acos(min(1.0, max(-1.0, mu_s)))
+    if sun_angular_radius <= 0.0:
+        return 1.0 if elevation >= 0.0 else 0.0
+    x = elevation / sun_angular_radius
+    if x >= 1.0:
+        return 1.0
+    if x <= -1.0:
+        return 0.0
+    return 0.5 + (x * math.sqrt(1.0 - x * x) + math.asin(x)) / math.pi
+
+
+def local_frame_directions(zenith_rad: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
+    """Unit vectors (..., 3) in the local east-north-up frame from zenith angle and azimuth
+    (azimuth from north towards east) [rad]."""
+    zenith = np.asarray(zenith_rad, dtype=np.float64)
+    azimuth = np.asarray(azimuth_rad, dtype=np.float64)
+    s = np.sin(zenith)
+    return np.stack([s * np.sin(azimuth), s * np.cos(azimuth), np.cos(zenith)], axis=-1)

@@ -1,0 +1,151 @@
+"""Single-scattering solver: sky radiance, transmittance and ground irradiance by ray marching.
+
+L(x, v) = E_sun * [ sum_c p_c(nu) beta_s,c  int T(x, p) n_c(p) T_sun(p) ds
+                    + albedo / pi * T(x, g) T_sun(g) max(mu_s(g), 0) ]
+for an observer at x looking along v, with the sun as a distant source of irradiance E_sun
+normal to its beam at the top of the atmosphere (Nishita et al. 1993; Bruneton & Neyret 2008,
+eq. 4 with one scattering order). The sun disk's own radiance is not included. Ground light is
+reflected once (Lambertian) from direct sunlight only. Kernels: `transport/_kernels.py`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.transport import _kernels
+from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fraction
+
+__all__ = ["SingleScatteringSolver", "observer_position"]
+
+CHUNK_RAYS = 16384  # rays per kernel call: bounds memory (n_c x n_wl doubles per ray)
+
+
+def observer_position(altitude_m: float, bottom_radius_m: float) -> np.ndarray:
+    """Planet-centred position [m] of an observer at `altitude_m` above the north pole, whose
+    local east-north-up frame then coincides with the world axes."""
+    return np.array([0.0, 0.0, bottom_radius_m + altitude_m])
+
+
+class SingleScatteringSolver:
+    """Answers the solver questions with one scattering order; an independent check for the
+    precomputed tables."""
+
+    name = "single"
+
+    def __init__(self, profile: OpticalProfile, n_samples: int = 64,
+                 table_size: tuple[int, int] = (128, 256), table_samples: int = 512) -> None:
+        self.profile = profile
+        self.n_samples = int(n_samples)
+        self._h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
+        self._sun_table = _kernels.build_sun_column_table(
+            table_size[0], table_size[1], table_samples, profile.bottom_radius_m,
+            profile.top_radius_m, self._h_step, profile.density)
+
+    def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
+                     sun_direction: ArrayLike,
+                     progress: Callable[[int], None] | None = None) -> np.ndarray:
+        """Diffuse spectral radiance [W m^-2 sr^-1 nm^-1] seen from `position` (planet-centred,
+        (3,) or broadcastable to the directions) along unit `view_directions` (..., 3), with the
+        sun along unit `sun_direction` (3,). Returns (..., n_wl). `progress(n)` is called with
+        the number of rays done after each chunk."""
+        origins, directions, shape = _broadcast_rays(position, view_directions)
+        sun = _unit(np.asarray(sun_direction, dtype=np.float64))
+        p = self.profile
+        result = np.empty((directions.shape[0], p.n_wavelengths))
+        for start in range(0, directions.shape[0], CHUNK_RAYS):
+            stop = min(start + CHUNK_RAYS, directions.shape[0])
+            inscatter, _, ground = _kernels.single_scattering(
+                origins[start:stop], directions[start:stop], sun, self.n_samples,
+                p.bottom_radius_m, p.top_radius_m, self._h_step, p.density,
+                p.extinction_per_density, self._sun_table, p.sun_angular_radius_rad)
+            nu = directions[start:stop] @ sun
+            radiance = ground * (p.ground_albedo / np.pi)
+            for c, phase in enumerate(p.phases):
+                if phase is None:
+                    continue
+                radiance += (phase.evaluate(nu, p.wavelengths_nm)
+                             * p.scattering_per_density[c] * inscatter[:, c, :])
+            result[start:stop] = radiance * p.toa_irradiance
+            if progress is not None:
+                progress(stop - start)
+        return result.reshape(shape + (p.n_wavelengths,))
+
+    def transmittance(self, position: ArrayLike, directions: ArrayLike,
+                      distance_m: ArrayLike = np.inf, n_samples: int = 256) -> np.ndarray:
+        """Transmittance [-] from `position` along `directions` over `distance_m` (inf: to
+        the ground or out of the atmosphere; 0 when the ground blocks the path). (..., n_wl)."""
+        origins, dirs, shape = _broadcast_rays(position, directions)
+        distances = np.broadcast_to(np.asarray(distance_m, dtype=np.float64), shape).ravel()
+        p = self.profile
+        result = _kernels.transmittance_rays(
+            origins, dirs, np.ascontiguousarray(distances), n_samples, p.bottom_radius_m,
+            p.top_radius_m, self._h_step, p.density, p.extinction_per_density)
+        return result.reshape(shape + (p.n_wavelengths,))
+
+    def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike,
+                          n_zenith: int = 24, n_azimuth: int = 48) -> tuple[np.ndarray, np.ndarray]:
+        """(direct, diffuse) spectral irradiance on a horizontal surface at `position`
+        [W m^-2 nm^-1], each (n_wl,). Direct: E_sun T_sun mu_s times the visible part of the
+        disk; diffuse: the single-scattered sky radiance integrated over the upper hemisphere
+        (Gauss-Legendre in cos(zenith), midpoint rule in azimuth)."""
+        origin = np.asarray(position, dtype=np.float64)
+        up = _unit(origin)
+        sun = _unit(np.asarray(sun_direction, dtype=np.float64))
+        p = self.profile
+        mu_s = float(up @ sun)
+        r = float(np.linalg.norm(origin))
+        visible = sun_visible_fraction(r, mu_s, p.bottom_radius_m,
+                                                p.sun_angular_radius_rad)
+        sun_transmittance = self.transmittance(origin, sun if mu_s > 0 else _horizon(up, sun, r,
+                                                                                     p))
+        direct = p.toa_irradiance * sun_transmittance * max(mu_s, 0.0) * visible
+        nodes, weights = np.polynomial.legendre.leggauss(n_zenith)
+        cos_zenith = 0.5 * (nodes + 1.0)
+        azimuth = (np.arange(n_azimuth) + 0.5) * 2.0 * np.pi / n_azimuth
+        east, north = _tangent_frame(up)
+        sin_zenith = np.sqrt(1.0 - cos_zenith**2)
+        dirs = (sin_zenith[:, None, None] * (np.cos(azimuth)[None, :, None] * east
+                                             + np.sin(azimuth)[None, :, None] * north)
+                + cos_zenith[:, None, None] * up)
+        radiance = self.sky_radiance(origin, dirs, sun)
+        weight = (0.5 * weights * cos_zenith)[:, None, None] * (2.0 * np.pi / n_azimuth)
+        diffuse = np.sum(radiance * weight, axis=(0, 1))
+        return direct, diffuse
+
+
+def _unit(vector: np.ndarray) -> np.ndarray:
+    return vector / np.linalg.norm(vector, axis=-1, keepdims=True)
+
+
+def _horizon(up: np.ndarray, sun: np.ndarray, r: float, p: OpticalProfile) -> np.ndarray:
+    """The direction towards the sun's azimuth on the geometric horizon (for a sun at or just
+    below it, whose visible part is attenuated like the horizon ray)."""
+    mu_h = _kernels.horizon_cos_zenith(r, p.bottom_radius_m)
+    horizontal = sun - (sun @ up) * up
+    norm = np.linalg.norm(horizontal)
+    horizontal = horizontal / norm if norm > 0 else _tangent_frame(up)[0]
+    return mu_h * up + np.sqrt(1.0 - mu_h**2) * horizontal
+
+
+def _tangent_frame(up: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors orthogonal to `up` (east, north for the north-pole observer)."""
+    helper = np.array([0.0, 1.0, 0.0]) if abs(up[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    east = np.cross(helper, up)
+    east /= np.linalg.norm(east)
+    return east, np.cross(up, east)
+
+
+def _broadcast_rays(position: ArrayLike, directions: ArrayLike
+                    ) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    """Flatten broadcast origins and unit directions to (n, 3) C-contiguous arrays."""
+    dirs = np.asarray(directions, dtype=np.float64)
+    origins = np.asarray(position, dtype=np.float64)
+    shape = np.broadcast_shapes(dirs.shape, origins.shape)[:-1]
+    dirs = _unit(np.broadcast_to(dirs, shape + (3,)))
+    origins = np.broadcast_to(origins, shape + (3,))
+    return (np.ascontiguousarray(origins.reshape(-1, 3)),
+            np.ascontiguousarray(dirs.reshape(-1, 3)), shape)

@@ -1,0 +1,106 @@
+"""Exposure, tone curves and sRGB encoding against their published formulas and known values."""
+
+import math
+
+import numpy as np
+import pytest
+
+from skyscatter.errors import InputError
+from skyscatter.render import tonemap as tm
+
+OPERATOR_NAMES = sorted(tm.OPERATORS)
+
+
+def test_aces_narkowicz_known_values():
+    # f(0) = 0; f(1) = 2.54 / 3.16 from the fitted coefficients; the limit 2.51/2.43 > 1 is clipped.
+    assert tm.aces_narkowicz2016(0.0) == 0.0
+    assert tm.aces_narkowicz2016(1.0) == pytest.approx(2.54 / 3.16, rel=1e-15)
+    assert tm.aces_narkowicz2016(1e6) == 1.0
+    assert 2.51 / 2.43 > 1.0
+
+
+def test_exponential_at_one_is_one_minus_inverse_e():
+    assert tm.exponential(1.0) == pytest.approx(1 - math.exp(-1), rel=1e-15)
+
+
+def test_reinhard_and_clamp_known_values():
+    np.testing.assert_allclose(tm.reinhard([0.0, 1.0, 3.0]), [0.0, 0.5, 0.75], rtol=1e-15)
+    np.testing.assert_array_equal(tm.clamp([-1.0, 0.25, 7.0]), [0.0, 0.25, 1.0])
+
+
+@pytest.mark.parametrize("name", OPERATOR_NAMES)
+def test_operators_are_monotonic_and_map_into_unit_interval(name):
+    x = np.concatenate([[0.0], np.logspace(-6, 6, 2001), [np.inf]])
+    y = tm.tonemap(x, name)
+    assert y[0] == 0.0 and y[-1] == 1.0
+    assert np.all(np.diff(y) >= 0)
+    assert np.all((y >= 0) & (y <= 1))
+
+
+@pytest.mark.parametrize("name", OPERATOR_NAMES)
+@pytest.mark.parametrize("shape", [(), (5,), (2, 3), (4, 5, 3)])
+def test_tonemap_keeps_shape_and_clips_negative_input(name, shape):
+    x = np.full(shape, -0.5)
+    y = tm.tonemap(x, name)
+    assert y.shape == shape and np.all(y == 0.0)
+
+
+def test_tonemap_exposure_multiplies_before_the_curve():
+    assert tm.tonemap(0.5, "exponential", exposure=2.0) == pytest.approx(1 - math.exp(-1))
+
+
+def test_unknown_operator_names_the_choices():
+    with pytest.raises(InputError, match="unknown tone-mapping operator 'filmic'; choose one of: "
+                                         "aces, clamp, exponential, reinhard"):
+        tm.tonemap(np.ones((2, 2, 3)), "filmic")
+
+
+def test_exposure_scale_is_inverse_saturation_luminance_lagarde2014():
+    # L_max = 1.2 · 2^EV100: at EV100 = 0 a luminance of 1.2 cd/m² just reaches 1.
+    assert tm.exposure_scale(0.0) == pytest.approx(1 / 1.2, rel=1e-15)
+    assert tm.exposure_scale(15.0) == pytest.approx(1 / (1.2 * 2**15), rel=1e-15)
+    assert tm.exposure_scale(15.0, compensation_ev=1.0) == pytest.approx(2 / (1.2 * 2**15))
+
+
+@pytest.mark.parametrize("luminance_cd_m2", [1e-4, 1.0, 5000.0])
+def test_auto_exposure_puts_a_uniform_scene_at_the_meter_mid_value(luminance_cd_m2):
+    # Meter K = 12.5 (ISO 2720), saturation 78/(q S), q = 0.65: mid value K q / 78 = 1/9.6.
+    scene = np.full((8, 8), luminance_cd_m2)
+    ev100 = tm.auto_ev100(scene)
+    assert ev100 == pytest.approx(math.log2(luminance_cd_m2 * 100 / 12.5), abs=1e-12)
+    assert luminance_cd_m2 * tm.exposure_scale(ev100) == pytest.approx(1 / 9.6, rel=1e-12)
+
+
+def test_auto_exposure_uses_the_geometric_mean_of_valid_positive_pixels():
+    scene = np.array([[1.0, 100.0], [0.0, 1e9]])
+    valid = np.array([[True, True], [True, False]])  # the 1e9 pixel is outside the lens
+    # geometric mean of 1 and 100 is 10 (the zero pixel is left out)
+    assert tm.auto_ev100(scene, valid) == pytest.approx(math.log2(10 * 8), abs=1e-12)
+
+
+def test_auto_exposure_of_a_black_scene_asks_for_an_explicit_ev():
+    with pytest.raises(InputError, match="give an explicit EV100"):
+        tm.auto_ev100(np.zeros((4, 4)))
+
+
+def test_srgb_transfer_is_continuous_at_the_breakpoint_iec61966():
+    below, above = tm.encode_srgb_transfer(np.array([0.0031308, np.nextafter(0.0031308, 1)]))
+    assert below == pytest.approx(12.92 * 0.0031308, rel=1e-15)
+    # The two published branches meet to ~1e-7 at the rounded breakpoint.
+    assert above == pytest.approx(below, abs=1e-7)
+
+
+def test_srgb8_known_codes():
+    # 50 % linear encodes to 0.7354 → 187.5 → 188, the standard 8-bit value; 1 → 255; 0 → 0.
+    codes = tm.to_srgb8(np.array([0.0, 0.5, 1.0, 2.0, -1.0]))
+    np.testing.assert_array_equal(codes, [0, 188, 255, 255, 0])
+    assert codes.dtype == np.uint8
+
+
+def test_srgb8_keeps_image_shape():
+    assert tm.to_srgb8(np.zeros((3, 4, 3))).shape == (3, 4, 3)
+
+
+def test_srgb8_refuses_nan():
+    with pytest.raises(InputError, match="1 NaN values"):
+        tm.to_srgb8(np.array([0.2, np.nan]))
