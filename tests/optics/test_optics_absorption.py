@@ -16,7 +16,7 @@ PERCENT = 1e-2  # cross-sections are ~1e-25 m^2: every approx below on them sets
 
 def test_dobson_unit_is_a_0p01mm_layer_at_stp():
     # 1 DU = 1e-5 m x Loschmidt 2.6867811e25 m^-3 (CODATA 2018); reference-data.md: 2.687e20.
-    assert DOBSON_UNIT_M2 == pytest.approx(2.687e20, rel=1e-4)
+    assert abs(DOBSON_UNIT_M2 / 2.687e20 - 1.0) < 1e-4
 
 
 def test_ozone_optical_depth_300du_at_600nm_matches_serdyuchenko():
@@ -36,14 +36,17 @@ def test_ozone_cross_section_matches_source_point_values():
         assert got == pytest.approx(sigma_cm2 * 1e-4, rel=1 * PERCENT, abs=0.0)
 
 
-def test_ozone_cell_average_on_a_10nm_grid_tracks_serdyuchenko_band_means():
-    # Bruneton's demo table (Serdyuchenko 233 K, 10-nm bin means; reference-data.md §4.2) at
-    # 550/590/600/650 nm. Temperature (233 vs 295 K) and dataset give up to ~7 % here; 10 %.
-    wl = np.arange(360.0, 831.0, 10.0)
-    sigma = ozone_cross_section(wl)
-    for lam, ref in ((550.0, 3.5e-25), (590.0, 4.701e-25), (600.0, 5.019e-25),
-                     (650.0, 2.238e-25)):
-        assert sigma[wl == lam][0] == pytest.approx(ref, rel=10 * PERCENT, abs=0.0)
+def test_ozone_10nm_band_means_track_serdyuchenko_233k():
+    # Bruneton's demo table (IUP Bremen / Serdyuchenko 233 K, "10-nm bin averages";
+    # anchor-bruneton.md). Its value at lambda matches our mean over [lambda, lambda + 10] nm
+    # (centred bins differ by up to 17 %, so that is evidently its binning). Measured gap
+    # 1.4-5.7 %; tolerance 7 %: Chappuis-band temperature dependence (233 vs 295 K) and the
+    # Brion vs Serdyuchenko datasets differ by a few percent, most in the band wings.
+    reference = {500.0: 1.48e-25, 550.0: 3.5e-25, 590.0: 4.701e-25, 600.0: 5.019e-25,
+                 610.0: 4.305e-25, 650.0: 2.238e-25, 700.0: 7.455e-26}
+    for lam, ref in reference.items():
+        ours = ozone_cross_section(lam + 5.0, single_cell_width_nm=10.0)
+        assert ours == pytest.approx(ref, rel=7 * PERCENT, abs=0.0), lam
 
 
 def test_cell_average_of_neighbouring_cells_is_the_mean_over_their_union():
@@ -99,7 +102,8 @@ def test_absorber_optics_is_a_pure_absorber():
 
 
 def test_unknown_cross_section_lists_known_names():
-    with pytest.raises(InputError, match=r"unknown cross-section 'o3-bogus'; known: o3-malicet-brion"):
+    with pytest.raises(InputError,
+                       match=r"unknown cross-section 'o3-bogus'; known: o3-malicet-brion"):
         AbsorberOptics("o3-bogus")
     with pytest.raises(InputError, match="must be finite and >= 0"):
         AbsorberOptics(SpectralParameter.constant(-1e-25))

@@ -42,8 +42,8 @@ def test_spectral_albedo_multiplies_extinction():
     optics = AngstromOptics(extinction_at_reference=1e-5, angstrom_exponent=1.0,
                             single_scattering_albedo=ssa, phase=RayleighPhase())
     wl = np.array([440.0, 560.0, 680.0])
-    np.testing.assert_allclose(optics.scattering_per_density(wl) / optics.extinction_per_density(wl),
-                               [0.8, 0.85, 0.9], rtol=1e-14)
+    ratio = optics.scattering_per_density(wl) / optics.extinction_per_density(wl)
+    np.testing.assert_allclose(ratio, [0.8, 0.85, 0.9], rtol=1e-14)
 
 
 @pytest.mark.parametrize("shape", [(), (5,), (2, 3)])

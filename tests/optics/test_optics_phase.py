@@ -227,7 +227,8 @@ def test_tabulated_phase_grey_column_and_out_of_range_wavelengths():
 @pytest.mark.parametrize("make, message", [
     (lambda: HenyeyGreensteinPhase(1.0), r"g = \[1.0\] must lie in \(-1.0, 1.0\)"),
     (lambda: CornetteShanksPhase(-1.2), r"g = \[-1.2\] must lie in"),
-    (lambda: DoubleHenyeyGreensteinPhase(0.5, 0.1, 1.5), r"alpha = \[1.5\] must lie in \[0.0, 1.0\]"),
+    (lambda: DoubleHenyeyGreensteinPhase(0.5, 0.1, 1.5),
+     r"alpha = \[1.5\] must lie in \[0.0, 1.0\]"),
     (lambda: TabulatedPhase([0.0, 90.0], [1.0, 1.0]), "increase strictly from 0 to 180"),
     (lambda: TabulatedPhase([0.0, 180.0], [1.0, 0.0]), "must be finite and > 0"),
     (lambda: TabulatedPhase([0.0, 180.0], np.ones((2, 2))), "wavelengths_nm is required"),

@@ -90,17 +90,29 @@ class Atmosphere:
     def top_radius_m(self) -> float:
         return self.planet.radius_m + self.top_altitude_m
 
-    def optical_profile(self, wavelengths_nm: ArrayLike,
-                        n_levels: int = 2001) -> OpticalProfile:
-        """Sample every constituent on a uniform altitude grid and a wavelength grid."""
+    def optical_profile(self, wavelengths_nm: ArrayLike, n_levels: int = 2001,
+                        monochromatic: bool = False) -> OpticalProfile:
+        """Sample every constituent on a uniform altitude grid and a wavelength grid.
+
+        Tabulated spectra (sun, absorption cross-sections) are averaged over each grid cell
+        (edges halfway between neighbouring wavelengths), the right thing for a spectral grid
+        that is integrated into colour. `monochromatic=True` treats each wavelength on its own
+        (a 1 nm cell), for users who ask for values at a few chosen wavelengths."""
         wl = np.atleast_1d(np.asarray(wavelengths_nm, dtype=np.float64))
         altitudes = np.linspace(0.0, self.top_altitude_m, n_levels)
         density = np.array([c.profile.density(altitudes) for c in self.constituents],
                            dtype=np.float64).reshape(len(self.constituents), n_levels)
-        extinction = np.array([c.optics.extinction_per_density(wl) for c in self.constituents],
-                              dtype=np.float64).reshape(len(self.constituents), wl.size)
-        scattering = np.array([c.optics.scattering_per_density(wl) for c in self.constituents],
-                              dtype=np.float64).reshape(len(self.constituents), wl.size)
+
+        def spectrum(function) -> np.ndarray:
+            if monochromatic:
+                return np.concatenate([np.atleast_1d(function(wl[i:i + 1]))
+                                       for i in range(wl.size)])
+            return np.asarray(function(wl), dtype=np.float64).reshape(wl.size)
+
+        extinction = np.array([spectrum(c.optics.extinction_per_density)
+                               for c in self.constituents]).reshape(-1, wl.size)
+        scattering = np.array([spectrum(c.optics.scattering_per_density)
+                               for c in self.constituents]).reshape(-1, wl.size)
         return OpticalProfile(
             wavelengths_nm=wl,
             bottom_radius_m=self.bottom_radius_m,
@@ -112,7 +124,7 @@ class Atmosphere:
             phases=tuple(c.optics.phase for c in self.constituents),
             names=tuple(c.name for c in self.constituents),
             ground_albedo=self.planet.ground_albedo.at(wl),
-            toa_irradiance=self.planet.star.irradiance_toa(wl),
+            toa_irradiance=spectrum(self.planet.star.irradiance_toa),
             sun_angular_radius_rad=self.planet.star.angular_radius_rad,
         )
 

@@ -197,7 +197,7 @@ class PenndorfPhase:
 
 @dataclass(frozen=True)
 class HenyeyGreensteinPhase:
-    """Henyey-Greenstein phase function (`henyey_greenstein`) with g(lambda) in (-1, 1); <nu> = g."""
+    """Henyey-Greenstein phase function (`henyey_greenstein`), g(lambda) in (-1, 1); <nu> = g."""
 
     g: SpectralParameter
 

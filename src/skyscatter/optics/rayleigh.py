@@ -29,6 +29,7 @@ from skyscatter.optics.refractive_index import GASES, gas_refractivity
 from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = [
+    "KING_FACTOR_CO2_BODHAINE_1999",
     "KING_FACTOR_MODELS",
     "RAYLEIGH_PHASES",
     "RayleighOptics",
@@ -93,7 +94,9 @@ def king_factor_air_bodhaine_1999(wavelengths_nm: ArrayLike, co2_ppm: float = 36
     f_n2 = 1.034 + 3.17e-4 * inv2
     f_o2 = 1.096 + 1.385e-3 * inv2 + 1.448e-4 * inv2 * inv2
     c_percent = co2_ppm * 1.0e-4
-    return ((78.084 * f_n2 + 20.946 * f_o2 + 0.934 * 1.00 + c_percent * KING_FACTOR_CO2_BODHAINE_1999)
+    f_ar = 1.00
+    f_co2 = KING_FACTOR_CO2_BODHAINE_1999
+    return ((78.084 * f_n2 + 20.946 * f_o2 + 0.934 * f_ar + c_percent * f_co2)
             / (78.084 + 20.946 + 0.934 + c_percent))
 
 

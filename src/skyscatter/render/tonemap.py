@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skyscatter.errors import InputError
+from skyscatter.spectrum.colour import encode_srgb_transfer
 
 __all__ = [
     "OPERATORS",
@@ -44,7 +45,6 @@ __all__ = [
     "aces_narkowicz2016",
     "auto_ev100",
     "clamp",
-    "encode_srgb_transfer",
     "exponential",
     "exposure_scale",
     "reinhard",
@@ -165,15 +165,6 @@ def tonemap(linear_rgb: ArrayLike, operator: str = "aces", exposure: float = 1.0
     return curve(np.clip(x, 0.0, _LARGEST_INPUT))
 
 
-def encode_srgb_transfer(linear: ArrayLike) -> np.ndarray:
-    """sRGB OETF (IEC 61966-2-1): display-linear [0, 1] → encoded [0, 1]; same shape out.
-
-    V = 12.92 L for L ≤ 0.0031308, else 1.055 L^(1/2.4) − 0.055. Inputs are clipped to [0, 1].
-    """
-    lin = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    return np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * lin ** (1.0 / 2.4) - 0.055)
-
-
 def to_srgb8(display_linear_rgb: ArrayLike) -> np.ndarray:
     """8-bit sRGB codes round(255 · OETF(L)) from display-linear values in [0, 1].
 
@@ -191,4 +182,4 @@ def to_srgb8(display_linear_rgb: ArrayLike) -> np.ndarray:
     if bad:
         raise InputError(f"cannot encode an image with {bad} NaN values to 8-bit sRGB",
                          key="display_linear_rgb", value=f"{bad} NaN")
-    return np.rint(encode_srgb_transfer(lin) * 255.0).astype(np.uint8)
+    return np.rint(encode_srgb_transfer(np.clip(lin, 0.0, 1.0)) * 255.0).astype(np.uint8)

@@ -211,7 +211,7 @@ def white_point_xyz(white: str | ArrayLike) -> np.ndarray:
     xyz = _checked_xyz(white, "white")
     bad = ~(xyz[..., 1] > 0.0)
     if np.any(bad):
-        first = xyz[np.argwhere(bad)[0]] if xyz.ndim > 1 else xyz
+        first = xyz[tuple(np.argwhere(bad)[0])] if xyz.ndim > 1 else xyz
         raise InputError(f"a white must have Y > 0; got XYZ {first.ravel().tolist()!r}",
                          key="white", value=first.ravel().tolist(), allowed="Y > 0")
     return xyz / xyz[..., 1:2]

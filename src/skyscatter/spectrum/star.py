@@ -13,13 +13,14 @@ Solar constants: IAU 2015 Resolution B3 nominal values (Prša et al. 2016, AJ 15
 doi:10.3847/0004-6256/152/2/41); astronomical unit: IAU 2012 Resolution B2 (exact).
 
 Public names: `AU_M`, `SOLAR_RADIUS_M`, `SOLAR_EFFECTIVE_TEMPERATURE_K`, `PLANCK`,
-`SPEED_OF_LIGHT`, `BOLTZMANN`, `planck_spectral_radiance`, `limb_darkening_neckel_labs_1994`,
-`limb_darkening_disk_mean`, `Star`.
+`SPEED_OF_LIGHT`, `BOLTZMANN`, `STAR_SPECTRA`, `planck_spectral_radiance`,
+`limb_darkening_neckel_labs_1994`, `limb_darkening_disk_mean`, `Star`.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -222,10 +223,9 @@ class Star:
                 f"{', '.join(STAR_SPECTRA)}", key="spectrum", value=self.spectrum,
                 allowed=", ".join(STAR_SPECTRA))
         for key, unit in (("temperature_k", "K"), ("radius_m", "m"), ("distance_m", "m")):
-            value = getattr(self, key)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise InputError(f"star {self.name!r}: {key} = {value!r} must be a finite "
-                                 f"number > 0 [{unit}]", key=key, value=value, allowed="> 0")
+            value = _positive_number(getattr(self, key), key, unit, f"star {self.name!r}: ")
+            object.__setattr__(self, key, value)  # frozen: store the checked float
+        object.__setattr__(self, "limb_darkening", bool(self.limb_darkening))
         if self.distance_m <= self.radius_m:
             raise InputError(
                 f"star {self.name!r}: distance_m = {self.distance_m!r} must exceed radius_m = "
@@ -236,18 +236,15 @@ class Star:
     def sun(cls, distance_au: float = 1.0) -> Star:
         """The Sun at `distance_au` [AU]: measured ASTM G173-03 spectrum, 5772 K, R = 6.957e8 m
         (IAU 2015 B3 nominal values), limb-darkened. Mars' mean distance is 1.524 AU."""
-        if not (isinstance(distance_au, (int, float)) and math.isfinite(distance_au)
-                and distance_au > 0):
-            raise InputError(f"distance_au = {distance_au!r} must be a finite number > 0 [AU]",
-                             key="distance_au", value=distance_au, allowed="> 0")
+        distance = _positive_number(distance_au, "distance_au", "AU")
         return cls("Sun", "astm-g173", SOLAR_EFFECTIVE_TEMPERATURE_K, SOLAR_RADIUS_M,
-                   float(distance_au) * AU_M)
+                   distance * AU_M)
 
     @classmethod
     def blackbody(cls, name: str, temperature_k: float, radius_m: float,
                   distance_m: float) -> Star:
         """A black-body star of `temperature_k` [K], `radius_m` [m] at `distance_m` [m]."""
-        return cls(name, "blackbody", float(temperature_k), float(radius_m), float(distance_m))
+        return cls(name, "blackbody", temperature_k, radius_m, distance_m)
 
     @property
     def angular_radius_rad(self) -> float:
@@ -321,6 +318,16 @@ class Star:
         if not self.limb_darkening:
             return np.broadcast_to(uniform, mu.shape + wl.shape).copy()
         return limb_darkening_neckel_labs_1994(mu, wl) * (uniform / limb_darkening_disk_mean(wl))
+
+
+def _positive_number(value: object, key: str, unit: str, prefix: str = "") -> float:
+    """`value` as a float, or InputError unless it is a real, finite number > 0."""
+    if isinstance(value, numbers.Real) and not isinstance(value, bool):
+        number = float(value)
+        if math.isfinite(number) and number > 0.0:
+            return number
+    raise InputError(f"{prefix}{key} = {value!r} must be a finite number > 0 [{unit}]",
+                     key=key, value=value, allowed=f"> 0 [{unit}]")
 
 
 def _checked_positive(value: ArrayLike, name: str, unit: str) -> np.ndarray:

@@ -210,6 +210,17 @@ def single_scattering(origins, directions, sun_direction, n_samples, bottom_radi
             nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
             t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
             if t_end <= t_start:
+                if hits_ground:  # standing on the ground, looking down: the lit ground
+                    sun_fraction = sun_visible_fraction(r, mu_s0, bottom_radius,
+                                                        sun_angular_radius)
+                    if sun_fraction > 0.0:
+                        sun_columns(r, mu_s0, bottom_radius, top_radius, sun_table, sun_col)
+                        for w in range(n_wl):
+                            tau_sun = 0.0
+                            for c in range(n_c):
+                                tau_sun += extinction[c, w] * sun_col[c]
+                            ground[i, w] = (math.exp(-tau_sun) * sun_fraction
+                                            * max(mu_s0, 0.0))
                 continue
             t_split, m1, m2 = split_sample_count(r, mu, t_start, t_end, n_samples)
             total = sample_total(m1, m2, n_samples)

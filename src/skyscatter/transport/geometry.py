@@ -48,8 +48,10 @@ def atmosphere_segment(r, mu, bottom_radius, top_radius):
     hits_ground = False
     if mu < 0.0:
         t_ground = distance_to_sphere(r, mu, bottom_radius, False)
-        if not math.isnan(t_ground) and t_ground >= 0.0 and t_ground < t_end:
-            t_end = t_ground
+        if not math.isnan(t_ground) and t_ground < t_end:
+            # Mathematically t_ground >= 0 for r >= bottom_radius; clamp the rounding error of
+            # an observer standing on the ground (t_ground = -r mu - r |mu| = 0).
+            t_end = max(t_ground, t_start)
             hits_ground = True
     return t_start, t_end, hits_ground
 

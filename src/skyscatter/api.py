@@ -1,0 +1,136 @@
+"""The public Python API: load an atmosphere, render sky images, compute sky radiance.
+
+    from skyscatter import api
+    atmosphere = api.load_atmosphere("earth")
+    image = api.render(atmosphere, api.FisheyeCamera(512), sun_zenith_deg=60.0)
+    api.save_image(image, png_path="sky.png", exr_path="sky.exr")
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from skyscatter.atmosphere.config import list_presets, load_atmosphere
+from skyscatter.atmosphere.model import Atmosphere
+from skyscatter.errors import InputError
+from skyscatter.render.camera import Camera, EquirectangularCamera, FisheyeCamera, PerspectiveCamera
+from skyscatter.render.image_io import write_exr, write_png
+from skyscatter.render.scene import SkyImage, render_sky, sun_direction
+from skyscatter.render.tonemap import auto_ev100, exposure_scale, to_srgb8, tonemap
+from skyscatter.spectrum.colour import xyz_to_rgb
+from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.transport.geometry import local_frame_directions
+from skyscatter.transport.single_scattering import observer_position
+from skyscatter.transport.solvers import make_solver
+
+__all__ = [
+    "EquirectangularCamera",
+    "FisheyeCamera",
+    "PerspectiveCamera",
+    "SkyImage",
+    "list_presets",
+    "load_atmosphere",
+    "render",
+    "save_image",
+    "sky_radiance_rows",
+]
+
+EXR_UNITS = {"rgb": "linear RGB, Y = 1 for 1 cd/m^2", "luminance": "cd/m^2",
+             "spectral": "W m^-2 sr^-1 nm^-1"}
+EXR_CONTENTS = tuple(EXR_UNITS)
+
+
+def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
+           sun_azimuth_deg: float = 180.0, altitude_m: float = 0.0,
+           wavelengths_nm: Sequence[float] | None = None, solver: str = "single",
+           n_samples: int = 64, progress: Callable[[int], None] | None = None) -> SkyImage:
+    """Render the sky seen by `camera` from `altitude_m` [m] above the ground, with the sun at
+    `sun_zenith_deg` and `sun_azimuth_deg` (from north towards east). Spectral, on
+    `wavelengths_nm` (default: 16 bins over 360-830 nm)."""
+    _check_range("sun_zenith_deg", sun_zenith_deg, 0.0, 180.0)
+    _check_range("altitude_m", altitude_m, 0.0, 1e12)
+    wavelengths = wavelength_grid(16) if wavelengths_nm is None else np.asarray(wavelengths_nm)
+    profile = atmosphere.optical_profile(wavelengths)
+    engine = make_solver(solver, profile, n_samples=n_samples)
+    return render_sky(engine, camera, altitude_m, sun_direction(sun_zenith_deg, sun_azimuth_deg),
+                      atmosphere.planet.star, progress)
+
+
+def save_image(image: SkyImage, png_path: str | Path | None = None,
+               exr_path: str | Path | None = None, ev100: float | None = None,
+               compensation_ev: float = 0.0, operator: str = "aces",
+               colour_space: str = "srgb", balance_to_light: bool = False,
+               exr_content: str = "rgb") -> float:
+    """Write a tone-mapped 8-bit PNG and/or a linear float32 EXR; returns the EV100 used.
+
+    EXR contents: "rgb" (linear `colour_space`, 1.0 = 1 cd m^-2 of luminance), "luminance"
+    (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
+    `ev100=None` picks the exposure from the sky pixels (geometric-mean metering)."""
+    if exr_content not in EXR_CONTENTS:
+        raise InputError(f"unknown EXR content {exr_content!r}; choose one of: "
+                         f"{', '.join(EXR_CONTENTS)}", key="exr_content", value=exr_content)
+    xyz = image.xyz(balance_to_light)
+    if ev100 is None:
+        ev100 = auto_ev100(xyz[..., 1], image.sky)
+    linear = xyz_to_rgb(xyz, colour_space)
+    if png_path is not None:
+        display = tonemap(linear, operator, exposure_scale(ev100, compensation_ev))
+        write_png(png_path, to_srgb8(display * image.valid[..., None]),
+                  text={"Software": "skyscatter", "EV100": f"{ev100:.3f}",
+                        "ColourSpace": colour_space})
+    if exr_path is not None:
+        if exr_content == "rgb":
+            data, names = linear, ("R", "G", "B")
+        elif exr_content == "luminance":
+            data, names = xyz[..., 1:2], ("Y",)
+        else:
+            data = image.spectral
+            names = tuple(f"radiance_{w:07.2f}nm" for w in image.wavelengths_nm)
+        write_exr(exr_path, data.astype(np.float32), names,
+                  attributes={"skyscatter_units": EXR_UNITS[exr_content],
+                              "skyscatter_colour_space": colour_space})
+    return float(ev100)
+
+
+def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
+                      view_zeniths_deg: Sequence[float], relative_azimuths_deg: Sequence[float],
+                      wavelengths_nm: Sequence[float], altitude_m: float = 0.0,
+                      solver: str = "single", n_samples: int = 512) -> list[dict[str, float]]:
+    """Diffuse sky radiance for every combination of the inputs, one dict per row with the keys
+    sun_zenith_deg, view_zenith_deg, relative_azimuth_deg, wavelength_nm, radiance
+    [W m^-2 sr^-1 nm^-1] and toa_irradiance [W m^-2 nm^-1]. Relative azimuth 0 looks towards
+    the sun. Each wavelength is monochromatic (a 1 nm cell)."""
+    for value in sun_zeniths_deg:
+        _check_range("sun zenith", value, 0.0, 180.0)
+    for value in view_zeniths_deg:
+        _check_range("view zenith", value, 0.0, 180.0)
+    _check_range("altitude_m", altitude_m, 0.0, 1e12)
+    profile = atmosphere.optical_profile(np.asarray(wavelengths_nm, dtype=np.float64),
+                                         monochromatic=True)
+    engine = make_solver(solver, profile, n_samples=n_samples)
+    position = observer_position(altitude_m, profile.bottom_radius_m)
+    view_zenith, azimuth = np.meshgrid(np.radians(view_zeniths_deg),
+                                       np.radians(relative_azimuths_deg), indexing="ij")
+    directions = local_frame_directions(view_zenith, azimuth)
+    rows = []
+    for sun_zenith in sun_zeniths_deg:
+        radiance = engine.sky_radiance(position, directions, sun_direction(sun_zenith, 0.0))
+        for (i, vz), (j, az) in itertools.product(enumerate(view_zeniths_deg),
+                                                   enumerate(relative_azimuths_deg)):
+            for k, wavelength in enumerate(profile.wavelengths_nm):
+                rows.append({"sun_zenith_deg": float(sun_zenith), "view_zenith_deg": float(vz),
+                             "relative_azimuth_deg": float(az),
+                             "wavelength_nm": float(wavelength),
+                             "radiance": float(radiance[i, j, k]),
+                             "toa_irradiance": float(profile.toa_irradiance[k])})
+    return rows
+
+
+def _check_range(name: str, value: float, low: float, high: float) -> None:
+    if not np.isfinite(value) or not low <= value <= high:
+        raise InputError(f"{name} = {value!r} must lie in [{low:g}, {high:g}]", key=name,
+                         value=value, allowed=f"[{low:g}, {high:g}]")

@@ -1,0 +1,99 @@
+"""Compose a sky image: camera rays -> solver radiance -> plus the sun disk -> spectral image.
+
+The observer stands above the planet's north pole, so the local east-north-up frame of the
+cameras is the world frame (`transport.single_scattering.observer_position`). The sun disk
+is added with its limb-darkened radiance times the transmittance along the line of sight;
+when the disk is smaller than about four pixels, its whole transmitted irradiance goes into the
+pixel that contains its centre, so the image always carries the right solar flux.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from skyscatter.render.camera import Camera
+from skyscatter.spectrum.colour import spectral_to_xyz, white_balance, xyz_to_rgb
+from skyscatter.spectrum.star import Star
+from skyscatter.transport.single_scattering import observer_position
+
+__all__ = ["SkyImage", "add_sun_disk", "render_sky", "sun_direction"]
+
+SUN_SPLAT_PIXELS = 4.0  # a disk covering fewer pixels than this is deposited into one pixel
+
+
+def sun_direction(zenith_deg: float, azimuth_deg: float) -> np.ndarray:
+    """Unit vector towards the sun in the local east-north-up frame; azimuth from north
+    towards east [deg]."""
+    zenith, azimuth = np.radians(zenith_deg), np.radians(azimuth_deg)
+    return np.array([np.sin(zenith) * np.sin(azimuth), np.sin(zenith) * np.cos(azimuth),
+                     np.cos(zenith)])
+
+
+@dataclass(frozen=True)
+class SkyImage:
+    """A rendered spectral image and what is needed to turn it into colour."""
+
+    spectral: np.ndarray  # (h, w, n_wl) [W m^-2 sr^-1 nm^-1]; 0 outside the lens
+    valid: np.ndarray  # (h, w) bool
+    sky: np.ndarray  # (h, w) bool: valid pixels looking above the horizontal (for metering)
+    wavelengths_nm: np.ndarray  # (n_wl,)
+    light_spectrum: np.ndarray  # (n_wl,) the star's irradiance at the top [W m^-2 nm^-1]
+
+    def xyz(self, balance_to_light: bool = False) -> np.ndarray:
+        """CIE 1931 XYZ (h, w, 3), Y = luminance [cd m^-2]; optionally adapted from the
+        light source's white to D65 (Bradford)."""
+        xyz = spectral_to_xyz(self.spectral, self.wavelengths_nm)
+        if balance_to_light:
+            xyz = white_balance(xyz, self.light_spectrum, self.wavelengths_nm)
+        return xyz
+
+    def rgb(self, space: str = "srgb", balance_to_light: bool = False) -> np.ndarray:
+        """Linear RGB (h, w, 3) in `space`, scaled so that Y = 1 is 1 cd m^-2."""
+        return xyz_to_rgb(self.xyz(balance_to_light), space)
+
+
+def render_sky(solver, camera: Camera, altitude_m: float, sun_dir: np.ndarray, star: Star,
+               progress: Callable[[int], None] | None = None) -> SkyImage:
+    """Spectral sky image seen by `camera` at `altitude_m` with the sun along `sun_dir`
+    (local frame). `solver` answers `sky_radiance` and `transmittance`."""
+    profile = solver.profile
+    directions, valid = camera.directions()
+    position = observer_position(altitude_m, profile.bottom_radius_m)
+    spectral = np.zeros(directions.shape[:2] + (profile.n_wavelengths,))
+    spectral[valid] = solver.sky_radiance(position, directions[valid], sun_dir, progress)
+    sun_transmittance = solver.transmittance(position, sun_dir)
+    add_sun_disk(spectral, camera, directions, valid, sun_dir, star,
+                 profile.wavelengths_nm, sun_transmittance)
+    sky = valid & (directions[..., 2] > 0.0)
+    return SkyImage(spectral, valid, sky if np.any(sky) else valid, profile.wavelengths_nm,
+                    profile.toa_irradiance)
+
+
+def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
+                 valid: np.ndarray, sun_dir: np.ndarray, star: Star,
+                 wavelengths_nm: np.ndarray, transmittance: np.ndarray) -> None:
+    """Add the transmitted sun disk to `spectral` (h, w, n_wl) in place."""
+    if not np.any(transmittance > 0.0):
+        return
+    solid_angles = camera.pixel_solid_angles()
+    row, column = (float(v) for v in camera.direction_to_pixel(sun_dir))
+    if not (np.isfinite(row) and np.isfinite(column)):
+        return  # behind a perspective camera
+    i, j = int(np.floor(row)), int(np.floor(column))
+    inside_image = 0 <= i < spectral.shape[0] and 0 <= j < spectral.shape[1]
+    if inside_image and solid_angles[i, j] * SUN_SPLAT_PIXELS > star.solid_angle_sr:
+        if valid[i, j]:
+            spectral[i, j] += (star.irradiance_toa(wavelengths_nm) * transmittance
+                               / solid_angles[i, j])
+        return
+    sin_alpha = np.sin(star.angular_radius_rad)
+    cos_angle = np.clip(directions @ sun_dir, -1.0, 1.0)
+    inside = valid & (cos_angle > np.cos(star.angular_radius_rad))
+    if not np.any(inside):
+        return
+    sin_ratio = np.sqrt(1.0 - cos_angle[inside] ** 2) / sin_alpha
+    cos_limb = np.sqrt(np.clip(1.0 - sin_ratio**2, 0.0, 1.0))
+    spectral[inside] += star.disk_radiance(wavelengths_nm, cos_limb) * transmittance
