@@ -48,7 +48,8 @@ def _exposure(text: str) -> float | None:
     try:
         return float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is neither 'auto' nor an EV100 number") from None
+        raise argparse.ArgumentTypeError(
+            f"'{text}' is neither 'auto' nor an EV100 number") from None
 
 
 def _wavelengths(text: str) -> list[float]:

@@ -85,6 +85,7 @@ class _Table:
     data: dict[str, Any]
     path: Path
     prefix: str
+    asked: set[str] = dataclasses.field(default_factory=set)  # keys looked up, for suggestions
 
     def _key(self, key: str) -> str:
         return f"{self.prefix}.{key}" if self.prefix else key
@@ -94,10 +95,12 @@ class _Table:
                            path=self.path, key=self._key(key), value=value, allowed=allowed)
 
     def has(self, key: str) -> bool:
+        self.asked.add(key)
         return key in self.data
 
     def number(self, key: str, default: float | None = None, *, low: float | None = None,
                high: float | None = None, low_open: bool = False) -> float:
+        self.asked.add(key)
         if key not in self.data:
             if default is None:
                 raise ConfigError(f"{self._key(key)} is missing (a number is required)",
@@ -116,6 +119,7 @@ class _Table:
         return float(value)
 
     def text(self, key: str, default: str | None = None, choices: tuple[str, ...] = ()) -> str:
+        self.asked.add(key)
         if key not in self.data:
             if default is None:
                 allowed = f" (one of: {', '.join(choices)})" if choices else ""
@@ -130,6 +134,7 @@ class _Table:
         return value
 
     def flag(self, key: str, default: bool) -> bool:
+        self.asked.add(key)
         if key not in self.data:
             return default
         value = self.data.pop(key)
@@ -138,6 +143,7 @@ class _Table:
         return value
 
     def table(self, key: str, required: bool = True) -> _Table | None:
+        self.asked.add(key)
         if key not in self.data:
             if required:
                 raise ConfigError(f"[{self._key(key)}] is missing", path=self.path,
@@ -149,6 +155,7 @@ class _Table:
         return _Table(dict(value), self.path, self._key(key))
 
     def numbers(self, key: str, *, low: float | None = None) -> np.ndarray:
+        self.asked.add(key)
         value = self.data.pop(key, None)
         if (not isinstance(value, list) or not value or not all(
                 isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
@@ -162,6 +169,7 @@ class _Table:
     def spectral(self, key: str, default: float | None = None, *, low: float = -math.inf,
                  high: float = math.inf) -> SpectralParameter:
         """A number, or {wavelength_nm = [...], value = [...]}."""
+        self.asked.add(key)
         if key not in self.data:
             if default is None:
                 raise ConfigError(f"{self._key(key)} is missing", path=self.path,
@@ -173,18 +181,20 @@ class _Table:
             values = sub.numbers("value")
             sub.finish()
             if wavelengths.size != values.size:
-                raise self.error(key, {"wavelength_nm": list(wavelengths),
-                                       "value": list(values)},
+                raise self.error(key, {"wavelength_nm": wavelengths.tolist(),
+                                       "value": values.tolist()},
                                  "wavelength_nm and value of the same length")
             if np.any(values < low) or np.any(values > high):
-                raise self.error(key, list(values), f"values in [{low}, {high}]")
+                raise self.error(key, values.tolist(), f"values in [{low}, {high}]")
             return SpectralParameter.table(wavelengths, values)
         return SpectralParameter.constant(self.number(key, low=low, high=high))
 
     def finish(self) -> None:
         """Reject keys nobody asked for, suggesting the closest known one."""
         for key in self.data:
-            raise ConfigError(f"unknown key {self._key(key)!r}", path=self.path,
+            close = difflib.get_close_matches(key, sorted(self.asked), n=1)
+            hint = f"; did you mean '{self._key(close[0])}'?" if close else ""
+            raise ConfigError(f"unknown key {self._key(key)!r}{hint}", path=self.path,
                               key=self._key(key), value=self.data[key])
 
 
@@ -321,9 +331,16 @@ def _profile_table(table: _Table) -> tuple[np.ndarray, np.ndarray]:
                 rows = [row for row in csv.reader(handle)
                         if row and not row[0].lstrip().startswith("#")]
             header, body = rows[0], rows[1:]
+            header = [column_name.strip() for column_name in header]
             altitude_column = header.index("altitude_m")
-            density_column = 1 - altitude_column if len(header) == 2 else header.index(
-                table.text("column", "number_density_m3"))
+            if len(header) == 2 and not table.has("column"):
+                density_column = 1 - altitude_column
+            else:
+                column = table.text("column", "number_density_m3")
+                if column not in header:
+                    raise table.error("column", column, f"a column of {name}: "
+                                      + ", ".join(h for h in header if h != "altitude_m"))
+                density_column = header.index(column)
             altitudes = np.array([float(r[altitude_column]) for r in body])
             values = np.array([float(r[density_column]) for r in body])
         except OSError as error:
@@ -334,11 +351,12 @@ def _profile_table(table: _Table) -> tuple[np.ndarray, np.ndarray]:
     else:
         altitudes = table.numbers("altitude_m")
         values = table.numbers("value", low=0.0)
-    if altitudes.size != values.size or altitudes.size < 2 or np.any(np.diff(altitudes) <= 0):
-        raise table.error("altitude_m", list(altitudes),
+    if (altitudes.size != values.size or altitudes.size < 2
+            or not np.all(np.isfinite(altitudes)) or not np.all(np.diff(altitudes) > 0)):
+        raise table.error("altitude_m", altitudes.tolist(),
                           "at least 2 strictly increasing altitudes, one value each")
     if np.any(values < 0) or not np.all(np.isfinite(values)):
-        raise table.error("value", list(values), "finite densities >= 0")
+        raise table.error("value", values.tolist(), "finite densities >= 0")
     return altitudes, values
 
 

@@ -175,7 +175,7 @@ def sun_columns(r, mu_s, bottom_radius, top_radius, table, out):
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loop
 
 
-@njit(parallel=True, cache=True, fastmath=True)
+@njit(parallel=True, cache=True)
 def single_scattering(origins, directions, sun_direction, n_samples, bottom_radius, top_radius,
                       h_step, density, extinction, sun_table, sun_angular_radius):
     """Single scattering along many rays with one sun direction.

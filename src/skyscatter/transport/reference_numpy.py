@@ -24,8 +24,9 @@ def _segment(origin: np.ndarray, direction: np.ndarray, profile: OpticalProfile
     t_start = max(0.0, -b - np.sqrt(disc_top))
     t_end = -b + np.sqrt(disc_top)
     disc_ground = b * b - (float(origin @ origin) - profile.bottom_radius_m**2)
-    if disc_ground >= 0.0 and -b - np.sqrt(disc_ground) >= 0.0 and b < 0.0:
-        return t_start, min(t_end, -b - np.sqrt(disc_ground)), True
+    if disc_ground >= 0.0 and b < 0.0:
+        # Near root; >= 0 for an origin on or above the ground (clamp its rounding error).
+        return t_start, max(t_start, min(t_end, -b - np.sqrt(disc_ground))), True
     return t_start, max(t_end, t_start), False
 
 
@@ -51,7 +52,7 @@ def single_scattering_radiance(origin: np.ndarray, direction: np.ndarray,
     sun = np.asarray(sun_direction, dtype=np.float64)
     t_start, t_end, hits_ground = _segment(origin, direction, profile)
     n_wl = profile.n_wavelengths
-    if t_end <= t_start:
+    if t_end <= t_start and not hits_ground:
         return np.zeros(n_wl)
     t = np.linspace(t_start, t_end, n_steps + 1)
     points = origin + t[:, None] * direction

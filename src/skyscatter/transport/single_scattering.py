@@ -124,7 +124,7 @@ def _unit(vector: np.ndarray) -> np.ndarray:
 def _horizon(up: np.ndarray, sun: np.ndarray, r: float, p: OpticalProfile) -> np.ndarray:
     """The direction towards the sun's azimuth on the geometric horizon (for a sun at or just
     below it, whose visible part is attenuated like the horizon ray)."""
-    mu_h = _kernels.horizon_cos_zenith(r, p.bottom_radius_m)
+    mu_h = horizon_cos_zenith(r, p.bottom_radius_m)
     horizontal = sun - (sun @ up) * up
     norm = np.linalg.norm(horizontal)
     horizontal = horizontal / norm if norm > 0 else _tangent_frame(up)[0]

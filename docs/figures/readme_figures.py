@@ -1,0 +1,27 @@
+"""Make the README pictures (docs/images/*.png) with the command line; run from the repo root:
+python docs/figures/readme_figures.py"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from skyscatter.cli import main
+
+IMAGES = Path(__file__).resolve().parents[1] / "images"
+FIGURES = {
+    "earth_noon.png": ["earth", "--sun-elevation", "60", "--size", "256"],
+    "earth_sunset.png": ["earth", "--sun-elevation", "2", "--sun-azimuth", "270", "--size",
+                         "256"],
+    "earth_sunset_panorama.png": ["earth", "--sun-elevation", "2", "--sun-azimuth", "270",
+                                  "--camera", "panorama", "--heading", "270", "--size", "192"],
+    "mars_afternoon.png": ["mars-costa", "--sun-elevation", "35", "--sun-azimuth", "240",
+                           "--size", "256"],
+}
+
+if __name__ == "__main__":
+    for name, arguments in FIGURES.items():
+        argv = ["render", *arguments, "-o", str(IMAGES / name)]
+        print("skyscatter " + " ".join(argv))
+        if main(argv) != 0:
+            sys.exit(1)

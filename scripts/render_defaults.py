@@ -1,0 +1,40 @@
+"""Render the shipped default scenes into a folder (what `make run` does).
+
+Earth at noon, Earth at sunset (fisheye + equirectangular panorama), Mars in the afternoon:
+tone-mapped PNGs and linear EXRs (linear sRGB, 1.0 = 1 cd m^-2). Each line printed names the
+command-line equivalent, so every picture can be made again by hand.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from skyscatter.cli import main
+
+SCENES = [
+    ("earth_noon", ["earth", "--sun-elevation", "60", "--sun-azimuth", "180"]),
+    ("earth_sunset", ["earth", "--sun-elevation", "2", "--sun-azimuth", "270"]),
+    ("earth_sunset_panorama", ["earth", "--sun-elevation", "2", "--sun-azimuth", "270",
+                               "--camera", "panorama", "--heading", "270", "--size", "512"]),
+    ("mars_afternoon", ["mars-costa", "--sun-elevation", "35", "--sun-azimuth", "240"]),
+]
+
+
+def render_all(folder: Path) -> int:
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, arguments in SCENES:
+        argv = ["render", *arguments, "-o", str(folder / f"{name}.png"),
+                "--exr", str(folder / f"{name}.exr")]
+        print("skyscatter " + " ".join(argv), flush=True)
+        start = time.perf_counter()
+        code = main(argv)
+        if code != 0:
+            return code
+        print(f"  {time.perf_counter() - start:.1f} s", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(render_all(Path(sys.argv[1] if len(sys.argv) > 1 else "out")))
