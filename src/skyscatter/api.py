@@ -62,7 +62,7 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
 
 def save_image(image: SkyImage, png_path: str | Path | None = None,
                exr_path: str | Path | None = None, ev100: float | None = None,
-               compensation_ev: float = 0.0, operator: str = "aces",
+               compensation_ev: float = 1.0, operator: str = "aces",
                colour_space: str = "srgb", balance_to_light: bool = False,
                exr_content: str = "rgb") -> float:
     """Write a tone-mapped 8-bit PNG and/or a linear float32 EXR; returns the EV100 used.

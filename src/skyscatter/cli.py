@@ -114,8 +114,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--solver", default="single", help="solver name (default single)")
     render.add_argument("--exposure", type=_exposure, default=None, metavar="EV100|auto",
                         help="exposure value EV100, or auto (default auto)")
-    render.add_argument("--exposure-compensation", type=float, default=0.0, metavar="EV",
-                        help="added to the exposure, in stops (default 0)")
+    render.add_argument("--exposure-compensation", type=float, default=1.0, metavar="EV",
+                        help="brightens the metered exposure by this many stops (default +1: "
+                        "a clear sky metered to middle grey looks a stop too dark)")
     render.add_argument("--tonemap", default="aces",
                         help="aces (filmic, default), exponential (Costa/Bruneton), "
                         "reinhard or clamp")
