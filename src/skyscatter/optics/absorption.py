@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skyscatter.errors import InputError
+from skyscatter.spectrum.grid import cell_edges
 from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = [
@@ -46,29 +47,12 @@ def _ozone_table() -> tuple[np.ndarray, np.ndarray]:
     return edges, running
 
 
-def _cell_edges(wl: np.ndarray, single_cell_width_nm: float) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper cell edges along the last axis: halfway to the neighbours, the end cells
-    mirrored, a single wavelength +- single_cell_width_nm / 2."""
-    if wl.ndim == 0 or wl.shape[-1] == 1:
-        half = 0.5 * single_cell_width_nm
-        return wl - half, wl + half
-    step = np.diff(wl, axis=-1)
-    if not np.all(np.all(step > 0.0, axis=-1) | np.all(step < 0.0, axis=-1)):
-        raise InputError("wavelengths_nm must be strictly monotonic along the last axis to "
-                         "define averaging cells", key="wavelengths_nm", value=wl,
-                         allowed="strictly increasing or decreasing")
-    mid = 0.5 * (wl[..., 1:] + wl[..., :-1])
-    lower = np.concatenate((wl[..., :1] - 0.5 * step[..., :1], mid), axis=-1)
-    upper = np.concatenate((mid, wl[..., -1:] + 0.5 * step[..., -1:]), axis=-1)
-    return np.minimum(lower, upper), np.maximum(lower, upper)
-
-
 def ozone_cross_section(wavelengths_nm: ArrayLike, single_cell_width_nm: float = 1.0) -> np.ndarray:
     r"""O3 absorption cross-section at 295 K, averaged over the cell of each grid wavelength.
 
     sigma_k = int_{a_k}^{b_k} sigma(lambda) dlambda / (b_k - a_k), with cell edges a_k, b_k halfway
     between neighbouring wavelengths along the last axis (the end cells extend as far outwards as
-    inwards; a lone wavelength gets a cell `single_cell_width_nm` wide). A 10-nm grid thus gets
+    inwards; a lone wavelength gets a cell `single_cell_width_nm` wide; `spectrum.grid.cell_edges`). A 10-nm grid thus gets
     10-nm band means, the way Bruneton (2017) bins Serdyuchenko's data. Data: Malicet et al.
     (1995), doi:10.1007/BF00696758, and Brion et al. (1998), doi:10.1023/A:1006036924364, 295 K,
     195-830 nm (`data/o3_cross_section_malicet_brion_295k.npz`, from PyPI musica 0.17.2).
@@ -81,8 +65,8 @@ def ozone_cross_section(wavelengths_nm: ArrayLike, single_cell_width_nm: float =
 
     Parameters
     ----------
-    wavelengths_nm : array_like, shape (..., n_wl)
-        Wavelength grid, strictly monotonic along the last axis. [nm]
+    wavelengths_nm : array_like, shape (n_wl,) or scalar
+        Wavelength grid, strictly ascending. [nm]
     single_cell_width_nm : float
         Cell width used when the last axis has a single wavelength. [nm]
 
@@ -100,7 +84,8 @@ def ozone_cross_section(wavelengths_nm: ArrayLike, single_cell_width_nm: float =
                          key="single_cell_width_nm", value=single_cell_width_nm,
                          allowed="> 0 nm")
     edges, running = _ozone_table()
-    lower, upper = _cell_edges(wl, single_cell_width_nm)
+    cells = cell_edges(np.atleast_1d(wl), single_cell_width_nm)
+    lower, upper = cells[:-1].reshape(wl.shape), cells[1:].reshape(wl.shape)
     lower = np.clip(lower, edges[0], edges[-1])
     upper = np.clip(upper, edges[0], edges[-1])
     width = upper - lower

@@ -110,12 +110,14 @@ def wavelength_grid(count: int = 16, start_nm: float = 360.0, stop_nm: float = 8
     return start + (np.arange(count, dtype=np.float64) + 0.5) * ((stop - start) / count)
 
 
-def cell_edges(wavelengths_nm: ArrayLike) -> np.ndarray:
+def cell_edges(wavelengths_nm: ArrayLike,
+               single_cell_width_nm: float = SINGLE_WAVELENGTH_CELL_NM) -> np.ndarray:
     """Edges of the cells each grid wavelength stands for.
 
     Inner edges lie halfway between neighbours; the first and last cells are symmetric about their
     wavelength (edge = λ_0 - (e_1 - λ_0), λ_{n-1} + (λ_{n-1} - e_{n-1})). A first edge that would
-    fall below 0 nm is clamped to 0. A single wavelength gets a 1 nm cell centred on it. For
+    fall below 0 nm is clamped to 0. A single wavelength gets a cell `single_cell_width_nm`
+    (default 1 nm) wide centred on it. For
     `wavelength_grid(count, start, stop)` the edges are start + k (stop - start)/count.
 
     Parameters
@@ -130,7 +132,7 @@ def cell_edges(wavelengths_nm: ArrayLike) -> np.ndarray:
     """
     wl = checked_grid(wavelengths_nm)
     if wl.size == 1:
-        half = 0.5 * SINGLE_WAVELENGTH_CELL_NM
+        half = 0.5 * single_cell_width_nm
         return np.array([max(wl[0] - half, 0.0), wl[0] + half])
     inner = 0.5 * (wl[1:] + wl[:-1])
     first = max(2.0 * wl[0] - inner[0], 0.0)

@@ -3,7 +3,8 @@
 A ray starts at distance r from the planet centre with mu = cos(angle between the ray and the
 local zenith). The distance along the ray to a sphere of radius R solves
 t^2 + 2 r mu t + r^2 - R^2 = 0, so t = -r mu +- sqrt(r^2 (mu^2 - 1) + R^2)
-(Bruneton 2017, functions.glsl `DistanceToTopAtmosphereBoundary`; docs/physics/geometry.md).
+(Bruneton 2017, functions.glsl `DistanceToTopAtmosphereBoundary`;
+docs/physics/single_scattering.md).
 All functions are numba kernels that work on floats; numpy wrappers broadcast.
 """
 

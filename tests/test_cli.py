@@ -1,0 +1,230 @@
+"""The command line as a contract: what each command prints, writes and exits with.
+
+Calls `skyscatter.cli.main(argv)` in-process. argparse exits through SystemExit (for --help and
+for arguments it rejects itself); `_run` turns that into the exit code as a shell sees it.
+"""
+
+import csv
+import io
+import json
+import math
+import tomllib
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from skyscatter.atmosphere.config import PRESETS_DIR
+from skyscatter.cli import main
+from skyscatter.render.image_io import read_exr
+
+PERCENT = 1e-2
+RADIANCE_KEYS = ["sun_zenith_deg", "view_zenith_deg", "relative_azimuth_deg", "wavelength_nm",
+                 "radiance", "toa_irradiance"]
+RADIANCE_ARGS = ["radiance", "earth", "--sun-zenith", "30", "--view-zenith", "0,60",
+                 "--view-azimuth", "0,180", "--wavelengths", "450,550"]
+
+
+def _run(capsys, argv):
+    """(exit code, stdout, stderr) of `skyscatter argv`."""
+    try:
+        code = main(argv)
+    except SystemExit as exit_:
+        code = 0 if exit_.code is None else exit_.code
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def _error_line(stderr: str) -> str:
+    """The one line of an error; argparse also prints its usage block, which we skip."""
+    assert "Traceback" not in stderr
+    lines = stderr.rstrip("\n").split("\n")
+    if lines[0].startswith("usage:"):
+        lines = [line for line in lines[1:] if not line.startswith(" ")]
+    assert len(lines) == 1, stderr
+    assert lines[0].startswith("skyscatter"), stderr
+    return lines[0]
+
+
+# --- presets ----------------------------------------------------------------------------------
+
+def test_presets_lists_each_shipped_preset_with_its_description(capsys):
+    code, out, err = _run(capsys, ["presets"])
+    assert code == 0 and err == ""
+    lines = out.splitlines()
+    shipped = sorted(PRESETS_DIR.glob("*.toml"))
+    assert {"earth", "earth-bruneton", "mars-costa"} <= {p.stem for p in shipped}
+    assert len(lines) == len(shipped)
+    for path, line in zip(shipped, lines, strict=True):
+        description = tomllib.loads(path.read_text(encoding="utf-8"))["description"]
+        assert line.split()[0] == path.stem
+        assert line.endswith(description) and description
+
+
+# --- radiance ---------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def radiance_json():
+    # module-scoped: capsys is function-scoped, so capture by hand
+    import contextlib
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        assert main([*RADIANCE_ARGS, "--format", "json"]) == 0
+    return json.loads(buffer.getvalue())
+
+
+def test_radiance_json_has_one_row_per_combination_with_the_documented_keys(radiance_json):
+    rows = radiance_json
+    assert len(rows) == 1 * 2 * 2 * 2  # sun zeniths x view zeniths x azimuths x wavelengths
+    for row in rows:
+        assert list(row) == RADIANCE_KEYS
+        assert all(isinstance(v, float) and math.isfinite(v) for v in row.values())
+        assert row["radiance"] > 0.0 and row["toa_irradiance"] > 0.0
+    combinations = {(r["view_zenith_deg"], r["relative_azimuth_deg"], r["wavelength_nm"])
+                    for r in rows}
+    assert combinations == {(vz, az, wl) for vz in (0.0, 60.0) for az in (0.0, 180.0)
+                            for wl in (450.0, 550.0)}
+    assert {r["sun_zenith_deg"] for r in rows} == {30.0}
+
+
+def test_radiance_csv_has_the_same_columns_and_rows_as_json(capsys, radiance_json):
+    code, out, err = _run(capsys, [*RADIANCE_ARGS, "--format", "csv"])
+    assert code == 0
+    reader = csv.DictReader(io.StringIO(out))
+    assert reader.fieldnames == RADIANCE_KEYS
+    rows = list(reader)
+    assert len(rows) == len(radiance_json)
+    for row, reference in zip(rows, radiance_json, strict=True):
+        for key in RADIANCE_KEYS:  # CSV prints 10 significant digits
+            assert float(row[key]) == pytest.approx(reference[key], rel=1e-9)
+
+
+def test_radiance_toa_irradiance_at_550nm_is_astm_g173(radiance_json):
+    # ASTM G173-03 ETR at 550 nm: 1.863 W m^-2 nm^-1 (point), 1.868 (10-nm mean),
+    # shared/research/reference-data.md §4.3. 2 %: the CLI averages over a 1-nm cell.
+    values = {r["toa_irradiance"] for r in radiance_json if r["wavelength_nm"] == 550.0}
+    assert len(values) == 1
+    assert values.pop() == pytest.approx(1.86, rel=2 * PERCENT)
+
+
+def test_radiance_is_mirror_symmetric_about_the_sun_vertical(capsys):
+    # A horizontally uniform atmosphere is symmetric under reflection in the vertical plane
+    # through the sun: relative azimuth +90 and -90 (= 270) see the same sky. Tolerance: rounding.
+    code, out, _ = _run(capsys, ["radiance", "earth", "--sun-zenith", "50", "--view-zenith",
+                                 "40,80", "--view-azimuth", "0,90,-90,270", "--wavelengths",
+                                 "450,650", "--format", "json"])
+    assert code == 0
+    radiance, towards_sun = {}, {}
+    for row in json.loads(out):
+        key = (row["view_zenith_deg"], row["wavelength_nm"])
+        if row["relative_azimuth_deg"] == 0.0:
+            towards_sun[key] = row["radiance"]
+        else:
+            radiance.setdefault(key, []).append(row["radiance"])
+    assert len(radiance) == 4
+    for key, values in radiance.items():
+        np.testing.assert_allclose(values, values[0], rtol=1e-9)
+        assert towards_sun[key] > 1.05 * values[0]  # azimuth matters: forward scattering
+
+
+# --- help -------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize(("command", "options"), [
+    ([], ["presets", "render", "radiance", "--version", "--debug"]),
+    (["presets"], []),
+    (["render"], ["--sun-zenith", "--sun-elevation", "--sun-azimuth", "--camera", "--size",
+                  "--wavelengths", "--exposure", "--output", "--exr", "--exr-content"]),
+    (["radiance"], ["--sun-zenith", "--view-zenith", "--view-azimuth", "--wavelengths",
+                    "--altitude", "--format"]),
+])
+def test_help_of_each_command_exits_0_and_lists_its_options(capsys, command, options):
+    code, out, err = _run(capsys, [*command, "--help"])
+    assert code == 0 and err == ""
+    assert out.startswith("usage: skyscatter" + "".join(f" {c}" for c in command))
+    for option in options:
+        assert option in out
+
+
+# --- bad arguments: exit 2, one line, no traceback -------------------------------------------
+
+@pytest.mark.parametrize(("argv", "expected"), [
+    (["radiance", "eart", "--sun-zenith", "30"], "did you mean 'earth'"),
+    (["radiance", "earth", "--sun-zenith", "abc"], "'abc' is not a comma-separated list"),
+    (["radiance", "earth", "--sun-zenith", "200"], "sun zenith = 200.0 must lie in [0, 180]"),
+    (["radiance", "earth", "--sun-zenith", "30", "--view-zenith", "-1"], "view zenith = -1.0"),
+    (["radiance", "earth", "--sun-zenith", "30", "--wavelengths", "-5"], "wavelength"),
+    (["radiance", "earth", "--sun-zenith", "30", "--format", "xml"], "invalid choice: 'xml'"),
+    (["render", "earth", "--size", "0"], "--size: 0 must be > 0"),
+    (["render", "earth", "--camera", "orthographic"], "invalid choice: 'orthographic'"),
+    (["render", "earth", "--sun-zenith", "30", "--sun-elevation", "60"], "not allowed with"),
+])
+def test_bad_argument_exits_2_with_one_clear_line(capsys, argv, expected):
+    code, out, err = _run(capsys, argv)
+    assert code == 2
+    assert out == ""
+    assert expected in _error_line(err)
+
+
+def test_negative_wavelength_message_names_the_value(capsys):
+    code, _, err = _run(capsys, ["radiance", "earth", "--sun-zenith", "30", "--wavelengths",
+                                 "-5"])
+    assert code == 2
+    line = _error_line(err)
+    assert "-5" in line and "> 0 nm" in line
+
+
+def test_missing_config_file_exits_2_naming_the_file(capsys, tmp_path):
+    missing = tmp_path / "missing.toml"
+    code, _, err = _run(capsys, ["radiance", str(missing), "--sun-zenith", "30"])
+    assert code == 2
+    assert _error_line(err) == f"skyscatter: config file '{missing}' does not exist"
+
+
+def test_config_file_with_a_bad_value_exits_2_naming_file_key_and_value(capsys, tmp_path):
+    text = (PRESETS_DIR / "earth-bruneton.toml").read_text(encoding="utf-8")
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("ground_albedo = 0.1", "ground_albedo = 1.5", 1),
+                   encoding="utf-8")
+    for command in (["radiance", str(bad), "--sun-zenith", "30"],
+                    ["render", str(bad), "--size", "8", "-o", str(tmp_path / "x.png")]):
+        code, _, err = _run(capsys, command)
+        assert code == 2
+        line = _error_line(err)
+        assert line.startswith(f"skyscatter: {bad}: planet.ground_albedo = 1.5")
+        assert "<= 1.0" in line
+    assert not (tmp_path / "x.png").exists()
+
+
+# --- render -----------------------------------------------------------------------------------
+
+def test_render_fisheye_writes_png_and_linear_exr(capsys, tmp_path):
+    png, exr = tmp_path / "out" / "x.png", tmp_path / "out" / "x.exr"
+    code, out, err = _run(capsys, ["render", "earth", "--size", "32", "--camera", "fisheye",
+                                   "-o", str(png), "--exr", str(exr)])
+    assert code == 0, err
+    assert str(png) in err and str(exr) in err
+    with Image.open(png) as image:
+        assert image.size == (32, 32)
+    rgb, names = read_exr(exr)
+    assert names == ("R", "G", "B") and rgb.shape == (32, 32, 3)
+    assert np.all(np.isfinite(rgb))
+    # The zenith is the image centre (equidistant all-sky lens); linear sRGB/Rec.709 primaries:
+    # Y = 0.2126 R + 0.7152 G + 0.0722 B (IEC 61966-2-1), in cd m^-2.
+    centre = rgb[15:17, 15:17].reshape(-1, 3).astype(np.float64)
+    luminance = centre @ np.array([0.2126, 0.7152, 0.0722])
+    assert np.all(luminance > 0.0)
+
+
+@pytest.mark.parametrize(("camera", "size", "expected_wh"), [
+    ("panorama", 12, (24, 12)),          # equirectangular: width = 2 x size
+    ("perspective", 9, (16, 9)),         # width = round(size x 16/9)
+])
+def test_render_other_cameras_at_small_sizes(capsys, tmp_path, camera, size, expected_wh):
+    png = tmp_path / f"{camera}.png"
+    code, _, err = _run(capsys, ["render", "earth", "--size", str(size), "--camera", camera,
+                                 "--sun-elevation", "20", "--wavelengths", "8", "--samples", "16",
+                                 "-o", str(png)])
+    assert code == 0, err
+    with Image.open(png) as image:
+        assert image.size == expected_wh
+        assert np.asarray(image.convert("RGB")).max() > 0
