@@ -22,7 +22,7 @@ from skyscatter.render.image_io import write_exr, write_png
 from skyscatter.render.scene import SkyImage, render_sky, sun_direction
 from skyscatter.render.tonemap import auto_ev100, exposure_scale, to_srgb8, tonemap
 from skyscatter.spectrum.colour import xyz_to_rgb
-from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.spectrum.grid import checked_grid, checked_wavelengths, wavelength_grid
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import make_solver
@@ -53,7 +53,7 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
     `wavelengths_nm` (default: 16 bins over 360-830 nm)."""
     _check_range("sun_zenith_deg", sun_zenith_deg, 0.0, 180.0)
     _check_range("altitude_m", altitude_m, 0.0, 1e12)
-    wavelengths = wavelength_grid(16) if wavelengths_nm is None else np.asarray(wavelengths_nm)
+    wavelengths = wavelength_grid(16) if wavelengths_nm is None else checked_grid(wavelengths_nm)
     profile = atmosphere.optical_profile(wavelengths)
     engine = make_solver(solver, profile, n_samples=n_samples)
     return render_sky(engine, camera, altitude_m, sun_direction(sun_zenith_deg, sun_azimuth_deg),
@@ -109,8 +109,8 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     for value in view_zeniths_deg:
         _check_range("view zenith", value, 0.0, 180.0)
     _check_range("altitude_m", altitude_m, 0.0, 1e12)
-    profile = atmosphere.optical_profile(np.asarray(wavelengths_nm, dtype=np.float64),
-                                         monochromatic=True)
+    wavelengths = checked_wavelengths(np.atleast_1d(wavelengths_nm), "wavelength")
+    profile = atmosphere.optical_profile(wavelengths, monochromatic=True)
     engine = make_solver(solver, profile, n_samples=n_samples)
     position = observer_position(altitude_m, profile.bottom_radius_m)
     view_zenith, azimuth = np.meshgrid(np.radians(view_zeniths_deg),

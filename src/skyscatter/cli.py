@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -227,6 +228,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("skyscatter: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # e.g. `skyscatter radiance ... | head`: the reader left
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - stops the flush at exit failing
+        return 0
     except Exception as error:  # our bug: say so, briefly
         if args.debug:
             raise

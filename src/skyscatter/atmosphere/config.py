@@ -416,14 +416,13 @@ def _parse_optics(kind: str, table: _Table) -> object:
                 angstrom_exponent=table.number("angstrom_exponent", 0.0),
                 single_scattering_albedo=table.spectral("single_scattering_albedo", 1.0,
                                                         low=0.0, high=1.0),
-                phase=_parse_phase(table.table("phase", required=False), "rayleigh"))
+                phase=_parse_phase(table.table("phase")))
         else:
             scattering = table.spectral("scattering_per_m", low=0.0)
             extinction = (table.spectral("extinction_per_m", low=0.0)
                           if table.has("extinction_per_m") else None)
             optics = TabulatedScatteringOptics(
-                scattering, extinction, _parse_phase(table.table("phase", required=False),
-                                                     "rayleigh"))
+                scattering, extinction, _parse_phase(table.table("phase")))
     except InputError as error:
         raise ConfigError(f"{table.prefix}: {error}", path=table.path,
                           key=f"{table.prefix}.{error.key}", value=error.value,

@@ -51,8 +51,9 @@ def ozone_cross_section(wavelengths_nm: ArrayLike, single_cell_width_nm: float =
     r"""O3 absorption cross-section at 295 K, averaged over the cell of each grid wavelength.
 
     sigma_k = int_{a_k}^{b_k} sigma(lambda) dlambda / (b_k - a_k), with cell edges a_k, b_k halfway
-    between neighbouring wavelengths along the last axis (the end cells extend as far outwards as
-    inwards; a lone wavelength gets a cell `single_cell_width_nm` wide; `spectrum.grid.cell_edges`). A 10-nm grid thus gets
+    between neighbouring wavelengths (the end cells extend as far outwards as inwards; a lone
+    wavelength gets a cell `single_cell_width_nm` wide; `spectrum.grid.cell_edges`). A 10-nm grid
+    thus gets
     10-nm band means, the way Bruneton (2017) bins Serdyuchenko's data. Data: Malicet et al.
     (1995), doi:10.1007/BF00696758, and Brion et al. (1998), doi:10.1023/A:1006036924364, 295 K,
     195-830 nm (`data/o3_cross_section_malicet_brion_295k.npz`, from PyPI musica 0.17.2).
