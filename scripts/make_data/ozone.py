@@ -17,18 +17,15 @@ Run: `python scripts/make_data/ozone.py` (needs `pip install musica h5py`).
 from __future__ import annotations
 
 import hashlib
-import io
-import os
-import zipfile
 from pathlib import Path
 
 import numpy as np
+from reproducible_npz import write_npz
 
 OUT = (Path(__file__).resolve().parents[2] / "src" / "skyscatter" / "data"
        / "o3_cross_section_malicet_brion_295k.npz")
 SOURCE_FILE = "configs/tuvx/data/cross_sections/O3_1.nc"
 BIN_NM = 0.1
-FIXED_TIME = (1980, 1, 1, 0, 0, 0)  # zip timestamps, for byte-reproducible output
 
 
 def load_source() -> tuple[np.ndarray, np.ndarray, str, str]:
@@ -58,21 +55,6 @@ def bin_means(wavelength_nm: np.ndarray, values: np.ndarray,
     slope = (values[i + 1] - values[i]) / (wavelength_nm[i + 1] - wavelength_nm[i])
     at_edges = cumulative[i] + values[i] * dx + 0.5 * slope * dx * dx
     return np.diff(at_edges) / np.diff(edges_nm)
-
-
-def write_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """np.savez layout (one .npy per array) with fixed timestamps; written then renamed."""
-    tmp = path.with_suffix(".npz.tmp")
-    with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for name, array in arrays.items():
-            buffer = io.BytesIO()
-            np.lib.format.write_array(buffer, np.require(array, requirements="C"),
-                                      allow_pickle=False)
-            info = zipfile.ZipInfo(f"{name}.npy", date_time=FIXED_TIME)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            zf.writestr(info, buffer.getvalue())
-    os.replace(tmp, path)
 
 
 def main() -> None:

@@ -12,16 +12,13 @@ bytes (checksum in data/PROVENANCE.md). Run: `python scripts/make_data/solar_g17
 from __future__ import annotations
 
 import hashlib
-import io
-import os
-import zipfile
 from pathlib import Path
 
 import numpy as np
+from reproducible_npz import write_npz
 
 OUT = (Path(__file__).resolve().parents[2] / "src" / "skyscatter" / "data"
        / "solar_astm_g173_etr.npz")
-FIXED_TIME = (1980, 1, 1, 0, 0, 0)  # zip timestamps, for byte-reproducible output
 
 
 def load_g173_etr() -> tuple[np.ndarray, np.ndarray, str]:
@@ -31,21 +28,6 @@ def load_g173_etr() -> tuple[np.ndarray, np.ndarray, str]:
     wavelength_nm = np.asarray(table.index.to_numpy(), dtype=np.float64)
     irradiance = np.asarray(table["extraterrestrial"].to_numpy(), dtype=np.float64)
     return wavelength_nm, irradiance, pvlib.__version__
-
-
-def write_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """np.savez layout (one .npy per array) with fixed timestamps; written then renamed."""
-    tmp = path.with_suffix(".npz.tmp")
-    with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for name, array in arrays.items():
-            buffer = io.BytesIO()
-            np.lib.format.write_array(buffer, np.require(array, requirements="C"),
-                                      allow_pickle=False)
-            info = zipfile.ZipInfo(f"{name}.npy", date_time=FIXED_TIME)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            zf.writestr(info, buffer.getvalue())
-    os.replace(tmp, path)
 
 
 def main() -> None:
