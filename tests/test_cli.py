@@ -228,3 +228,18 @@ def test_render_other_cameras_at_small_sizes(capsys, tmp_path, camera, size, exp
     with Image.open(png) as image:
         assert image.size == expected_wh
         assert np.asarray(image.convert("RGB")).max() > 0
+
+
+def test_orbit_camera_sees_the_lit_side_towards_the_sun(capsys, tmp_path):
+    # Sun low in the east of the point below the camera: looking down with north up, east is
+    # on the right of the image, so the right half must be brighter than the left.
+    exr = tmp_path / "orbit.exr"
+    code, _, err = _run(capsys, ["render", "earth", "--camera", "orbit", "--distance-km",
+                                 "20000", "--lat", "0", "--sun-elevation", "10",
+                                 "--sun-azimuth", "90", "--size", "24", "-o",
+                                 str(tmp_path / "orbit.png"), "--exr", str(exr),
+                                 "--wavelengths", "4"])
+    assert code == 0, err
+    image, _ = read_exr(exr)
+    luminance = image.sum(axis=-1)
+    assert luminance[:, 16:].mean() > 3.0 * luminance[:, :8].mean()

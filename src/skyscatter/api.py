@@ -19,7 +19,13 @@ from skyscatter.atmosphere.model import Atmosphere
 from skyscatter.errors import InputError
 from skyscatter.render.camera import Camera, EquirectangularCamera, FisheyeCamera, PerspectiveCamera
 from skyscatter.render.image_io import write_exr, write_png
-from skyscatter.render.scene import SkyImage, render_sky, sun_direction
+from skyscatter.render.scene import (
+    SkyImage,
+    ground_viewpoint,
+    orbit_viewpoint,
+    render_sky,
+    sun_direction,
+)
 from skyscatter.render.tonemap import auto_ev100, exposure_scale, to_srgb8, tonemap
 from skyscatter.spectrum.colour import xyz_to_rgb
 from skyscatter.spectrum.grid import checked_grid, checked_wavelengths, wavelength_grid
@@ -34,6 +40,7 @@ __all__ = [
     "SkyImage",
     "list_presets",
     "load_atmosphere",
+    "orbit_field_of_view_deg",
     "render",
     "save_image",
     "sky_radiance_rows",
@@ -47,17 +54,35 @@ EXR_CONTENTS = tuple(EXR_UNITS)
 def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
            sun_azimuth_deg: float = 180.0, altitude_m: float = 0.0,
            wavelengths_nm: Sequence[float] | None = None, solver: str = "single",
-           n_samples: int = 64, progress: Callable[[int], None] | None = None) -> SkyImage:
-    """Render the sky seen by `camera` from `altitude_m` [m] above the ground, with the sun at
-    `sun_zenith_deg` and `sun_azimuth_deg` (from north towards east). Spectral, on
-    `wavelengths_nm` (default: 16 bins over 360-830 nm)."""
+           n_samples: int = 64, progress: Callable[[int], None] | None = None,
+           orbit_latitude_deg: float | None = None,
+           orbit_longitude_deg: float = 0.0) -> SkyImage:
+    """Render what `camera` sees from `altitude_m` [m] above the ground, with the sun at
+    `sun_zenith_deg` and `sun_azimuth_deg` (from north towards east) in the observer's local
+    frame. Spectral, on `wavelengths_nm` (default: 16 bins over 360-830 nm). With
+    `orbit_latitude_deg` the camera hangs above that latitude/longitude (views from space;
+    pitch -90 looks at the planet's centre); otherwise above the north pole."""
     _check_range("sun_zenith_deg", sun_zenith_deg, 0.0, 180.0)
     _check_range("altitude_m", altitude_m, 0.0, 1e12)
     wavelengths = wavelength_grid(16) if wavelengths_nm is None else checked_grid(wavelengths_nm)
     profile = atmosphere.optical_profile(wavelengths)
     engine = make_solver(solver, profile, n_samples=n_samples)
-    return render_sky(engine, camera, altitude_m, sun_direction(sun_zenith_deg, sun_azimuth_deg),
+    if orbit_latitude_deg is None:
+        viewpoint = ground_viewpoint(altitude_m, profile.bottom_radius_m)
+    else:
+        _check_range("latitude", orbit_latitude_deg, -90.0, 90.0)
+        viewpoint = orbit_viewpoint(altitude_m, orbit_latitude_deg, orbit_longitude_deg,
+                                    profile.bottom_radius_m)
+    return render_sky(engine, camera, viewpoint, sun_direction(sun_zenith_deg, sun_azimuth_deg),
                       atmosphere.planet.star, progress)
+
+
+def orbit_field_of_view_deg(altitude_m: float, planet_radius_m: float,
+                            margin: float = 1.15) -> float:
+    """Vertical field of view [deg] that frames the whole planet (with its atmosphere) seen
+    from `altitude_m` above the ground: 2 asin(R / (R + h)) times `margin`."""
+    half = np.degrees(np.arcsin(planet_radius_m / (planet_radius_m + altitude_m)))
+    return float(min(2.0 * half * margin, 170.0))
 
 
 def save_image(image: SkyImage, png_path: str | Path | None = None,

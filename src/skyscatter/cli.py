@@ -18,7 +18,7 @@ from skyscatter import __version__
 
 __all__ = ["main"]
 
-CAMERAS = ("fisheye", "panorama", "perspective")
+CAMERAS = ("fisheye", "panorama", "perspective", "orbit")
 
 
 def _float_list(text: str) -> list[float]:
@@ -91,15 +91,24 @@ def build_parser() -> argparse.ArgumentParser:
                         help="sun azimuth from north towards east in degrees (default 180)")
     render.add_argument("--camera", choices=CAMERAS, default="fisheye",
                         help="fisheye: all-sky, zenith at centre, north up, east left; "
-                        "panorama: equirectangular 2:1; perspective: pinhole "
-                        "(default fisheye)")
+                        "panorama: equirectangular 2:1; perspective: pinhole; orbit: the planet "
+                        "from space, looking at its centre from --distance-km above "
+                        "--lat/--lon, north up (default fisheye)")
     render.add_argument("--size", type=_positive_int, default=512, metavar="PIXELS",
                         help="image height in pixels (panorama width = 2 x size; "
                         "perspective width from --aspect) (default 512)")
     render.add_argument("--aspect", type=float, default=16 / 9,
                         help="perspective width / height (default 16/9)")
-    render.add_argument("--fov", type=float, default=60.0, metavar="DEG",
-                        help="perspective vertical field of view in degrees (default 60)")
+    render.add_argument("--fov", type=float, default=None, metavar="DEG",
+                        help="vertical field of view in degrees (default 60 for perspective; "
+                        "orbit: the whole planet)")
+    render.add_argument("--distance-km", type=float, default=None, metavar="KM",
+                        help="orbit camera: height above the ground in km (default: the "
+                        "planet's radius)")
+    render.add_argument("--lat", type=float, default=0.0, metavar="DEG",
+                        help="orbit camera: latitude below the camera in degrees (default 0)")
+    render.add_argument("--lon", type=float, default=0.0, metavar="DEG",
+                        help="orbit camera: longitude below the camera in degrees (default 0)")
     render.add_argument("--heading", type=float, default=180.0, metavar="DEG",
                         help="view azimuth from north towards east for perspective and "
                         "panorama centre, degrees (default 180: south)")
@@ -170,16 +179,32 @@ def _presets(args: argparse.Namespace) -> None:
 
 def _render(args: argparse.Namespace) -> None:
     from skyscatter import api
+    from skyscatter.errors import InputError
     from skyscatter.render.progress import progress
 
     atmosphere = api.load_atmosphere(args.atmosphere)
     zenith = (args.sun_zenith if args.sun_zenith is not None
               else 90.0 - (30.0 if args.sun_elevation is None else args.sun_elevation))
-    camera = _camera(args)
+    orbit = args.camera == "orbit"
+    altitude = args.altitude
+    if orbit:
+        radius = atmosphere.planet.radius_m
+        altitude = radius if args.distance_km is None else args.distance_km * 1000.0
+        if not altitude > 0.0:
+            raise InputError(f"--distance-km {args.distance_km} must be > 0", key="distance_km",
+                             value=args.distance_km)
+        fov = args.fov if args.fov is not None else api.orbit_field_of_view_deg(altitude,
+                                                                                radius)
+        camera = api.PerspectiveCamera(args.size, args.size, fov, heading_deg=0.0,
+                                       pitch_deg=-90.0)
+    else:
+        camera = _camera(args)
     directions, valid = camera.directions()
     with progress(int(valid.sum()), "rendering", unit="ray") as bar:
-        image = api.render(atmosphere, camera, zenith, args.sun_azimuth, args.altitude,
-                           args.wavelengths, args.solver, args.samples, bar.update)
+        image = api.render(atmosphere, camera, zenith, args.sun_azimuth, altitude,
+                           args.wavelengths, args.solver, args.samples, bar.update,
+                           orbit_latitude_deg=args.lat if orbit else None,
+                           orbit_longitude_deg=args.lon)
     ev100 = api.save_image(image, args.output, args.exr, args.exposure,
                            args.exposure_compensation, args.tonemap, args.colour_space,
                            args.white_balance == "star", args.exr_content)
@@ -194,7 +219,8 @@ def _camera(args: argparse.Namespace):
     if args.camera == "panorama":
         return api.EquirectangularCamera(2 * args.size, args.size, heading_deg=args.heading)
     width = max(1, round(args.size * args.aspect))
-    return api.PerspectiveCamera(width, args.size, args.fov, heading_deg=args.heading,
+    fov = 60.0 if args.fov is None else args.fov
+    return api.PerspectiveCamera(width, args.size, fov, heading_deg=args.heading,
                                  pitch_deg=args.pitch)
 
 

@@ -1,7 +1,8 @@
 """Compose a sky image: camera rays -> solver radiance -> plus the sun disk -> spectral image.
 
-The observer stands above the planet's north pole, so the local east-north-up frame of the
-cameras is the world frame (`transport.single_scattering.observer_position`). The sun disk
+Cameras and the sun direction live in the local east-north-up frame of a `Viewpoint`: an
+observer above the north pole (`ground_viewpoint`, where that frame is the world frame) or a
+point in orbit above any latitude and longitude (`orbit_viewpoint`). The sun disk
 is added with its limb-darkened radiance times the transmittance along the line of sight;
 when the disk is smaller than about four pixels, its whole transmitted irradiance goes into the
 pixel that contains its centre, so the image always carries the right solar flux.
@@ -19,7 +20,15 @@ from skyscatter.spectrum.colour import spectral_to_xyz, white_balance, xyz_to_rg
 from skyscatter.spectrum.star import Star
 from skyscatter.transport.single_scattering import observer_position
 
-__all__ = ["SkyImage", "add_sun_disk", "render_sky", "sun_direction"]
+__all__ = [
+    "SkyImage",
+    "Viewpoint",
+    "add_sun_disk",
+    "ground_viewpoint",
+    "orbit_viewpoint",
+    "render_sky",
+    "sun_direction",
+]
 
 SUN_SPLAT_PIXELS = 4.0  # a disk covering fewer pixels than this is deposited into one pixel
 
@@ -55,16 +64,46 @@ class SkyImage:
         return xyz_to_rgb(self.xyz(balance_to_light), space)
 
 
-def render_sky(solver, camera: Camera, altitude_m: float, sun_dir: np.ndarray, star: Star,
+@dataclass(frozen=True)
+class Viewpoint:
+    """Where the camera is (planet-centred [m]) and its local east-north-up axes (columns of
+    `to_world`, world coordinates)."""
+
+    position_m: np.ndarray  # (3,)
+    to_world: np.ndarray  # (3, 3)
+
+    def direction_to_world(self, local: np.ndarray) -> np.ndarray:
+        return np.asarray(local) @ self.to_world.T
+
+
+def ground_viewpoint(altitude_m: float, bottom_radius_m: float) -> Viewpoint:
+    """An observer `altitude_m` above the north pole; local frame = world frame."""
+    return Viewpoint(observer_position(altitude_m, bottom_radius_m), np.eye(3))
+
+
+def orbit_viewpoint(altitude_m: float, latitude_deg: float, longitude_deg: float,
+                    bottom_radius_m: float) -> Viewpoint:
+    """A camera `altitude_m` above the ground point at (latitude, longitude) [deg]; its local
+    frame is east-north-up at that point, so pitch -90 looks at the planet's centre."""
+    lat, lon = np.radians(latitude_deg), np.radians(longitude_deg)
+    up = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
+    east = np.array([-np.sin(lon), np.cos(lon), 0.0])
+    north = np.cross(up, east)
+    return Viewpoint((bottom_radius_m + altitude_m) * up, np.column_stack([east, north, up]))
+
+
+def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray, star: Star,
                progress: Callable[[int], None] | None = None) -> SkyImage:
-    """Spectral sky image seen by `camera` at `altitude_m` with the sun along `sun_dir`
-    (local frame). `solver` answers `sky_radiance` and `transmittance`."""
+    """Spectral image seen by `camera` from `viewpoint` with the sun along `sun_dir` (both in
+    the viewpoint's local frame). `solver` answers `sky_radiance` and `transmittance`."""
     profile = solver.profile
     directions, valid = camera.directions()
-    position = observer_position(altitude_m, profile.bottom_radius_m)
+    world_directions = viewpoint.direction_to_world(directions)
+    world_sun = viewpoint.direction_to_world(sun_dir)
     spectral = np.zeros(directions.shape[:2] + (profile.n_wavelengths,))
-    spectral[valid] = solver.sky_radiance(position, directions[valid], sun_dir, progress)
-    sun_transmittance = solver.transmittance(position, sun_dir)
+    spectral[valid] = solver.sky_radiance(viewpoint.position_m, world_directions[valid],
+                                          world_sun, progress)
+    sun_transmittance = solver.transmittance(viewpoint.position_m, world_sun)
     add_sun_disk(spectral, camera, directions, valid, sun_dir, star,
                  profile.wavelengths_nm, sun_transmittance)
     sky = valid & (directions[..., 2] > 0.0)
