@@ -17,6 +17,9 @@ FIGURES = {
                                   "--camera", "panorama", "--heading", "270", "--size", "192"],
     "mars_afternoon.png": ["mars-costa", "--sun-elevation", "35", "--sun-azimuth", "240",
                            "--size", "256"],
+    "earth_from_space.png": ["earth", "--camera", "orbit", "--distance-km", "20000", "--lat",
+                             "30", "--sun-elevation", "15", "--sun-azimuth", "90", "--size",
+                             "256"],
 }
 
 if __name__ == "__main__":
