@@ -379,3 +379,15 @@ def test_unknown_preset_suggests_the_closest_name():
 def test_missing_config_file_is_an_input_error(tmp_path):
     with pytest.raises(InputError, match="does not exist"):
         load_atmosphere(tmp_path / "missing.toml")
+
+
+@pytest.mark.parametrize("scale_height_m", [30.0, 100.0, 2000.0])
+def test_optical_depth_is_exact_on_the_solver_levels_even_for_thin_layers(tmp_path,
+                                                                         scale_height_m):
+    # The AOD asked for is what the solver integrates, whatever the layer's thickness relative
+    # to the 50 m level spacing (normalised on the levels the solver uses). Tolerance: rounding.
+    text = BASE.replace("scale_height_m = 2000.0", f"scale_height_m = {scale_height_m}")
+    atmosphere = load_atmosphere(_config(tmp_path, text))
+    tau, _ = _vertical_optical_depth(atmosphere, [500.0, 550.0])
+    assert tau[0, 1] == pytest.approx(0.1, rel=1e-12)
+    assert tau[0, 0] == pytest.approx(0.1 * (500.0 / 550.0) ** -1.3, rel=1e-12)

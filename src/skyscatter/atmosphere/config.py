@@ -272,22 +272,20 @@ def _parse_constituent(table: _Table, top_m: float) -> Constituent:
     profile = _parse_profile(table.table("density"), top_m)
     optics_table = table.table("optics")
     kind = optics_table.text("type", choices=("rayleigh", "absorber", "angstrom", "coefficients"))
+    target_column = None
     if kind == "absorber" and table.has("column_dobson"):
-        column = vertical_column(profile, top_m)
-        if column <= 0.0:
+        if vertical_column(profile, top_m) <= 0.0:
             raise table.error("column_dobson", table.data["column_dobson"],
                               "the density profile is zero everywhere")
-        target = table.number("column_dobson", low=0.0) * DOBSON_UNIT_M2
-        profile = ScaledProfile(profile, target / column)
+        target_column = table.number("column_dobson", low=0.0) * DOBSON_UNIT_M2
     if kind == "angstrom" and optics_table.has("optical_depth"):
-        column = vertical_column(profile, top_m)
-        if column <= 0.0:
+        if vertical_column(profile, top_m) <= 0.0:
             raise optics_table.error("optical_depth", optics_table.data["optical_depth"],
                                      "the density profile is zero everywhere")
-        profile = ScaledProfile(profile, 1.0 / column)  # unit column: per density = tau
+        target_column = 1.0  # unit column: extinction per density = optical depth
     optics = _parse_optics(kind, optics_table)
     table.finish()
-    return Constituent(name=name, profile=profile, optics=optics)
+    return Constituent(name=name, profile=profile, optics=optics, vertical_column=target_column)
 
 
 def _parse_profile(table: _Table, top_m: float) -> object:

@@ -59,6 +59,9 @@ class Constituent:
     name: str
     profile: DensityProfile
     optics: ConstituentOptics
+    # When set, the sampled density is scaled so that its vertical column on the solver's own
+    # altitude levels is exactly this [density x m] (a Dobson column, or 1 for an optical depth).
+    vertical_column: float | None = None
 
 
 @dataclass(frozen=True)
@@ -102,6 +105,9 @@ class Atmosphere:
         altitudes = np.linspace(0.0, self.top_altitude_m, n_levels)
         density = np.array([c.profile.density(altitudes) for c in self.constituents],
                            dtype=np.float64).reshape(len(self.constituents), n_levels)
+        for row, constituent in zip(density, self.constituents, strict=True):
+            if constituent.vertical_column is not None:
+                row *= constituent.vertical_column / np.trapezoid(row, altitudes)
 
         def spectrum(function) -> np.ndarray:
             if monochromatic:
