@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
+from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver
 
 __all__ = ["SOLVERS", "make_solver"]
@@ -16,10 +17,13 @@ __all__ = ["SOLVERS", "make_solver"]
 SOLVERS = {
     "single": (SingleScatteringSolver, "single scattering + one Lambertian ground bounce, "
                                        "ray marched (no tables)"),
+    "lut": (LutSolver, "precomputed tables with multiple scattering (Bruneton & Neyret), "
+                       "4 orders by default"),
 }
 
 
-def make_solver(name: str, profile: OpticalProfile, **options) -> SingleScatteringSolver:
+def make_solver(name: str, profile: OpticalProfile,
+                **options) -> SingleScatteringSolver | LutSolver:
     """A solver of `profile` by name (`SOLVERS`); options go to its constructor."""
     if name not in SOLVERS:
         raise InputError(f"unknown solver {name!r}; available: {', '.join(SOLVERS)}",

@@ -1,0 +1,814 @@
+"""Numba kernels of the precomputed tables: building them (`transport/tables.py`) and looking
+them up (`transport/lut_solver.py`).
+
+Conventions (docs/physics/tables.md, Bruneton 2017 functions.glsl):
+- Table coordinates come from `transport/table_parameterisation.py` only. Entry i of an axis of
+  n entries holds the texel centre x = i / (n - 1); interpolation is linear on each axis
+  (quadrilinear in the 4-D scattering table, the mu axis split into its ground / sky halves).
+- During the precomputation transmittances come from a wavelength-free table of column
+  densities per constituent (n_c, n_r_t, n_mu_t) in the transmittance parameterisation:
+  tau = sum_c beta_e,c col_c, so all wavelengths share one lookup. Between two points of a ray,
+  col = col_top(start) - col_top(end) (rays that miss the ground) or col_top(end, -mu_end) -
+  col_top(start, -mu) (rays that hit it), Bruneton 2017 `GetTransmittance` in columns.
+- Table rays are sampled densest near their lowest point and near the observer
+  (`table_ray_distances`); integrals use the trapezoid rule on the samples.
+- Stacked scattering tables have shape (n_t, n_r, n_mu, n_mu_s, n_nu, n_wl); a lookup sums
+  weights[t, w] * table[t] (phase functions for single scattering, 1 for multiple).
+- Phase functions inside kernels come from tables (n_s, n_angle, n_wl) sampled uniformly in the
+  scattering angle over [0, pi], interpolated linearly.
+- The scattering density J is tabulated per scattering constituent and per unit density on
+  (r_k, mu_s_l) nodes of the scattering table times outgoing directions (theta_o, phi_o) on a
+  regular grid, phi measured from the sun's vertical plane (J is even in phi).
+Kernels take arrays and floats only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skyscatter.transport._kernels import (
+    columns_along_segment,
+    density_at,
+)
+from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fraction
+from skyscatter.transport.table_parameterisation import (
+    distance_to_bottom_boundary,
+    distance_to_top_boundary,
+    irradiance_r_mu_s_from_x,
+    irradiance_x_from_r_mu_s,
+    mu_s_mapping_constants,
+    ray_intersects_ground,
+    scattering_mu_from_u,
+    scattering_mu_s_from_u,
+    scattering_nu_from_u,
+    scattering_r_from_u,
+    scattering_u_mu,
+    scattering_u_mu_s,
+    scattering_u_mu_s_from_constants,
+    scattering_u_nu,
+    scattering_u_r,
+    texel_index,
+    transmittance_r_mu_from_x,
+    transmittance_x_from_r_mu,
+)
+
+RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loops of the lookups
+
+
+# --------------------------------------------------------------------------------------------
+# Small lookups
+# --------------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def _axis(f, n):
+    """(i, a): lower entry and weight of the fractional index f on an axis of n >= 2 entries."""
+    f = min(max(f, 0.0), n - 1.0)
+    i = min(int(f), n - 2)
+    return i, f - i
+
+
+@njit(cache=True)
+def columns_to_top(r, mu, bottom_radius, top_radius, columns, out):
+    """Column densities from (r, mu) to the top, bilinear in `columns` (n_c, n_r_t, n_mu_t),
+    into out (n_c,). For rays that do not hit the ground."""
+    x_mu, x_r = transmittance_x_from_r_mu(r, mu, bottom_radius, top_radius)
+    i, a = _axis(x_r * (columns.shape[1] - 1), columns.shape[1])
+    j, b = _axis(x_mu * (columns.shape[2] - 1), columns.shape[2])
+    for c in range(columns.shape[0]):
+        out[c] = ((1.0 - a) * ((1.0 - b) * columns[c, i, j] + b * columns[c, i, j + 1])
+                  + a * ((1.0 - b) * columns[c, i + 1, j] + b * columns[c, i + 1, j + 1]))
+
+
+@njit(cache=True)
+def transmittance_to_top(r, mu, bottom_radius, top_radius, transmittance, out):
+    """Transmittance from (r, mu) to the top, bilinear in `transmittance` (n_r_t, n_mu_t,
+    n_wl), into out (n_wl,) (Bruneton 2017, `GetTransmittanceToTopAtmosphereBoundary`)."""
+    x_mu, x_r = transmittance_x_from_r_mu(r, mu, bottom_radius, top_radius)
+    i, a = _axis(x_r * (transmittance.shape[0] - 1), transmittance.shape[0])
+    j, b = _axis(x_mu * (transmittance.shape[1] - 1), transmittance.shape[1])
+    for w in range(transmittance.shape[2]):
+        out[w] = ((1.0 - a) * ((1.0 - b) * transmittance[i, j, w]
+                               + b * transmittance[i, j + 1, w])
+                  + a * ((1.0 - b) * transmittance[i + 1, j, w]
+                         + b * transmittance[i + 1, j + 1, w]))
+
+
+@njit(cache=True)
+def transmittance_along(r, mu, d, hits_ground, bottom_radius, top_radius, transmittance, out,
+                        scratch):
+    """Transmittance over the distance d along the ray (r, mu), into out (n_wl,): the ratio of
+    two lookups, capped at 1 (Bruneton 2017, `GetTransmittance`); rays that hit the ground use
+    the upward rays -mu at both ends."""
+    r_d = math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0))
+    r_d = min(max(r_d, bottom_radius), top_radius)
+    mu_d = min(max((r * mu + d) / r_d, -1.0), 1.0)
+    if hits_ground:
+        transmittance_to_top(r_d, -mu_d, bottom_radius, top_radius, transmittance, out)
+        transmittance_to_top(r, -mu, bottom_radius, top_radius, transmittance, scratch)
+    else:
+        transmittance_to_top(r, mu, bottom_radius, top_radius, transmittance, out)
+        transmittance_to_top(r_d, mu_d, bottom_radius, top_radius, transmittance, scratch)
+    for w in range(out.size):
+        out[w] = min(out[w] / scratch[w], 1.0) if scratch[w] > 0.0 else 0.0
+
+
+@njit(cache=True)
+def phase_values(phase_table, nu, out):
+    """Phase functions at nu = cos(scattering angle), linear in the angle, from `phase_table`
+    (n_s, n_angle, n_wl) sampled uniformly over [0, pi]; into out (n_s, n_wl) [sr^-1]."""
+    n_angle = phase_table.shape[1]
+    theta = math.acos(min(max(nu, -1.0), 1.0))
+    i, a = _axis(theta / math.pi * (n_angle - 1), n_angle)
+    for s in range(phase_table.shape[0]):
+        for w in range(phase_table.shape[2]):
+            out[s, w] = (1.0 - a) * phase_table[s, i, w] + a * phase_table[s, i + 1, w]
+
+
+@njit(cache=True)
+def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r,
+                       n_mu, n_mu_s, n_nu):
+    """Lower entries and weights (i_r, a_r, i_mu, a_mu, i_mu_s, a_mu_s, i_nu, a_nu) of the
+    quadrilinear lookup of (r, mu, mu_s, nu) in a scattering table. The mu interpolation stays
+    inside the half chosen by `hits_ground`."""
+    i_r, a_r = _axis(texel_index(scattering_u_r(r, bottom_radius, top_radius, n_r), n_r), n_r)
+    u_mu = scattering_u_mu(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
+    half = n_mu // 2
+    f_mu = u_mu * n_mu - 0.5
+    if hits_ground:
+        f_mu = min(max(f_mu, 0.0), half - 1.0)
+        i_mu = min(int(f_mu), half - 2)
+    else:
+        f_mu = min(max(f_mu, float(half)), n_mu - 1.0)
+        i_mu = min(int(f_mu), n_mu - 2)
+    a_mu = f_mu - i_mu
+    i_s, a_s = _axis(texel_index(
+        scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s), n_mu_s), n_mu_s)
+    i_nu, a_nu = _axis(scattering_u_nu(nu) * (n_nu - 1), n_nu)
+    return i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu
+
+
+@njit(cache=True)
+def scattering_accumulate(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
+                          i_nu, a_nu, out):
+    """out[w] += sum_t weights[t, w] * table_t interpolated at the corners of
+    `scattering_corners`; `flat` is the stacked table (n_t, n_r, n_mu, n_mu_s, n_nu, n_wl)
+    reshaped to (n_t, n_r n_mu n_mu_s n_nu n_wl) (a view of the C-ordered array)."""
+    n_t = flat.shape[0]
+    n_wl = out.size
+    s_nu = n_wl
+    s_s = n_nu * s_nu
+    s_mu = n_mu_s * s_s
+    s_r = n_mu * s_mu
+    base = i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu
+    for dr in range(2):
+        wr = a_r if dr == 1 else 1.0 - a_r
+        if wr == 0.0:
+            continue
+        for dm in range(2):
+            wm = wr * (a_mu if dm == 1 else 1.0 - a_mu)
+            if wm == 0.0:
+                continue
+            for ds in range(2):
+                ws = wm * (a_s if ds == 1 else 1.0 - a_s)
+                if ws == 0.0:
+                    continue
+                for dn in range(2):
+                    wn = ws * (a_nu if dn == 1 else 1.0 - a_nu)
+                    if wn == 0.0:
+                        continue
+                    offset = base + dr * s_r + dm * s_mu + ds * s_s + dn * s_nu
+                    for t in range(n_t):
+                        for w in range(n_wl):
+                            out[w] += wn * weights[t, w] * flat[t, offset + w]
+
+
+def flat_tables(tables: np.ndarray) -> np.ndarray:
+    """The stacked scattering tables as the (n_t, cells x n_wl) view `scattering_accumulate`
+    reads (a copy only if `tables` is not C-contiguous)."""
+    tables = np.ascontiguousarray(tables)
+    return tables.reshape(tables.shape[0], -1)
+
+
+# --------------------------------------------------------------------------------------------
+# Precomputation
+# --------------------------------------------------------------------------------------------
+
+@njit(parallel=True, cache=True)
+def column_table(n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density):
+    """Column densities [density x m] from each node of the transmittance table to the top,
+    (n_c, n_r, n_mu); node (i, j) is x_r = i / (n_r - 1), x_mu = j / (n_mu - 1)."""
+    n_c = density.shape[0]
+    table = np.empty((n_c, n_r, n_mu))
+    for index in prange(n_r * n_mu):
+        i = index // n_mu
+        j = index % n_mu
+        r, mu = transmittance_r_mu_from_x(j / (n_mu - 1), i / (n_r - 1), bottom_radius,
+                                          top_radius)
+        out = np.empty(n_c)
+        columns_along_segment(r, mu, 0.0, distance_to_top_boundary(r, mu, top_radius),
+                              n_samples, bottom_radius, h_step, density, out)
+        for c in range(n_c):
+            table[c, i, j] = out[c]
+    return table
+
+
+@njit(cache=True)
+def table_ray_distances(r, mu, d, hits_ground, n_samples, out):
+    """Sample distances along the table ray (r, mu) of length d, increasing from 0 to d, into
+    out; returns their number (n_samples + 1). Where they crowd:
+    - upward rays (lowest point at the start): t = d (k/n)^2, dense near the start;
+    - rays that hit the ground: t = d (1 - cos(pi k/n)) / 2, dense near the observer (the
+      attenuation of thick paths) and near the ground (the densest air);
+    - rays through a tangent point t_p = -r mu: half the samples on [0, t_p] with the cosine
+      law (dense at the observer and at t_p), half on [t_p, d] with t_p + (d - t_p) (k/m)^2.
+    Unlike the ray-marching solver (`_kernels.sample_distance`, dense at the tangent point
+    only), the observer's end is resolved too: a ray from 1 km just above the horizon has its
+    light within ~30 km of the observer in the blue."""
+    t_tangent = -r * mu
+    if hits_ground:
+        for k in range(n_samples + 1):
+            out[k] = 0.5 * d * (1.0 - math.cos(math.pi * k / n_samples))
+    elif t_tangent <= 0.0 or t_tangent >= d:
+        for k in range(n_samples + 1):
+            out[k] = d * (k / n_samples) ** 2
+    else:
+        m1 = n_samples // 2
+        m2 = n_samples - m1
+        for k in range(m1 + 1):
+            out[k] = 0.5 * t_tangent * (1.0 - math.cos(math.pi * k / m1))
+        for k in range(1, m2 + 1):
+            out[m1 + k] = t_tangent + (d - t_tangent) * (k / m2) ** 2
+    out[n_samples] = d
+    return n_samples + 1
+
+
+@njit(cache=True)
+def _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step, density,
+                 columns, t, radius, mu_t, weight, dens, col_view):
+    """Samples of the table ray (r, mu) up to the ground or the top (`table_ray_distances`):
+    distances t, radii, cosines mu_t, trapezoid weights [m], densities dens (n, n_c) and view
+    columns col_view (n, n_c) from the start. Returns the number of samples (0 for a ray of
+    zero length)."""
+    n_c = density.shape[0]
+    if hits_ground:
+        d = distance_to_bottom_boundary(r, mu, bottom_radius)
+    else:
+        d = distance_to_top_boundary(r, mu, top_radius)
+    if d <= 0.0:
+        return 0
+    total = table_ray_distances(r, mu, d, hits_ground, n_samples, t)
+    start = np.empty(n_c)
+    here = np.empty(n_c)
+    columns_to_top(r, -mu if hits_ground else mu, bottom_radius, top_radius, columns, start)
+    for j in range(total):
+        tj = t[j]
+        rj = math.sqrt(max(r * r + tj * tj + 2.0 * r * mu * tj, 0.0))
+        rj = min(max(rj, bottom_radius), top_radius)
+        mj = min(max((r * mu + tj) / rj, -1.0), 1.0)
+        radius[j] = rj
+        mu_t[j] = mj
+        density_at(rj - bottom_radius, h_step, density, dens[j])
+        if hits_ground:
+            columns_to_top(rj, -mj, bottom_radius, top_radius, columns, here)
+            for c in range(n_c):
+                col_view[j, c] = max(here[c] - start[c], 0.0)
+        else:
+            columns_to_top(rj, mj, bottom_radius, top_radius, columns, here)
+            for c in range(n_c):
+                col_view[j, c] = max(start[c] - here[c], 0.0)
+    for j in range(total):
+        left = t[j] - t[j - 1] if j > 0 else 0.0
+        right = t[j + 1] - t[j] if j < total - 1 else 0.0
+        weight[j] = 0.5 * (left + right)
+    return total
+
+
+@njit(cache=True)
+def _view_transmittance(total, weight, col_view, extinction, out):
+    """out[j, w] = T(x, p_j) * weight[j] from the view columns of `_ray_samples`."""
+    n_c, n_wl = extinction.shape
+    for j in range(total):
+        for w in range(n_wl):
+            tau = 0.0
+            for c in range(n_c):
+                tau += extinction[c, w] * col_view[j, c]
+            out[j, w] = math.exp(-tau) * weight[j]
+
+
+@njit(cache=True)
+def _sun_visible(r, mu_s, bottom_radius, sun_angular_radius):
+    """`geometry.sun_visible_fraction`, with a shortcut for a sun well above the horizon:
+    mu_s >= mu_h + alpha + alpha^2 / 2 >= cos(theta_h - alpha) implies the whole disk is up."""
+    mu_h = horizon_cos_zenith(r, bottom_radius)
+    if mu_s >= mu_h + sun_angular_radius * (1.0 + 0.5 * sun_angular_radius):
+        return 1.0
+    return sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
+
+
+@njit(parallel=True, cache=True)
+def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
+                            mu_s_min, h_step, density, columns, extinction, transmittance,
+                            scatterers, factor, sun_angular_radius):
+    """Single scattering without phase function, per scattering constituent:
+    table[s, cell, w] = factor[s, w] * int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt, with
+    factor = E_sun beta_s,s [W m^-2 nm^-1 / density]; (n_s, n_r, n_mu, n_mu_s, n_nu, n_wl)
+    float32. T(x, p) from the column table, T_sun from the transmittance table (n_r_t, n_mu_t,
+    n_wl) (no exponential per cell). Bruneton 2017, `ComputeSingleScattering`; V = visible
+    part of the sun disk."""
+    n_c = density.shape[0]
+    n_s = scatterers.size
+    n_wl = extinction.shape[1]
+    table = np.zeros((n_s, n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
+    n_max = n_samples + 8
+    for row in prange(n_r * n_mu):
+        i_r = row // n_mu
+        i_mu = row % n_mu
+        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius,
+                                               top_radius, n_mu)
+        t = np.empty(n_max)
+        radius = np.empty(n_max)
+        mu_t = np.empty(n_max)
+        weight = np.empty(n_max)
+        dens = np.empty((n_max, n_c))
+        col_view = np.empty((n_max, n_c))
+        total = _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step,
+                             density, columns, t, radius, mu_t, weight, dens, col_view)
+        if total == 0:
+            continue
+        view = np.empty((total, n_wl))
+        _view_transmittance(total, weight, col_view, extinction, view)
+        mu_h = np.empty(total)
+        for j in range(total):
+            mu_h[j] = horizon_cos_zenith(radius[j], bottom_radius)
+        sun = np.empty(n_wl)
+        acc = np.empty((n_s, n_wl))
+        for i_s in range(n_mu_s):
+            mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
+                                          mu_s_min, n_mu_s)
+            spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+            for i_nu in range(n_nu):
+                nu = scattering_nu_from_u(i_nu / (n_nu - 1))
+                nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                acc[:, :] = 0.0
+                for j in range(total):
+                    rj = radius[j]
+                    mu_s_j = min(max((r * mu_s + t[j] * nu) / rj, -1.0), 1.0)
+                    visible = _sun_visible(rj, mu_s_j, bottom_radius, sun_angular_radius)
+                    if visible <= 0.0:
+                        continue
+                    transmittance_to_top(rj, max(mu_s_j, mu_h[j]), bottom_radius, top_radius,
+                                         transmittance, sun)
+                    for s in range(n_s):
+                        dv = dens[j, scatterers[s]] * visible
+                        for w in range(n_wl):
+                            acc[s, w] += dv * view[j, w] * sun[w]
+                for s in range(n_s):
+                    for w in range(n_wl):
+                        table[s, i_r, i_mu, i_s, i_nu, w] = acc[s, w] * factor[s, w]
+    return table
+
+
+@njit(parallel=True, cache=True)
+def direct_ground_irradiance(n_points, bottom_radius, top_radius, columns, extinction,
+                             sun_irradiance, sun_angular_radius):
+    """Direct sun irradiance on the ground E_sun T_sun max(mu_s, 0) V at mu_s = -1 + 2 i /
+    (n_points - 1), (n_points, n_wl) [W m^-2 nm^-1]."""
+    n_c, n_wl = extinction.shape
+    out = np.zeros((n_points, n_wl))
+    for i in prange(n_points):
+        mu_s = -1.0 + 2.0 * i / (n_points - 1)
+        visible = sun_visible_fraction(bottom_radius, mu_s, bottom_radius, sun_angular_radius)
+        if visible <= 0.0 or mu_s <= 0.0:
+            continue
+        col = np.empty(n_c)
+        columns_to_top(bottom_radius, mu_s, bottom_radius, top_radius, columns, col)
+        for w in range(n_wl):
+            tau = 0.0
+            for c in range(n_c):
+                tau += extinction[c, w] * col[c]
+            out[i, w] = sun_irradiance[w] * math.exp(-tau) * mu_s * visible
+    return out
+
+
+@njit(cache=True)
+def _ground_radiance(r, mu, mu_s, nu, bottom_radius, top_radius, columns, extinction,
+                     ground_irradiance, albedo, col_a, col_b, out):
+    """out[w] += radiance of the Lambertian ground seen from (r, mu) through the atmosphere:
+    T(x, g) albedo / pi E(mu_s(g)), E from `ground_irradiance` (n_g, n_wl) on mu_s = -1 + 2 i /
+    (n_g - 1). For rays that hit the ground."""
+    n_c, n_wl = extinction.shape
+    d = distance_to_bottom_boundary(r, mu, bottom_radius)
+    mu_g = min(max((r * mu + d) / bottom_radius, -1.0), 1.0)
+    mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
+    columns_to_top(bottom_radius, -mu_g, bottom_radius, top_radius, columns, col_a)
+    columns_to_top(r, -mu, bottom_radius, top_radius, columns, col_b)
+    n_g = ground_irradiance.shape[0]
+    i, a = _axis(0.5 * (mu_s_g + 1.0) * (n_g - 1), n_g)
+    for w in range(n_wl):
+        tau = 0.0
+        for c in range(n_c):
+            tau += extinction[c, w] * max(col_a[c] - col_b[c], 0.0)
+        irradiance = (1.0 - a) * ground_irradiance[i, w] + a * ground_irradiance[i + 1, w]
+        out[w] += math.exp(-tau) * albedo[w] / math.pi * irradiance
+
+
+@njit(parallel=True, cache=True)
+def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, mu_s_min,
+                      tables, n_mu, n_nu, use_phase, phase_table, ground_irradiance, albedo,
+                      columns, extinction):
+    """Radiance of the previous order arriving at the scattering-density nodes, from the
+    directions (theta_in[a], phi_in[p]) (phi from the sun's vertical plane): the scattering
+    lookup (with phase functions when `use_phase`, i.e. the single-scattering tables; `tables`
+    as from `flat_tables`, n_mu and n_nu their axes) plus the ground lit by
+    `ground_irradiance` for directions that hit it. Returns
+    (n_wl, n_a n_p, n_r n_mu_s), the layout of the matrix product that follows.
+    Bruneton 2017, `ComputeScatteringDensity`, the inner part."""
+    n_c, n_wl = extinction.shape
+    n_t = tables.shape[0]
+    n_a = theta_in.size
+    n_p = phi_in.size
+    radiance = np.zeros((n_wl, n_a * n_p, n_r * n_mu_s))
+    for kl in prange(n_r * n_mu_s):
+        k = kl // n_mu_s
+        l = kl % n_mu_s
+        r = scattering_r_from_u((k + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        mu_s = scattering_mu_s_from_u((l + 0.5) / n_mu_s, bottom_radius, top_radius, mu_s_min,
+                                      n_mu_s)
+        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        weights = np.ones((n_t, n_wl))
+        value = np.empty(n_wl)
+        col_a = np.empty(n_c)
+        col_b = np.empty(n_c)
+        for a in range(n_a):
+            mu_in = math.cos(theta_in[a])
+            sin_in = math.sin(theta_in[a])
+            hits_ground = ray_intersects_ground(r, mu_in, bottom_radius)
+            for p in range(n_p):
+                nu_in = min(max(mu_in * mu_s + sin_in * sin_s * math.cos(phi_in[p]), -1.0), 1.0)
+                if use_phase:
+                    phase_values(phase_table, nu_in, weights)
+                value[:] = 0.0
+                i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
+                    r, mu_in, mu_s, nu_in, hits_ground, bottom_radius, top_radius, mu_s_min,
+                    n_r, n_mu, n_mu_s, n_nu)
+                scattering_accumulate(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu,
+                                      a_mu, i_s, a_s, i_nu, a_nu, value)
+                if hits_ground:
+                    _ground_radiance(r, mu_in, mu_s, nu_in, bottom_radius, top_radius, columns,
+                                     extinction, ground_irradiance, albedo, col_a, col_b, value)
+                for w in range(n_wl):
+                    radiance[w, a * n_p + p, kl] = value[w]
+    return radiance
+
+
+@njit(parallel=True, cache=True)
+def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radius, mu_s_min,
+                        tables, n_r, n_mu, n_mu_s, n_nu, use_phase, phase_table):
+    """Irradiance on a horizontal surface from the sky radiance of one order,
+    E = int_{mu > 0} L(r, mu, mu_s, nu) mu d omega, on the irradiance nodes (r = R_b + i (R_t -
+    R_b) / (n_r_e - 1), mu_s = -1 + 2 j / (n_mu_s_e - 1)); midpoint rule with n_theta polar
+    angles in [0, pi/2] and n_phi azimuths in [0, pi] (L is even in the azimuth); `tables`
+    from `flat_tables`, (n_r, n_mu, n_mu_s, n_nu) their axes. Returns (n_r_e, n_mu_s_e,
+    n_wl). Bruneton 2017, `ComputeIndirectIrradiance`."""
+    n_t = tables.shape[0]
+    n_wl = phase_table.shape[2]
+    out = np.zeros((n_r_e, n_mu_s_e, n_wl))
+    d_theta = 0.5 * math.pi / n_theta
+    d_phi = math.pi / n_phi
+    for node in prange(n_r_e * n_mu_s_e):
+        i = node // n_mu_s_e
+        j = node % n_mu_s_e
+        r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1), bottom_radius,
+                                           top_radius)
+        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        weights = np.ones((n_t, n_wl))
+        value = np.empty(n_wl)
+        for a in range(n_theta):
+            theta = (a + 0.5) * d_theta
+            mu_in = math.cos(theta)
+            sin_in = math.sin(theta)
+            solid = 2.0 * mu_in * sin_in * d_theta * d_phi  # x 2: the mirrored half
+            for p in range(n_phi):
+                phi = (p + 0.5) * d_phi
+                nu_in = min(max(mu_in * mu_s + sin_in * sin_s * math.cos(phi), -1.0), 1.0)
+                if use_phase:
+                    phase_values(phase_table, nu_in, weights)
+                value[:] = 0.0
+                i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
+                    r, mu_in, mu_s, nu_in, False, bottom_radius, top_radius, mu_s_min, n_r,
+                    n_mu, n_mu_s, n_nu)
+                scattering_accumulate(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu,
+                                      a_mu, i_s, a_s, i_nu, a_nu, value)
+                for w in range(n_wl):
+                    out[i, j, w] += value[w] * solid
+    return out
+
+
+@njit(parallel=True, cache=True)
+def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
+                              mu_s_min, h_step, density, columns, extinction, scatterers,
+                              scattering_density, n_phi):
+    """One order of multiple scattering: int_0^d T(x, p) J(p, v) dt for every cell,
+    J(p, v) = sum_s n_s(p) J_s(r, theta, mu_s, phi) interpolated in `scattering_density`
+    (n_s, n_r, n_theta, n_mu_s * n_phi * n_wl) (r, mu_s on the scattering-table nodes; theta
+    = view zenith and phi = azimuth from the sun on regular grids over [0, pi]). For each ray
+    sample the (r, theta) interpolation and the densities are applied once, to a (mu_s, phi)
+    slab shared by the n_mu_s x n_nu cells of the ray. Returns (n_r, n_mu, n_mu_s, n_nu,
+    n_wl) float32. Bruneton 2017, `ComputeMultipleScattering`."""
+    n_c, n_wl = extinction.shape
+    n_s = scatterers.size
+    n_theta = scattering_density.shape[2]
+    n_block = scattering_density.shape[3]
+    table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
+    n_max = n_samples + 8
+    mu_s_nodes = np.empty(n_mu_s)
+    for i_s in range(n_mu_s):
+        mu_s_nodes[i_s] = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius,
+                                                 top_radius, mu_s_min, n_mu_s)
+    d_min, d_max, big_a = mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min)
+    for row in prange(n_r * n_mu):
+        i_r = row // n_mu
+        i_mu = row % n_mu
+        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius,
+                                               top_radius, n_mu)
+        t = np.empty(n_max)
+        radius = np.empty(n_max)
+        mu_t = np.empty(n_max)
+        weight = np.empty(n_max)
+        dens = np.empty((n_max, n_c))
+        col_view = np.empty((n_max, n_c))
+        total = _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step,
+                             density, columns, t, radius, mu_t, weight, dens, col_view)
+        if total == 0:
+            continue
+        view = np.empty((total, n_wl))
+        _view_transmittance(total, weight, col_view, extinction, view)
+        nu_cells = np.empty((n_mu_s, n_nu))
+        for i_s in range(n_mu_s):
+            mu_s = mu_s_nodes[i_s]
+            spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+            for i_nu in range(n_nu):
+                nu = scattering_nu_from_u(i_nu / (n_nu - 1))
+                nu_cells[i_s, i_nu] = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+        acc = np.zeros((n_mu_s, n_nu, n_wl))
+        slab = np.empty(n_block)
+        for j in range(total):
+            k, a_r = _axis(texel_index(scattering_u_r(radius[j], bottom_radius, top_radius,
+                                                      n_r), n_r), n_r)
+            o, a_th = _axis(math.acos(mu_t[j]) / math.pi * (n_theta - 1), n_theta)
+            slab[:] = 0.0
+            for s in range(n_s):
+                ds = dens[j, scatterers[s]]
+                if ds == 0.0:
+                    continue
+                for dr in range(2):
+                    wr = ds * (a_r if dr == 1 else 1.0 - a_r)
+                    for dt in range(2):
+                        wt = wr * (a_th if dt == 1 else 1.0 - a_th)
+                        if wt == 0.0:
+                            continue
+                        block = scattering_density[s, k + dr, o + dt]
+                        for q in range(n_block):
+                            slab[q] += wt * block[q]
+            sin_t = math.sqrt(max(1.0 - mu_t[j] * mu_t[j], 0.0))
+            rj = radius[j]
+            tj = t[j]
+            for i_s in range(n_mu_s):
+                for i_nu in range(n_nu):
+                    nu = nu_cells[i_s, i_nu]
+                    mu_s_j = min(max((r * mu_s_nodes[i_s] + tj * nu) / rj, -1.0), 1.0)
+                    l, a_l = _axis(texel_index(scattering_u_mu_s_from_constants(
+                        mu_s_j, bottom_radius, top_radius, d_min, d_max, big_a, n_mu_s),
+                        n_mu_s), n_mu_s)
+                    denominator = sin_t * math.sqrt(max(1.0 - mu_s_j * mu_s_j, 0.0))
+                    cos_phi = 1.0
+                    if denominator > 1e-12:
+                        cos_phi = min(max((nu - mu_t[j] * mu_s_j) / denominator, -1.0), 1.0)
+                    m, a_m = _axis(math.acos(cos_phi) / math.pi * (n_phi - 1), n_phi)
+                    b00 = (l * n_phi + m) * n_wl
+                    b01 = b00 + n_wl
+                    b10 = b00 + n_phi * n_wl
+                    b11 = b10 + n_wl
+                    w00 = (1.0 - a_l) * (1.0 - a_m)
+                    w01 = (1.0 - a_l) * a_m
+                    w10 = a_l * (1.0 - a_m)
+                    w11 = a_l * a_m
+                    for w in range(n_wl):
+                        acc[i_s, i_nu, w] += view[j, w] * (
+                            w00 * slab[b00 + w] + w01 * slab[b01 + w]
+                            + w10 * slab[b10 + w] + w11 * slab[b11 + w])
+        for i_s in range(n_mu_s):
+            for i_nu in range(n_nu):
+                for w in range(n_wl):
+                    table[i_r, i_mu, i_s, i_nu, w] = acc[i_s, i_nu, w]
+    return table
+
+
+@njit(parallel=True, cache=True)
+def order_statistics(tables, use_phase, phase_table, bottom_radius, top_radius, mu_s_min):
+    """(mean over all cells, value at the ground looking at the zenith with the sun there) of
+    the radiance of one order [W m^-2 sr^-1 nm^-1], each (n_wl,); with phase functions applied
+    (`use_phase`) for the single-scattering tables."""
+    n_t, n_r, n_mu, n_mu_s, n_nu, n_wl = tables.shape
+    partial = np.zeros((n_r, n_wl))
+    for i_r in prange(n_r):
+        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        weights = np.ones((n_t, n_wl))
+        for i_mu in range(n_mu):
+            mu, _ = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
+                                         n_mu)
+            for i_s in range(n_mu_s):
+                mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
+                                              mu_s_min, n_mu_s)
+                spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+                for i_nu in range(n_nu):
+                    nu = scattering_nu_from_u(i_nu / (n_nu - 1))
+                    nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                    if use_phase:
+                        phase_values(phase_table, nu, weights)
+                    for t in range(n_t):
+                        for w in range(n_wl):
+                            partial[i_r, w] += weights[t, w] * tables[t, i_r, i_mu, i_s, i_nu, w]
+    mean = partial.sum(axis=0) / (n_r * n_mu * n_mu_s * n_nu)
+    weights = np.ones((n_t, n_wl))
+    if use_phase:
+        phase_values(phase_table, 1.0, weights)
+    zenith = np.zeros(n_wl)
+    for t in range(n_t):
+        for w in range(n_wl):
+            zenith[w] += weights[t, w] * tables[t, 0, n_mu // 2, n_mu_s - 1, n_nu - 1, w]
+    return mean, zenith
+
+
+# --------------------------------------------------------------------------------------------
+# Lookups for the solver
+# --------------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def _enter_atmosphere(ox, oy, oz, dx, dy, dz, top_radius):
+    """Move an observer in space to the top boundary along the ray (Bruneton 2017,
+    `GetSkyRadiance`): (x, y, z, travelled distance, inside) with inside False when the ray
+    misses the atmosphere."""
+    r = math.sqrt(ox * ox + oy * oy + oz * oz)
+    if r <= top_radius:
+        return ox, oy, oz, 0.0, True
+    r_mu = ox * dx + oy * dy + oz * dz
+    discriminant = r_mu * r_mu - r * r + top_radius * top_radius
+    if r_mu >= 0.0 or discriminant < 0.0:
+        return ox, oy, oz, 0.0, False
+    d = -r_mu - math.sqrt(discriminant)
+    return ox + d * dx, oy + d * dy, oz + d * dz, d, True
+
+
+@njit(parallel=True, cache=True)
+def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_radius, mu_s_min,
+                      scattering, shape, phase_table, transmittance, irradiance, sun_irradiance,
+                      ground_albedo, sun_angular_radius, out):
+    """Radiance from the tables into out (n_ray, n_wl) [W m^-2 sr^-1 nm^-1]:
+    sum_s p_s(nu) S_s + M (`scattering` = (S_1..S_n_s, M) stacked, from `flat_tables`; shape =
+    (n_r, n_mu, n_mu_s, n_nu)), plus for rays that hit the ground the Lambertian ground
+    albedo / pi (E_sun T_sun max(mu_s, 0) V + E_indirect) seen through T(x, g). origins is
+    (1, 3) or (n_ray, 3); directions (n_ray, 3), normalised here. Observers in space start at
+    the top boundary; rays that miss the atmosphere get 0. Bruneton 2017, `GetSkyRadiance`
+    and the demo's ground shading."""
+    n_ray = directions.shape[0]
+    n_r, n_mu, n_mu_s, n_nu = shape
+    n_t = scattering.shape[0]
+    n_wl = out.shape[1]
+    n_s = phase_table.shape[0]
+    single_origin = origins.shape[0] == 1
+    n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
+    for block in prange(n_blocks):
+        weights = np.ones((n_t, n_wl))
+        phase = np.empty((n_s, n_wl))
+        value = np.empty(n_wl)
+        t_view = np.empty(n_wl)
+        t_sun = np.empty(n_wl)
+        scratch = np.empty(n_wl)
+        for i in range(block * RAYS_PER_BLOCK, min(n_ray, (block + 1) * RAYS_PER_BLOCK)):
+            for w in range(n_wl):
+                out[i, w] = 0.0
+            o = 0 if single_origin else i
+            dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
+            norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if not norm > 0.0:
+                continue
+            dx, dy, dz = dx / norm, dy / norm, dz / norm
+            x, y, z, _, inside = _enter_atmosphere(origins[o, 0], origins[o, 1], origins[o, 2],
+                                                   dx, dy, dz, top_radius)
+            if not inside:
+                continue
+            r = math.sqrt(x * x + y * y + z * z)
+            mu = (x * dx + y * dy + z * dz) / r
+            mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
+            nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
+            r = min(max(r, bottom_radius), top_radius)
+            hits_ground = ray_intersects_ground(r, mu, bottom_radius)
+            phase_values(phase_table, nu, phase)
+            for s in range(n_s):
+                for w in range(n_wl):
+                    weights[s, w] = phase[s, w]
+            value[:] = 0.0
+            i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
+                r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
+                n_mu_s, n_nu)
+            scattering_accumulate(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
+                                  i_s, a_s, i_nu, a_nu, value)
+            if hits_ground:
+                d = distance_to_bottom_boundary(r, mu, bottom_radius)
+                mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
+                transmittance_along(r, mu, d, True, bottom_radius, top_radius, transmittance,
+                                    t_view, scratch)
+                visible = sun_visible_fraction(bottom_radius, mu_s_g, bottom_radius,
+                                               sun_angular_radius)
+                transmittance_to_top(bottom_radius, max(mu_s_g, 0.0), bottom_radius,
+                                     top_radius, transmittance, t_sun)
+                direct = max(mu_s_g, 0.0) * visible
+                irradiance_lookup(bottom_radius, mu_s_g, bottom_radius, top_radius, irradiance,
+                                  scratch)
+                for w in range(n_wl):
+                    ground = sun_irradiance[w] * t_sun[w] * direct + scratch[w]
+                    value[w] += ground_albedo[w] / math.pi * ground * t_view[w]
+            for w in range(n_wl):
+                out[i, w] = value[w]
+
+
+@njit(cache=True)
+def irradiance_lookup(r, mu_s, bottom_radius, top_radius, irradiance, out):
+    """Indirect irradiance, bilinear in `irradiance` (n_r_e, n_mu_s_e, n_wl), into out."""
+    x_mu_s, x_r = irradiance_x_from_r_mu_s(r, mu_s, bottom_radius, top_radius)
+    i, a = _axis(x_r * (irradiance.shape[0] - 1), irradiance.shape[0])
+    j, b = _axis(x_mu_s * (irradiance.shape[1] - 1), irradiance.shape[1])
+    for w in range(irradiance.shape[2]):
+        out[w] = ((1.0 - a) * ((1.0 - b) * irradiance[i, j, w] + b * irradiance[i, j + 1, w])
+                  + a * ((1.0 - b) * irradiance[i + 1, j, w]
+                         + b * irradiance[i + 1, j + 1, w]))
+
+
+@njit(parallel=True, cache=True)
+def transmittance_rays(origins, directions, distances, bottom_radius, top_radius,
+                       transmittance):
+    """Transmittance (n_ray, n_wl) from each origin along its direction over `distances` [m]
+    from the tables (inf: to the ground or out of the atmosphere; 0 when the ground blocks a
+    finite distance). Observers in space start at the top boundary."""
+    n_ray = origins.shape[0]
+    n_wl = transmittance.shape[2]
+    out = np.ones((n_ray, n_wl))
+    for i in prange(n_ray):
+        dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
+        x, y, z, travelled, inside = _enter_atmosphere(origins[i, 0], origins[i, 1],
+                                                       origins[i, 2], dx, dy, dz, top_radius)
+        distance = distances[i] - travelled
+        if not inside or distance <= 0.0:
+            continue
+        r = math.sqrt(x * x + y * y + z * z)
+        mu = (x * dx + y * dy + z * dz) / r
+        r = min(max(r, bottom_radius), top_radius)
+        hits_ground = ray_intersects_ground(r, mu, bottom_radius)
+        if hits_ground:
+            d_end = distance_to_bottom_boundary(r, mu, bottom_radius)
+            if math.isfinite(distance) and distance > d_end * (1.0 + 1e-12):
+                out[i, :] = 0.0
+                continue
+        else:
+            d_end = distance_to_top_boundary(r, mu, top_radius)
+        result = np.empty(n_wl)
+        scratch = np.empty(n_wl)
+        transmittance_along(r, mu, min(distance, d_end), hits_ground, bottom_radius, top_radius,
+                            transmittance, result, scratch)
+        for w in range(n_wl):
+            out[i, w] = result[w]
+    return out
+
+
+@njit(parallel=True, cache=True)
+def ground_irradiance_points(positions, sun_direction, bottom_radius, top_radius, transmittance,
+                             irradiance, sun_irradiance, sun_angular_radius):
+    """(direct, diffuse) irradiance on horizontal surfaces at `positions` (n, 3), each (n, n_wl)
+    [W m^-2 nm^-1]: E_sun T_sun max(mu_s, 0) V and the indirect-irradiance table (Bruneton 2017,
+    `GetSunAndSkyIrradiance` for a horizontal normal)."""
+    n = positions.shape[0]
+    n_wl = transmittance.shape[2]
+    direct = np.zeros((n, n_wl))
+    diffuse = np.zeros((n, n_wl))
+    for i in prange(n):
+        x, y, z = positions[i, 0], positions[i, 1], positions[i, 2]
+        r = math.sqrt(x * x + y * y + z * z)
+        mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
+        r = min(max(r, bottom_radius), top_radius)
+        out = np.empty(n_wl)
+        irradiance_lookup(r, mu_s, bottom_radius, top_radius, irradiance, out)
+        for w in range(n_wl):
+            diffuse[i, w] = out[w]
+        visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
+        if visible > 0.0 and mu_s > 0.0:
+            transmittance_to_top(r, max(mu_s, horizon_cos_zenith(r, bottom_radius)),
+                                 bottom_radius, top_radius, transmittance, out)
+            for w in range(n_wl):
+                direct[i, w] = sun_irradiance[w] * out[w] * mu_s * visible
+    return direct, diffuse

@@ -1,0 +1,145 @@
+"""Table solver: sky radiance, transmittance and ground irradiance looked up in precomputed
+tables with multiple scattering (Bruneton & Neyret 2008; Bruneton 2017, functions.glsl
+§Rendering).
+
+L(x, v) = sum_s p_s(nu) S_s(r, mu, mu_s, nu) + M(r, mu, mu_s, nu)
+          + [ray hits the ground at g] albedo / pi (E_sun T_sun(g) max(mu_s(g), 0) V(g)
+                                                     + E_indirect(g)) T(x, g)
+with S_s the single scattering of constituent s without its phase function, M the orders >= 2
+and E_indirect the sky light on the ground (`transport/tables.py`). As in
+`SingleScatteringSolver`, the sun disk's own radiance is not included. Observers in space are
+moved to the top of the atmosphere along each ray first; rays that miss it see nothing.
+Kernels: `transport/_table_kernels.py`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.errors import InputError
+from skyscatter.transport import _table_kernels
+from skyscatter.transport.single_scattering import _broadcast_rays, _unit
+from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN_EARTH
+from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
+
+__all__ = ["LutSolver"]
+
+CHUNK_RAYS = 1 << 18  # rays per kernel call, so that progress can be reported
+
+
+class LutSolver:
+    """Answers the solver questions from precomputed tables (multiple scattering included).
+
+    Parameters
+    ----------
+    profile : OpticalProfile
+        The atmosphere; its wavelengths are the tables' wavelengths.
+    resolution : TableResolution, optional
+        Table sizes and quadrature (Bruneton 2017's sizes by default).
+    orders : int
+        Scattering orders (1 = single scattering only).
+    min_cos_sun_zenith : float
+        Smallest cos(sun zenith) tabulated (`precompute_tables`).
+    tables : AtmosphereTables, optional
+        Tables computed before for this profile (e.g. from a cache); skips the precomputation.
+    progress : callable(done, total, stage), optional
+        Passed to `precompute_tables`.
+    n_samples : int, optional
+        Accepted for the common solver interface (`make_solver(..., n_samples=...)`); the
+        tables' quadrature is set by `resolution`, so it is not used.
+    """
+
+    name = "lut"
+
+    def __init__(self, profile: OpticalProfile, resolution: TableResolution | None = None,
+                 orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN_EARTH,
+                 tables: AtmosphereTables | None = None,
+                 progress: Callable[[int, int, str], None] | None = None,
+                 n_samples: int | None = None) -> None:
+        self.profile = profile
+        if tables is None:
+            tables = precompute_tables(profile, resolution, orders, min_cos_sun_zenith,
+                                       progress=progress)
+        elif not np.array_equal(tables.wavelengths_nm, profile.wavelengths_nm):
+            raise InputError("LutSolver: the tables were computed for other wavelengths "
+                             f"({tables.wavelengths_nm.size} values) than the profile's "
+                             f"({profile.wavelengths_nm.size})", key="tables",
+                             value=tables.wavelengths_nm, allowed="the profile's wavelengths")
+        self.tables = tables
+        self._scattering = _table_kernels.flat_tables(tables.scattering)
+        self._shape = tuple(int(n) for n in tables.scattering.shape[1:5])
+        self._albedo = np.ascontiguousarray(profile.ground_albedo, dtype=np.float64)
+        self._sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
+
+    def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
+                     sun_direction: ArrayLike,
+                     progress: Callable[[int], None] | None = None) -> np.ndarray:
+        """Diffuse spectral radiance [W m^-2 sr^-1 nm^-1] seen from `position` (planet-centred
+        [m], (3,) or broadcastable to the directions) along `view_directions` (..., 3; any
+        length), with the sun along `sun_direction` (3,). Returns (..., n_wl). `progress(n)` is
+        called with the number of rays done after each chunk."""
+        origins, directions, shape = _rays(position, view_directions)
+        sun = _unit(np.asarray(sun_direction, dtype=np.float64))
+        p, t = self.profile, self.tables
+        result = np.empty((directions.shape[0], p.n_wavelengths))
+        for start in range(0, directions.shape[0], CHUNK_RAYS):
+            stop = min(start + CHUNK_RAYS, directions.shape[0])
+            _table_kernels.sky_radiance_rays(
+                origins if origins.shape[0] == 1 else origins[start:stop],
+                directions[start:stop], sun, t.bottom_radius_m, t.top_radius_m,
+                t.min_cos_sun_zenith, self._scattering, self._shape, t.phase, t.transmittance,
+                t.irradiance, self._sun_irradiance, self._albedo,
+                float(p.sun_angular_radius_rad), result[start:stop])
+            if progress is not None:
+                progress(stop - start)
+        return result.reshape(shape + (p.n_wavelengths,))
+
+    def transmittance(self, position: ArrayLike, directions: ArrayLike,
+                      distance_m: ArrayLike = np.inf) -> np.ndarray:
+        """Transmittance [-] from `position` along `directions` over `distance_m` [m] (inf: to
+        the ground or out of the atmosphere; 0 when the ground blocks a finite path), from the
+        transmittance table (ratio of two lookups, Bruneton 2017 `GetTransmittance`).
+        Returns (..., n_wl)."""
+        origins, dirs, shape = _broadcast_rays(position, directions)
+        distances = np.broadcast_to(np.asarray(distance_m, dtype=np.float64), shape).ravel()
+        t = self.tables
+        result = _table_kernels.transmittance_rays(
+            origins, dirs, np.ascontiguousarray(distances), t.bottom_radius_m, t.top_radius_m,
+            t.transmittance)
+        return result.reshape(shape + (self.profile.n_wavelengths,))
+
+    def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike
+                          ) -> tuple[np.ndarray, np.ndarray]:
+        """(direct, diffuse) spectral irradiance on a horizontal surface at `position`
+        (planet-centred [m], (..., 3)) [W m^-2 nm^-1], each (..., n_wl). Direct: E_sun T_sun
+        mu_s times the visible part of the disk; diffuse: the indirect-irradiance table, sky
+        light of orders 1 .. orders-1 (none for orders = 1)."""
+        positions = np.asarray(position, dtype=np.float64)
+        shape = positions.shape[:-1]
+        flat = np.ascontiguousarray(positions.reshape(-1, 3))
+        sun = _unit(np.asarray(sun_direction, dtype=np.float64))
+        p, t = self.profile, self.tables
+        direct, diffuse = _table_kernels.ground_irradiance_points(
+            flat, sun, t.bottom_radius_m, t.top_radius_m, t.transmittance, t.irradiance,
+            np.ascontiguousarray(p.toa_irradiance, dtype=np.float64),
+            float(p.sun_angular_radius_rad))
+        n_wl = p.n_wavelengths
+        return direct.reshape(shape + (n_wl,)), diffuse.reshape(shape + (n_wl,))
+
+
+def _rays(position: ArrayLike, directions: ArrayLike
+          ) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    """(origins (1, 3) or (n, 3), directions (n, 3), broadcast shape S): views of the inputs
+    where they are already float64 and C-ordered; directions are normalised by the kernel."""
+    dirs = np.asarray(directions, dtype=np.float64)
+    origin = np.asarray(position, dtype=np.float64)
+    shape = np.broadcast_shapes(dirs.shape, origin.shape)[:-1]
+    flat_dirs = np.ascontiguousarray(np.broadcast_to(dirs, shape + (3,))).reshape(-1, 3)
+    if origin.ndim == 1:
+        return np.ascontiguousarray(origin.reshape(1, 3)), flat_dirs, shape
+    flat_origins = np.ascontiguousarray(np.broadcast_to(origin, shape + (3,))).reshape(-1, 3)
+    return flat_origins, flat_dirs, shape

@@ -1,0 +1,326 @@
+r"""Mappings between physical ray parameters and the coordinates of the precomputed tables.
+
+One definition of each mapping, as numba scalar functions that kernels call and that the GLSL
+copy of the viewer mirrors (same names). Bruneton (2017), `precomputed_atmospheric_scattering`,
+atmosphere/functions.glsl, which refines Bruneton & Neyret (2008), "Precomputed atmospheric
+scattering", Comput. Graph. Forum 27(4), 1079, doi:10.1111/j.1467-8659.2008.01245.x, §4;
+digest in shared/research/anchor-bruneton.md §1.4.
+
+Symbols (r, mu, mu_s, nu as in docs/nomenclature.md):
+  r     distance to the planet centre [m]; R_b, R_t bottom and top radius [m]
+  mu    cos(view zenith angle) [-]; mu_s cos(sun zenith angle) [-]; nu = cos(view-sun angle) [-]
+  H   = sqrt(R_t^2 - R_b^2)   distance from the ground to the top along a horizontal ray [m]
+  rho = sqrt(r^2 - R_b^2)     distance from r to the horizon [m]
+  d                           distance along the ray to the top (or to the ground) [m]
+
+Texel centres: a table of n entries stores the values at x = i / (n - 1), i = 0..n-1, so that
+x = 0 and x = 1 fall on texel centres of a GPU texture with u = tc(x, n) = 0.5/n + x (1 - 1/n)
+(`texture_coord_from_unit_range`). A CPU lookup turns u back into a fractional index
+f = u n - 0.5 = x (n - 1) (`texel_index`); linear interpolation between entries then equals
+the GPU's hardware filtering.
+
+Transmittance table (r, mu), rays that do not hit the ground only:
+  x_r = rho / H,   x_mu = (d - d_min) / (d_max - d_min),
+  d = distance to the top, d_min = R_t - r, d_max = rho + H;
+  inverse mu = (H^2 - rho^2 - d^2) / (2 r d).
+Scattering table (r, mu, mu_s, nu), 4-D with axes (u_r, u_mu, u_mu_s, u_nu):
+  u_r = tc(rho / H, n_r);
+  rays hitting the ground use the lower half of the mu axis,
+    u_mu = 1/2 - 1/2 tc((d - d_min) / (d_max - d_min), n_mu / 2),
+    d = distance to the ground, d_min = r - R_b, d_max = rho;
+  other rays the upper half,
+    u_mu = 1/2 + 1/2 tc((d - d_min) / (d_max - d_min), n_mu / 2),
+    d = distance to the top, d_min = R_t - r, d_max = rho + H;
+  the half is chosen by the caller's `ray_hits_ground` flag, never recomputed, so rays at the
+  horizon stay on their side;
+  u_mu_s = tc(max(1 - a / A, 0) / (1 + a), n_mu_s), a = (d_s - d_min) / (d_max - d_min) with
+    d_s the distance to the top from the ground along mu_s, d_min = R_t - R_b, d_max = H, and A
+    the same for mu_s = mu_s_min (the smallest sun cosine tabulated; below it the first texel
+    is used). Samples crowd near the horizon;
+  u_nu = (nu + 1) / 2, with the n_nu slices at the exact ends (index f = u_nu (n_nu - 1)).
+Irradiance table (r, mu_s), affine: x_r = (r - R_b) / (R_t - R_b), x_mu_s = (mu_s + 1) / 2.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+__all__ = [
+    "COS_SUN_ZENITH_MIN_EARTH",
+    "distance_to_bottom_boundary",
+    "distance_to_top_boundary",
+    "irradiance_r_mu_s_from_x",
+    "irradiance_x_from_r_mu_s",
+    "mu_s_mapping_constants",
+    "ray_intersects_ground",
+    "scattering_mu_from_u",
+    "scattering_mu_s_from_u",
+    "scattering_nu_from_u",
+    "scattering_r_from_u",
+    "scattering_r_mu_mu_s_nu_from_uvwz",
+    "scattering_u_mu",
+    "scattering_u_mu_s",
+    "scattering_u_mu_s_from_constants",
+    "scattering_u_nu",
+    "scattering_u_r",
+    "scattering_uvwz_from_r_mu_mu_s_nu",
+    "texel_index",
+    "texture_coord_from_unit_range",
+    "transmittance_r_mu_from_x",
+    "transmittance_x_from_r_mu",
+    "unit_range_from_texture_coord",
+]
+
+# cos(102 deg): Bruneton 2017's suggestion for Earth (definitions.glsl, `mu_s_min`): the sun
+# 12 deg below the horizon, where the sky of Earth is dark. Use -0.5 for deep twilight.
+COS_SUN_ZENITH_MIN_EARTH = math.cos(math.radians(102.0))
+
+
+@njit(cache=True)
+def texture_coord_from_unit_range(x, n):
+    """tc(x, n) = 0.5/n + x (1 - 1/n): x in [0, 1] -> texture coordinate between the centres
+    of the first and the last of n texels (Bruneton 2017, `GetTextureCoordFromUnitRange`)."""
+    return 0.5 / n + x * (1.0 - 1.0 / n)
+
+
+@njit(cache=True)
+def unit_range_from_texture_coord(u, n):
+    """Inverse of `texture_coord_from_unit_range`: x = (u - 0.5/n) / (1 - 1/n)."""
+    return (u - 0.5 / n) / (1.0 - 1.0 / n)
+
+
+@njit(cache=True)
+def texel_index(u, n):
+    """Fractional array index f = u n - 0.5 of texture coordinate u on an axis of n entries,
+    clamped to [0, n - 1] (entry i holds the texel centre u = (i + 0.5) / n)."""
+    return min(max(u * n - 0.5, 0.0), n - 1.0)
+
+
+@njit(cache=True)
+def distance_to_top_boundary(r, mu, top_radius):
+    """Distance [m] from radius r along mu to the top sphere (far root), clamped >= 0:
+    d = -r mu + sqrt(max(r^2 (mu^2 - 1) + R_t^2, 0)) (Bruneton 2017,
+    `DistanceToTopAtmosphereBoundary`; valid for r <= R_t)."""
+    discriminant = r * r * (mu * mu - 1.0) + top_radius * top_radius
+    return max(-r * mu + math.sqrt(max(discriminant, 0.0)), 0.0)
+
+
+@njit(cache=True)
+def distance_to_bottom_boundary(r, mu, bottom_radius):
+    """Distance [m] from radius r along mu to the ground (near root), clamped >= 0:
+    d = -r mu - sqrt(max(r^2 (mu^2 - 1) + R_b^2, 0)) (Bruneton 2017,
+    `DistanceToBottomAtmosphereBoundary`); meaningful when `ray_intersects_ground`."""
+    discriminant = r * r * (mu * mu - 1.0) + bottom_radius * bottom_radius
+    return max(-r * mu - math.sqrt(max(discriminant, 0.0)), 0.0)
+
+
+@njit(cache=True)
+def ray_intersects_ground(r, mu, bottom_radius):
+    """True when the ray (r, mu) meets the ground: mu < 0 and r^2 (mu^2 - 1) + R_b^2 >= 0
+    (Bruneton 2017, `RayIntersectsGround`)."""
+    return mu < 0.0 and r * r * (mu * mu - 1.0) + bottom_radius * bottom_radius >= 0.0
+
+
+# --------------------------------------------------------------------------------------------
+# Transmittance table (r, mu) <-> (x_mu, x_r), unit ranges; texture u = tc(x, n).
+# --------------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def transmittance_x_from_r_mu(r, mu, bottom_radius, top_radius):
+    """(r, mu) -> (x_mu, x_r) in [0, 1] for a ray that does not hit the ground:
+    x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), d = distance to the top,
+    d_min = R_t - r, d_max = rho + H (Bruneton 2017, `GetTransmittanceTextureUvFromRMu`,
+    before the texel-centre mapping). Results are clamped to [0, 1]."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
+    d = distance_to_top_boundary(r, mu, top_radius)
+    d_min = top_radius - r
+    d_max = rho + big_h
+    x_mu = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
+    return min(max(x_mu, 0.0), 1.0), min(max(rho / big_h, 0.0), 1.0)
+
+
+@njit(cache=True)
+def transmittance_r_mu_from_x(x_mu, x_r, bottom_radius, top_radius):
+    """Inverse of `transmittance_x_from_r_mu`: rho = H x_r, r = sqrt(rho^2 + R_b^2),
+    d = d_min + x_mu (d_max - d_min), mu = (H^2 - rho^2 - d^2) / (2 r d) (mu = 1 for d = 0)
+    (Bruneton 2017, `GetRMuFromTransmittanceTextureUv`). Returns (r [m], mu [-])."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = big_h * x_r
+    r = math.sqrt(rho * rho + bottom_radius * bottom_radius)
+    d_min = top_radius - r
+    d_max = rho + big_h
+    d = d_min + x_mu * (d_max - d_min)
+    if d <= 0.0:
+        return r, 1.0
+    mu = (big_h * big_h - rho * rho - d * d) / (2.0 * r * d)
+    return r, min(max(mu, -1.0), 1.0)
+
+
+# --------------------------------------------------------------------------------------------
+# Scattering table (r, mu, mu_s, nu, ray_hits_ground) <-> (u_r, u_mu, u_mu_s, u_nu).
+# --------------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def scattering_u_r(r, bottom_radius, top_radius, n_r):
+    """u_r = tc(rho / H, n_r) [-]."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
+    return texture_coord_from_unit_range(min(rho / big_h, 1.0), n_r)
+
+
+@njit(cache=True)
+def scattering_r_from_u(u_r, bottom_radius, top_radius, n_r):
+    """Inverse of `scattering_u_r`: r = sqrt((H x_r)^2 + R_b^2) [m]."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = big_h * unit_range_from_texture_coord(u_r, n_r)
+    return math.sqrt(rho * rho + bottom_radius * bottom_radius)
+
+
+@njit(cache=True)
+def scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu):
+    """u_mu of the ray (r, mu): lower half of the axis for rays that hit the ground (distance
+    to the ground between r - R_b and rho), upper half for the others (distance to the top
+    between R_t - r and rho + H); module docstring. Bruneton 2017,
+    `GetScatteringTextureUvwzFromRMuMuSNu`."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
+    r_mu = r * mu
+    discriminant = r_mu * r_mu - r * r + bottom_radius * bottom_radius
+    half = n_mu // 2
+    if ray_hits_ground:
+        d = -r_mu - math.sqrt(max(discriminant, 0.0))
+        d_min = r - bottom_radius
+        d_max = rho
+        x = 0.0 if d_max == d_min else (d - d_min) / (d_max - d_min)
+        return 0.5 - 0.5 * texture_coord_from_unit_range(min(max(x, 0.0), 1.0), half)
+    d = -r_mu + math.sqrt(max(discriminant + big_h * big_h, 0.0))
+    d_min = top_radius - r
+    d_max = rho + big_h
+    x = (d - d_min) / (d_max - d_min)
+    return 0.5 + 0.5 * texture_coord_from_unit_range(min(max(x, 0.0), 1.0), half)
+
+
+@njit(cache=True)
+def scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu):
+    """Inverse of `scattering_u_mu` at radius r: (mu [-], ray_hits_ground)."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
+    half = n_mu // 2
+    if u_mu < 0.5:
+        d_min = r - bottom_radius
+        d_max = rho
+        d = d_min + (d_max - d_min) * unit_range_from_texture_coord(1.0 - 2.0 * u_mu, half)
+        if d <= 0.0:
+            return -1.0, True
+        return min(max(-(rho * rho + d * d) / (2.0 * r * d), -1.0), 1.0), True
+    d_min = top_radius - r
+    d_max = rho + big_h
+    d = d_min + (d_max - d_min) * unit_range_from_texture_coord(2.0 * u_mu - 1.0, half)
+    if d <= 0.0:
+        return 1.0, False
+    return min(max((big_h * big_h - rho * rho - d * d) / (2.0 * r * d), -1.0), 1.0), False
+
+
+@njit(cache=True)
+def mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min):
+    """(d_min, d_max, A) of the mu_s mapping (module docstring): d_min = R_t - R_b, d_max = H,
+    A = (D - d_min) / (d_max - d_min) with D the distance to the top from the ground along
+    mu_s_min. Constant for an atmosphere; kernels compute it once."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    d_min = top_radius - bottom_radius
+    d_max = big_h
+    big_d = distance_to_top_boundary(bottom_radius, mu_s_min, top_radius)
+    return d_min, d_max, (big_d - d_min) / (d_max - d_min)
+
+
+@njit(cache=True)
+def scattering_u_mu_s_from_constants(mu_s, bottom_radius, top_radius, d_min, d_max, big_a,
+                                     n_mu_s):
+    """`scattering_u_mu_s` with the constants of `mu_s_mapping_constants` given."""
+    d = distance_to_top_boundary(bottom_radius, mu_s, top_radius)
+    a = (d - d_min) / (d_max - d_min)
+    return texture_coord_from_unit_range(max(1.0 - a / big_a, 0.0) / (1.0 + a), n_mu_s)
+
+
+@njit(cache=True)
+def scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s):
+    """u_mu_s = tc(max(1 - a / A, 0) / (1 + a), n_mu_s); module docstring (Bruneton 2017)."""
+    d_min, d_max, big_a = mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min)
+    return scattering_u_mu_s_from_constants(mu_s, bottom_radius, top_radius, d_min, d_max,
+                                            big_a, n_mu_s)
+
+
+@njit(cache=True)
+def scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s):
+    """Inverse of `scattering_u_mu_s`: a = A (1 - x) / (1 + x A), d = d_min + min(a, A)
+    (d_max - d_min), mu_s = (H^2 - d^2) / (2 R_b d) [-]."""
+    d_min, d_max, big_a = mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min)
+    x = unit_range_from_texture_coord(u_mu_s, n_mu_s)
+    a = (big_a - x * big_a) / (1.0 + x * big_a)
+    d = d_min + min(a, big_a) * (d_max - d_min)
+    if d <= 0.0:
+        return 1.0
+    big_h = d_max
+    return min(max((big_h * big_h - d * d) / (2.0 * bottom_radius * d), -1.0), 1.0)
+
+
+@njit(cache=True)
+def scattering_u_nu(nu):
+    """u_nu = (nu + 1) / 2 [-]; the nu slices lie at the exact ends (no texel-centre map)."""
+    return 0.5 * (nu + 1.0)
+
+
+@njit(cache=True)
+def scattering_nu_from_u(u_nu):
+    """Inverse of `scattering_u_nu`: nu = 2 u_nu - 1, clamped to [-1, 1]."""
+    return min(max(2.0 * u_nu - 1.0, -1.0), 1.0)
+
+
+@njit(cache=True)
+def scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, ray_hits_ground, bottom_radius,
+                                      top_radius, mu_s_min, n_r, n_mu, n_mu_s):
+    """(r, mu, mu_s, nu, ray_hits_ground) -> (u_r, u_mu, u_mu_s, u_nu), the table axis order
+    (n_r, n_mu, n_mu_s, n_nu); module docstring. Bruneton 2017,
+    `GetScatteringTextureUvwzFromRMuMuSNu` (which returns them as (u_nu, u_mu_s, u_mu, u_r))."""
+    return (scattering_u_r(r, bottom_radius, top_radius, n_r),
+            scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu),
+            scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s),
+            scattering_u_nu(nu))
+
+
+@njit(cache=True)
+def scattering_r_mu_mu_s_nu_from_uvwz(u_r, u_mu, u_mu_s, u_nu, bottom_radius, top_radius,
+                                      mu_s_min, n_r, n_mu, n_mu_s):
+    """Inverse of `scattering_uvwz_from_r_mu_mu_s_nu`: (r, mu, mu_s, nu, ray_hits_ground).
+
+    nu is clamped to the values possible for (mu, mu_s),
+    mu mu_s -+ sqrt((1 - mu^2)(1 - mu_s^2)) (Bruneton 2017,
+    `GetRMuMuSNuFromScatteringTextureFragCoord`)."""
+    r = scattering_r_from_u(u_r, bottom_radius, top_radius, n_r)
+    mu, hits_ground = scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu)
+    mu_s = scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s)
+    nu = scattering_nu_from_u(u_nu)
+    spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+    nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+    return r, mu, mu_s, nu, hits_ground
+
+
+# --------------------------------------------------------------------------------------------
+# Irradiance table (r, mu_s) <-> (x_mu_s, x_r), affine.
+# --------------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def irradiance_x_from_r_mu_s(r, mu_s, bottom_radius, top_radius):
+    """(r, mu_s) -> (x_mu_s, x_r): x_mu_s = (mu_s + 1) / 2, x_r = (r - R_b) / (R_t - R_b),
+    clamped to [0, 1] (Bruneton 2017, `GetIrradianceTextureUvFromRMuS`)."""
+    x_r = (r - bottom_radius) / (top_radius - bottom_radius)
+    return min(max(0.5 * (mu_s + 1.0), 0.0), 1.0), min(max(x_r, 0.0), 1.0)
+
+
+@njit(cache=True)
+def irradiance_r_mu_s_from_x(x_mu_s, x_r, bottom_radius, top_radius):
+    """Inverse of `irradiance_x_from_r_mu_s`: (r [m], mu_s [-])."""
+    return bottom_radius + x_r * (top_radius - bottom_radius), 2.0 * x_mu_s - 1.0

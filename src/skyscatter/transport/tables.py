@@ -1,0 +1,388 @@
+"""Precomputed atmosphere tables with multiple scattering (Bruneton & Neyret 2008; Bruneton 2017).
+
+What is computed, for every wavelength of an `OpticalProfile` (docs/physics/tables.md):
+
+- transmittance T(r, mu) to the top of the atmosphere, (n_r_t, n_mu_t, n_wl);
+- single scattering per scattering constituent s WITHOUT its phase function,
+  S_s(r, mu, mu_s, nu) = E_sun beta_s,s int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt
+  [W m^-2 nm^-1], so that the renderer applies p_s(nu) exactly and aerosol forward peaks stay
+  sharp; and the sum of the orders n >= 2 M(r, mu, mu_s, nu) [W m^-2 sr^-1 nm^-1], phase
+  functions included; stacked as `scattering` (n_s + 1, n_r, n_mu, n_mu_s, n_nu, n_wl);
+- indirect irradiance of horizontal ground, E(r, mu_s) = sum_{k=1}^{N-1} Delta E_k, the sky
+  light of orders 1 .. N-1 (N = orders), (n_r_e, n_mu_s_e, n_wl) [W m^-2 nm^-1].
+
+The orders are iterated as in Bruneton & Neyret (2008), Algorithm 4.1, and Bruneton 2017
+(`model.cc::Precompute`); for n = 2 .. N:
+  J_n(x, v)   = sum_s n_s(x) beta_s,s int_{4 pi} p_s(v . w) L_{n-1}(x, w) dw, where L_{n-1} is
+                the radiance of order n-1 (Delta S_{n-1}; for n = 2 the single scattering with
+                its phase functions) plus, for directions w that hit the ground, the ground lit
+                by Delta E_{n-2} (Delta E_0 = direct sunlight) seen through the atmosphere;
+  Delta E_{n-1}(x) = int_{mu > 0} L_{n-1}(x, w) mu dw;
+  Delta S_n(x, v) = int_0^d T(x, p) J_n(p, v) dt;   M += Delta S_n;   E += Delta E_{n-1}.
+Paths whose last event is a ground reflection are not in the tables; the renderer adds the ground
+with albedo / pi (direct sun + E) (Bruneton 2017). The ground albedo of the profile enters the
+orders >= 2 through J.
+
+Departures from Bruneton 2017, deliberate:
+- J_n is tabulated per scattering constituent and per unit density on (r, mu_s) nodes of the
+  scattering table times a regular grid of outgoing directions relative to the sun's vertical
+  plane, and multiplied by the exact density along each ray; the sphere integral is a matrix
+  product with phase matrices normalised so that each row integrates to exactly 1 (energy is
+  conserved by the discrete sphere integral even where the quadrature does not resolve a
+  forward peak);
+- transmittances inside the precomputation come from a wavelength-free table of column densities
+  in the transmittance parameterisation; rays are sampled densest near their lowest point.
+Wavelengths are processed in batches (`wavelength_batch`), so working memory does not grow with
+the number of wavelengths beyond the result tables.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+
+from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.errors import InputError
+from skyscatter.transport import _table_kernels
+from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN_EARTH
+
+__all__ = [
+    "AtmosphereTables",
+    "TableResolution",
+    "precompute_tables",
+    "sample_phase_functions",
+    "scattering_constituents",
+]
+
+# Direct sun on the ground for the ground term of the second order: mu_s samples over [-1, 1].
+DIRECT_GROUND_SAMPLES = 1025
+
+
+@dataclass(frozen=True)
+class TableResolution:
+    """Table sizes and quadrature counts of the precomputation.
+
+    Table sizes default to Bruneton 2017 (atmosphere/constants.h): transmittance 256 (mu) x 64
+    (r); scattering r 32, mu 128 (two halves of 64), mu_s 32, nu 8; irradiance 64 (mu_s) x 16
+    (r). Quadrature:
+    transmittance_samples  column integral per transmittance entry (Bruneton: 500 intervals)
+    ray_samples            samples along each scattering-table ray for single scattering
+                           (Bruneton: 50 uniform; ours crowd near the lowest point)
+    multiple_ray_samples   the same for the orders >= 2, whose integrand is smoother
+    sphere_theta, sphere_phi
+                           incoming directions of the scattering density: polar midpoints over
+                           [0, pi] and azimuth midpoints over [0, pi], mirrored (Bruneton: 16 x
+                           32 over the whole sphere)
+    density_theta, density_phi
+                           outgoing directions where J is tabulated: regular over [0, pi]
+                           including both ends
+    irradiance_theta, irradiance_phi
+                           hemisphere quadrature of the indirect irradiance: polar midpoints in
+                           [0, pi/2], azimuth midpoints in [0, pi] mirrored (Bruneton: 16 x 64)
+    phase_angles           samples of each phase function over [0, pi] for the kernels
+    """
+
+    transmittance_r: int = 64
+    transmittance_mu: int = 256
+    scattering_r: int = 32
+    scattering_mu: int = 128
+    scattering_mu_s: int = 32
+    scattering_nu: int = 8
+    irradiance_r: int = 16
+    irradiance_mu_s: int = 64
+    transmittance_samples: int = 500
+    ray_samples: int = 64
+    multiple_ray_samples: int = 32
+    sphere_theta: int = 32
+    sphere_phi: int = 16
+    density_theta: int = 33
+    density_phi: int = 17
+    irradiance_theta: int = 16
+    irradiance_phi: int = 32
+    phase_angles: int = 4097
+
+    def __post_init__(self) -> None:
+        for field in fields(self):
+            value = getattr(self, field.name)
+            if not isinstance(value, int | np.integer) or value < 2:
+                raise InputError(f"TableResolution.{field.name} = {value!r} must be an integer "
+                                 ">= 2", key=field.name, value=value, allowed="integer >= 2")
+        if self.scattering_mu % 2 or self.scattering_mu < 4:
+            raise InputError(f"TableResolution.scattering_mu = {self.scattering_mu} must be even "
+                             "and >= 4 (two halves: rays that hit the ground and rays that miss "
+                             "it)", key="scattering_mu", value=self.scattering_mu,
+                             allowed="even integer >= 4")
+
+    def scaled(self, factor: float) -> TableResolution:
+        """The table sizes multiplied by `factor` (the mu axis kept even); quadrature unchanged."""
+        def size(n: int) -> int:
+            return max(2, int(round(n * factor)))
+        return replace(self, transmittance_r=size(self.transmittance_r),
+                       transmittance_mu=size(self.transmittance_mu),
+                       scattering_r=size(self.scattering_r),
+                       scattering_mu=max(4, 2 * size(self.scattering_mu // 2)),
+                       scattering_mu_s=size(self.scattering_mu_s),
+                       scattering_nu=size(self.scattering_nu),
+                       irradiance_r=size(self.irradiance_r),
+                       irradiance_mu_s=size(self.irradiance_mu_s))
+
+
+@dataclass(frozen=True, eq=False)
+class AtmosphereTables:
+    """Precomputed tables of one atmosphere (module docstring); arrays C order, wavelength last.
+
+    transmittance  (n_r_t, n_mu_t, n_wl) float64: T to the top for rays that miss the ground [-]
+    scattering     (n_s + 1, n_r, n_mu, n_mu_s, n_nu, n_wl) float32: [s] single scattering of
+                   constituent `scattering_names[s]` without phase [W m^-2 nm^-1]; [-1] the
+                   orders >= 2 with phases [W m^-2 sr^-1 nm^-1]
+    irradiance     (n_r_e, n_mu_s_e, n_wl) float64: indirect irradiance on horizontal ground
+                   from sky light of orders 1 .. orders-1 [W m^-2 nm^-1]
+    phase          (n_s, n_angle, n_wl) float64: p_s at scattering angles uniform in [0, pi]
+                   [sr^-1]
+    order_mean_radiance, order_zenith_radiance  (orders, n_wl): radiance of each order alone,
+                   the mean over all table cells and the zenith seen from the ground with the
+                   sun at the zenith [W m^-2 sr^-1 nm^-1]; they show how the orders converge
+    """
+
+    wavelengths_nm: np.ndarray
+    bottom_radius_m: float
+    top_radius_m: float
+    min_cos_sun_zenith: float
+    resolution: TableResolution
+    orders: int
+    scattering_names: tuple[str, ...]
+    scattering_constituents: tuple[int, ...]
+    transmittance: np.ndarray
+    scattering: np.ndarray
+    irradiance: np.ndarray
+    phase: np.ndarray
+    order_mean_radiance: np.ndarray
+    order_zenith_radiance: np.ndarray
+
+    @property
+    def single_scattering(self) -> np.ndarray:
+        """(n_s, n_r, n_mu, n_mu_s, n_nu, n_wl): single scattering per constituent, no phase."""
+        return self.scattering[:-1]
+
+    @property
+    def multiple_scattering(self) -> np.ndarray:
+        """(n_r, n_mu, n_mu_s, n_nu, n_wl): orders >= 2, phase functions included."""
+        return self.scattering[-1]
+
+    @property
+    def nbytes(self) -> int:
+        return sum(a.nbytes for a in (self.transmittance, self.scattering, self.irradiance,
+                                      self.phase))
+
+
+def scattering_constituents(profile: OpticalProfile) -> tuple[int, ...]:
+    """Indices of the constituents that scatter (a phase function and a nonzero scattering
+    cross-section at some wavelength)."""
+    return tuple(c for c, phase in enumerate(profile.phases)
+                 if phase is not None and np.any(profile.scattering_per_density[c] > 0.0))
+
+
+def sample_phase_functions(profile: OpticalProfile, constituents: tuple[int, ...],
+                           n_angle: int, wavelengths_nm: np.ndarray | None = None) -> np.ndarray:
+    """p_c at scattering angles theta_i = pi i / (n_angle - 1) for each constituent in
+    `constituents`, shape (n_s, n_angle, n_wl) [sr^-1] (linear interpolation in theta between
+    samples is what the kernels do)."""
+    wl = profile.wavelengths_nm if wavelengths_nm is None else wavelengths_nm
+    nu = np.cos(np.linspace(0.0, np.pi, n_angle))
+    table = np.empty((len(constituents), n_angle, wl.size))
+    for s, c in enumerate(constituents):
+        table[s] = profile.phases[c].evaluate(nu, wl)
+    return table
+
+
+def _sphere_grids(resolution: TableResolution) -> tuple[np.ndarray, ...]:
+    """(theta_in, phi_in, solid_angle_in (n_in,), out directions (n_out, 3), in directions and
+    their mirror images (n_in, 3) each) in a frame whose x-z plane holds the sun."""
+    theta_in = (np.arange(resolution.sphere_theta) + 0.5) * np.pi / resolution.sphere_theta
+    phi_in = (np.arange(resolution.sphere_phi) + 0.5) * np.pi / resolution.sphere_phi
+    theta_out = np.linspace(0.0, np.pi, resolution.density_theta)
+    phi_out = np.linspace(0.0, np.pi, resolution.density_phi)
+
+    def directions(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+        t, p = np.meshgrid(theta, phi, indexing="ij")
+        return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)],
+                        axis=-1).reshape(-1, 3)
+
+    solid = (np.sin(theta_in)[:, None] * (np.pi / resolution.sphere_theta)
+             * (np.pi / resolution.sphere_phi) * np.ones(resolution.sphere_phi)).reshape(-1)
+    incoming = directions(theta_in, phi_in)
+    mirrored = incoming * np.array([1.0, -1.0, 1.0])
+    return theta_in, phi_in, solid, directions(theta_out, phi_out), incoming, mirrored
+
+
+def _phase_matrices(profile: OpticalProfile, constituents: tuple[int, ...], wl: np.ndarray,
+                    resolution: TableResolution) -> np.ndarray:
+    """Discrete sphere integral of each phase function, (n_s, n_wl, n_out, n_in) float32:
+    P[o, i] = (p(w_o . w_i) + p(w_o . w_i')) dOmega_i with w_i' the mirror image of w_i about
+    the sun's vertical plane, each row scaled to sum to 1 (the phase function's normalisation)."""
+    _, _, solid, out, incoming, mirrored = _sphere_grids(resolution)
+    cos_direct = np.clip(out @ incoming.T, -1.0, 1.0)
+    cos_mirror = np.clip(out @ mirrored.T, -1.0, 1.0)
+    matrices = np.empty((len(constituents), wl.size, out.shape[0], incoming.shape[0]),
+                        dtype=np.float32)
+    for s, c in enumerate(constituents):
+        phase = profile.phases[c]
+        p = (phase.evaluate(cos_direct, wl) + phase.evaluate(cos_mirror, wl)) * solid[None, :,
+                                                                                        None]
+        p /= p.sum(axis=1, keepdims=True)
+        matrices[s] = np.moveaxis(p, -1, 0)
+    return matrices
+
+
+def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
+                      orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN_EARTH,
+                      wavelength_batch: int = 16,
+                      progress: Callable[[int, int, str], None] | None = None
+                      ) -> AtmosphereTables:
+    """Precompute the tables of `profile` with `orders` scattering orders (module docstring).
+
+    Parameters
+    ----------
+    profile : OpticalProfile
+        The atmosphere sampled at its wavelengths.
+    resolution : TableResolution, optional
+        Table sizes and quadrature; Bruneton 2017's sizes by default.
+    orders : int
+        Number of scattering orders N >= 1 (1: single scattering only, as the ray-marching
+        solver; 4 is Bruneton's default for Earth; dusty atmospheres need 10 or more).
+    min_cos_sun_zenith : float
+        mu_s_min, the smallest cos(sun zenith) tabulated (below it the sky of mu_s_min is
+        used): cos(102 deg) = -0.208 for Earth (Bruneton 2017); -0.5 covers deep twilight.
+    wavelength_batch : int
+        Wavelengths computed together; bounds the working memory (about 0.3 GB per 16
+        wavelengths at the default resolution) besides the result tables.
+    progress : callable(done, total, stage), optional
+        Called after each step.
+
+    Returns
+    -------
+    AtmosphereTables
+    """
+    resolution = resolution or TableResolution()
+    if int(orders) != orders or orders < 1:
+        raise InputError(f"orders = {orders!r} must be an integer >= 1", key="orders",
+                         value=orders, allowed="integer >= 1")
+    if not -1.0 <= min_cos_sun_zenith < 0.5:
+        raise InputError(f"min_cos_sun_zenith = {min_cos_sun_zenith!r} must lie in [-1, 0.5)",
+                         key="min_cos_sun_zenith", value=min_cos_sun_zenith,
+                         allowed="[-1, 0.5)")
+    if int(wavelength_batch) != wavelength_batch or wavelength_batch < 1:
+        raise InputError(f"wavelength_batch = {wavelength_batch!r} must be an integer >= 1",
+                         key="wavelength_batch", value=wavelength_batch, allowed=">= 1")
+    orders = int(orders)
+    res = resolution
+    bottom, top = float(profile.bottom_radius_m), float(profile.top_radius_m)
+    mu_s_min = float(min_cos_sun_zenith)
+    h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
+    density = np.ascontiguousarray(profile.density, dtype=np.float64)
+    wavelengths = profile.wavelengths_nm
+    n_wl = wavelengths.size
+    scatterers = scattering_constituents(profile)
+    n_s = len(scatterers)
+    scatterer_index = np.array(scatterers, dtype=np.int64)
+    batches = [slice(i, min(i + int(wavelength_batch), n_wl))
+               for i in range(0, n_wl, int(wavelength_batch))]
+    total_steps = 1 + len(batches) * orders
+    step = 0
+
+    def report(stage: str) -> None:
+        nonlocal step
+        step += 1
+        if progress is not None:
+            progress(step, total_steps, stage)
+
+    columns = _table_kernels.column_table(res.transmittance_r, res.transmittance_mu,
+                                          res.transmittance_samples, bottom, top, h_step, density)
+    transmittance = np.exp(-np.einsum("cw,crm->rmw", profile.extinction_per_density, columns))
+    report("transmittance")
+    phase = sample_phase_functions(profile, scatterers, res.phase_angles)
+    theta_in, phi_in, *_ = _sphere_grids(res)
+    scattering = np.zeros((n_s + 1, res.scattering_r, res.scattering_mu, res.scattering_mu_s,
+                           res.scattering_nu, n_wl), dtype=np.float32)
+    irradiance = np.zeros((res.irradiance_r, res.irradiance_mu_s, n_wl))
+    order_mean = np.zeros((orders, n_wl))
+    order_zenith = np.zeros((orders, n_wl))
+    shape = (res.scattering_r, res.scattering_mu, res.scattering_mu_s, res.scattering_nu)
+    geometry = (bottom, top, mu_s_min)
+
+    for batch in batches:
+        wl = wavelengths[batch]
+        extinction = np.ascontiguousarray(profile.extinction_per_density[:, batch])
+        sun = np.ascontiguousarray(profile.toa_irradiance[batch], dtype=np.float64)
+        albedo = np.ascontiguousarray(profile.ground_albedo[batch], dtype=np.float64)
+        phase_b = np.ascontiguousarray(phase[:, :, batch])
+        factor = np.ascontiguousarray(
+            sun[None, :] * profile.scattering_per_density[scatterer_index][:, batch])
+        label = f"wavelengths {batch.start + 1}-{batch.stop} of {n_wl}"
+
+        single = _table_kernels.single_scattering_table(
+            *shape, res.ray_samples, *geometry, h_step, density, columns, extinction,
+            np.ascontiguousarray(transmittance[..., batch]), scatterer_index, factor,
+            float(profile.sun_angular_radius_rad))
+        scattering[:n_s, ..., batch] = single
+        order_mean[0, batch], order_zenith[0, batch] = _table_kernels.order_statistics(
+            single, True, phase_b, *geometry)
+        report(f"single scattering, {label}")
+        if orders == 1:
+            continue
+        matrices = _phase_matrices(profile, scatterers, wl, res)
+        beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
+        previous, use_phase = single, True
+        ground = _table_kernels.direct_ground_irradiance(
+            DIRECT_GROUND_SAMPLES, bottom, top, columns, extinction, sun,
+            float(profile.sun_angular_radius_rad))
+        for order in range(2, orders + 1):
+            previous_flat = _table_kernels.flat_tables(previous)
+            incoming = _table_kernels.incoming_radiance(
+                res.scattering_r, res.scattering_mu_s, theta_in, phi_in, *geometry,
+                previous_flat, res.scattering_mu, res.scattering_nu, use_phase, phase_b, ground,
+                albedo, columns, extinction).astype(np.float32)
+            density_table = _scattering_density(matrices, incoming, beta_s, res)
+            del incoming
+            delta_irradiance = _table_kernels.indirect_irradiance(
+                res.irradiance_r, res.irradiance_mu_s, res.irradiance_theta,
+                res.irradiance_phi, *geometry, previous_flat, *shape, use_phase, phase_b)
+            irradiance[..., batch] += delta_irradiance
+            ground = np.ascontiguousarray(delta_irradiance[0])
+            delta = _table_kernels.multiple_scattering_table(
+                *shape, res.multiple_ray_samples, *geometry, h_step, density, columns, extinction,
+                scatterer_index, density_table, res.density_phi)
+            del density_table, previous_flat
+            scattering[n_s, ..., batch] += delta
+            previous, use_phase = delta[None], False
+            order_mean[order - 1, batch], order_zenith[order - 1, batch] = (
+                _table_kernels.order_statistics(previous, False, phase_b, *geometry))
+            report(f"order {order}, {label}")
+        del previous, single
+
+    return AtmosphereTables(
+        wavelengths_nm=wavelengths.copy(), bottom_radius_m=bottom, top_radius_m=top,
+        min_cos_sun_zenith=mu_s_min, resolution=res, orders=orders,
+        scattering_names=tuple(profile.names[c] for c in scatterers),
+        scattering_constituents=scatterers, transmittance=transmittance,
+        scattering=scattering, irradiance=irradiance, phase=phase,
+        order_mean_radiance=order_mean, order_zenith_radiance=order_zenith)
+
+
+def _scattering_density(matrices: np.ndarray, incoming: np.ndarray, beta_s: np.ndarray,
+                        res: TableResolution) -> np.ndarray:
+    """J_s per unit density, beta_s (P_s @ L) for each wavelength, laid out for
+    `multiple_scattering_table`: (n_s, n_r, n_theta, n_mu_s * n_phi * n_b) float32 (axes r,
+    theta, then mu_s, phi, wavelength flattened); incoming (n_b, n_in, n_r n_mu_s)."""
+    n_s, n_b = matrices.shape[:2]
+    out = np.empty((n_s, res.scattering_r, res.density_theta, res.scattering_mu_s,
+                    res.density_phi, n_b), dtype=np.float32)
+    for s in range(n_s):
+        product = np.matmul(matrices[s], incoming)  # (n_b, n_out, n_r n_mu_s)
+        product = product.reshape(n_b, res.density_theta, res.density_phi, res.scattering_r,
+                                  res.scattering_mu_s)
+        # (n_b, theta, phi, r, mu_s) -> (r, theta, mu_s, phi, n_b)
+        out[s] = product.transpose(3, 1, 4, 2, 0) * beta_s[s].astype(np.float32)
+    return out.reshape(n_s, res.scattering_r, res.density_theta, -1)
