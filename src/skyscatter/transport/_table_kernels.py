@@ -12,13 +12,16 @@ Conventions (docs/physics/tables.md, Bruneton 2017 functions.glsl):
   col_top(start, -mu) (rays that hit it), Bruneton 2017 `GetTransmittance` in columns.
 - Table rays are sampled densest near their lowest point and near the observer
   (`table_ray_distances`); integrals use the trapezoid rule on the samples.
-- Stacked scattering tables have shape (n_t, n_r, n_mu, n_mu_s, n_nu, n_wl); a lookup sums
-  weights[t, w] * table[t] (phase functions for single scattering, 1 for multiple).
+- Scattering tables are interleaved, (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl): the n_t tables of a
+  cell (single scattering per constituent, then multiple) and their wavelengths are adjacent,
+  so a lookup reads each (r, mu, mu_s) corner's two nu slices in one contiguous run; it sums
+  weights[t, w] * table_t (phase functions for single scattering, 1 for multiple).
 - Phase functions inside kernels come from tables (n_s, n_angle, n_wl) sampled uniformly in the
   scattering angle over [0, pi], interpolated linearly.
-- The scattering density J is tabulated per scattering constituent and per unit density on
-  (r_k, mu_s_l) nodes of the scattering table times outgoing directions (theta_o, phi_o) on a
-  regular grid, phi measured from the sun's vertical plane (J is even in phi).
+- The scattering density J is stored as the source function J / beta_s (beta_s the scattering
+  coefficient) on (r_k, mu_s_l) nodes of the scattering table times outgoing directions
+  (theta_o, phi_o) on a regular grid, phi measured from the sun's vertical plane (J is even in
+  phi); rays multiply it by the exact beta_s at each sample.
 Kernels take arrays and floats only.
 """
 
@@ -53,6 +56,8 @@ from skyscatter.transport.table_parameterisation import (
     texel_index,
     transmittance_r_mu_from_x,
     transmittance_x_from_r_mu,
+    transmittance_x_mu,
+    transmittance_x_r,
 )
 
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loops of the lookups
@@ -88,6 +93,13 @@ def transmittance_to_top(r, mu, bottom_radius, top_radius, transmittance, out):
     n_wl), into out (n_wl,) (Bruneton 2017, `GetTransmittanceToTopAtmosphereBoundary`)."""
     x_mu, x_r = transmittance_x_from_r_mu(r, mu, bottom_radius, top_radius)
     i, a = _axis(x_r * (transmittance.shape[0] - 1), transmittance.shape[0])
+    transmittance_in_row(transmittance, i, a, x_mu, out)
+
+
+@njit(cache=True)
+def transmittance_in_row(transmittance, i, a, x_mu, out):
+    """`transmittance_to_top` with the r part (row i, weight a, from `transmittance_x_r`)
+    done by the caller: bilinear at (i + a, x_mu (n_mu_t - 1)), into out (n_wl,)."""
     j, b = _axis(x_mu * (transmittance.shape[1] - 1), transmittance.shape[1])
     for w in range(transmittance.shape[2]):
         out[w] = ((1.0 - a) * ((1.0 - b) * transmittance[i, j, w]
@@ -118,13 +130,15 @@ def transmittance_along(r, mu, d, hits_ground, bottom_radius, top_radius, transm
 @njit(cache=True)
 def phase_values(phase_table, nu, out):
     """Phase functions at nu = cos(scattering angle), linear in the angle, from `phase_table`
-    (n_s, n_angle, n_wl) sampled uniformly over [0, pi]; into out (n_s, n_wl) [sr^-1]."""
+    (n_s, n_angle, n_wl) sampled uniformly over [0, pi]; into out[s * n_wl + w] for s < n_s
+    (out may be longer: the weights of a lookup, 1 for the multiple-scattering table) [sr^-1]."""
     n_angle = phase_table.shape[1]
+    n_wl = phase_table.shape[2]
     theta = math.acos(min(max(nu, -1.0), 1.0))
     i, a = _axis(theta / math.pi * (n_angle - 1), n_angle)
     for s in range(phase_table.shape[0]):
-        for w in range(phase_table.shape[2]):
-            out[s, w] = (1.0 - a) * phase_table[s, i, w] + a * phase_table[s, i + 1, w]
+        for w in range(n_wl):
+            out[s * n_wl + w] = (1.0 - a) * phase_table[s, i, w] + a * phase_table[s, i + 1, w]
 
 
 @njit(cache=True)
@@ -151,17 +165,27 @@ def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, 
 
 
 @njit(cache=True)
-def scattering_accumulate(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
-                          i_nu, a_nu, out):
-    """out[w] += sum_t weights[t, w] * table_t interpolated at the corners of
-    `scattering_corners`; `flat` is the stacked table (n_t, n_r, n_mu, n_mu_s, n_nu, n_wl)
-    reshaped to (n_t, n_r n_mu n_mu_s n_nu n_wl) (a view of the C-ordered array)."""
-    n_t = flat.shape[0]
+def scattering_lookup(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu,
+                      a_nu, pair_weights, pair_values, out):
+    """out[w] += sum_t weights[t n_wl + w] * table_t(w) interpolated at the corners of
+    `scattering_corners`.
+
+    `flat` is the interleaved table (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl) as a 1-D view
+    (`flat_tables`): for each (r, mu, mu_s) corner the two nu slices and all tables and
+    wavelengths are 2 n_t n_wl contiguous numbers, read in one loop. pair_weights and
+    pair_values are scratch arrays of 2 n_t n_wl."""
+    m = weights.size
     n_wl = out.size
-    s_nu = n_wl
+    n_t = m // n_wl
+    s_nu = m
     s_s = n_nu * s_nu
     s_mu = n_mu_s * s_s
     s_r = n_mu * s_mu
+    for k in range(m):
+        pair_weights[k] = (1.0 - a_nu) * weights[k]
+        pair_weights[m + k] = a_nu * weights[k]
+        pair_values[k] = 0.0
+        pair_values[m + k] = 0.0
     base = i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu
     for dr in range(2):
         wr = a_r if dr == 1 else 1.0 - a_r
@@ -175,21 +199,19 @@ def scattering_accumulate(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_m
                 ws = wm * (a_s if ds == 1 else 1.0 - a_s)
                 if ws == 0.0:
                     continue
-                for dn in range(2):
-                    wn = ws * (a_nu if dn == 1 else 1.0 - a_nu)
-                    if wn == 0.0:
-                        continue
-                    offset = base + dr * s_r + dm * s_mu + ds * s_s + dn * s_nu
-                    for t in range(n_t):
-                        for w in range(n_wl):
-                            out[w] += wn * weights[t, w] * flat[t, offset + w]
+                offset = base + dr * s_r + dm * s_mu + ds * s_s
+                segment = flat[offset:offset + 2 * m]
+                for k in range(2 * m):
+                    pair_values[k] += ws * pair_weights[k] * segment[k]
+    for t in range(2 * n_t):
+        for w in range(n_wl):
+            out[w] += pair_values[t * n_wl + w]
 
 
 def flat_tables(tables: np.ndarray) -> np.ndarray:
-    """The stacked scattering tables as the (n_t, cells x n_wl) view `scattering_accumulate`
-    reads (a copy only if `tables` is not C-contiguous)."""
-    tables = np.ascontiguousarray(tables)
-    return tables.reshape(tables.shape[0], -1)
+    """An interleaved scattering table (n_r, n_mu, n_mu_s, n_nu, [n_t,] n_wl) as the 1-D view
+    `scattering_lookup` reads (a copy only if it is not C-contiguous)."""
+    return np.ascontiguousarray(tables).reshape(-1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -298,31 +320,25 @@ def _view_transmittance(total, weight, col_view, extinction, out):
             out[j, w] = math.exp(-tau) * weight[j]
 
 
-@njit(cache=True)
-def _sun_visible(r, mu_s, bottom_radius, sun_angular_radius):
-    """`geometry.sun_visible_fraction`, with a shortcut for a sun well above the horizon:
-    mu_s >= mu_h + alpha + alpha^2 / 2 >= cos(theta_h - alpha) implies the whole disk is up."""
-    mu_h = horizon_cos_zenith(r, bottom_radius)
-    if mu_s >= mu_h + sun_angular_radius * (1.0 + 0.5 * sun_angular_radius):
-        return 1.0
-    return sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
-
-
 @njit(parallel=True, cache=True)
 def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
                             mu_s_min, h_step, density, columns, extinction, transmittance,
                             scatterers, factor, sun_angular_radius):
     """Single scattering without phase function, per scattering constituent:
     table[s, cell, w] = factor[s, w] * int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt, with
-    factor = E_sun beta_s,s [W m^-2 nm^-1 / density]; (n_s, n_r, n_mu, n_mu_s, n_nu, n_wl)
-    float32. T(x, p) from the column table, T_sun from the transmittance table (n_r_t, n_mu_t,
-    n_wl) (no exponential per cell). Bruneton 2017, `ComputeSingleScattering`; V = visible
-    part of the sun disk."""
+    factor = E_sun beta_s,s [W m^-2 nm^-1 / density]; (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl)
+    float32 (interleaved, `scattering_lookup`). T(x, p) from the column table, T_sun from the
+    transmittance table (n_r_t, n_mu_t, n_wl) (no exponential per cell). Bruneton 2017,
+    `ComputeSingleScattering`; V = visible part of the sun disk."""
     n_c = density.shape[0]
     n_s = scatterers.size
     n_wl = extinction.shape[1]
-    table = np.zeros((n_s, n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
+    table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_s, n_wl), dtype=np.float32)
     n_max = n_samples + 8
+    n_r_t = transmittance.shape[0]
+    # mu_s >= mu_h + alpha + alpha^2 / 2 >= cos(theta_h - alpha): the whole sun disk is above
+    # the horizon, `sun_visible_fraction` = 1 (its own fast exit costs a cos and a sin).
+    sun_clear = sun_angular_radius * (1.0 + 0.5 * sun_angular_radius)
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
@@ -341,9 +357,17 @@ def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, t
             continue
         view = np.empty((total, n_wl))
         _view_transmittance(total, weight, col_view, extinction, view)
+        # Per sample: the horizon, and the r part of the transmittance lookup towards the sun.
         mu_h = np.empty(total)
+        row_i = np.empty(total, dtype=np.int64)
+        row_a = np.empty(total)
+        row_d_min = np.empty(total)
+        row_d_max = np.empty(total)
         for j in range(total):
             mu_h[j] = horizon_cos_zenith(radius[j], bottom_radius)
+            x_r, row_d_min[j], row_d_max[j] = transmittance_x_r(radius[j], bottom_radius,
+                                                                top_radius)
+            row_i[j], row_a[j] = _axis(x_r * (n_r_t - 1), n_r_t)
         sun = np.empty(n_wl)
         acc = np.empty((n_s, n_wl))
         for i_s in range(n_mu_s):
@@ -357,18 +381,22 @@ def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, t
                 for j in range(total):
                     rj = radius[j]
                     mu_s_j = min(max((r * mu_s + t[j] * nu) / rj, -1.0), 1.0)
-                    visible = _sun_visible(rj, mu_s_j, bottom_radius, sun_angular_radius)
-                    if visible <= 0.0:
-                        continue
-                    transmittance_to_top(rj, max(mu_s_j, mu_h[j]), bottom_radius, top_radius,
-                                         transmittance, sun)
+                    visible = 1.0
+                    if mu_s_j < mu_h[j] + sun_clear:  # else the whole disk is up
+                        visible = sun_visible_fraction(rj, mu_s_j, bottom_radius,
+                                                       sun_angular_radius)
+                        if visible <= 0.0:
+                            continue
+                    x_mu = transmittance_x_mu(rj, max(mu_s_j, mu_h[j]), top_radius,
+                                              row_d_min[j], row_d_max[j])
+                    transmittance_in_row(transmittance, row_i[j], row_a[j], x_mu, sun)
                     for s in range(n_s):
                         dv = dens[j, scatterers[s]] * visible
                         for w in range(n_wl):
                             acc[s, w] += dv * view[j, w] * sun[w]
                 for s in range(n_s):
                     for w in range(n_wl):
-                        table[s, i_r, i_mu, i_s, i_nu, w] = acc[s, w] * factor[s, w]
+                        table[i_r, i_mu, i_s, i_nu, s, w] = acc[s, w] * factor[s, w]
     return table
 
 
@@ -391,6 +419,46 @@ def direct_ground_irradiance(n_points, bottom_radius, top_radius, columns, extin
             for c in range(n_c):
                 tau += extinction[c, w] * col[c]
             out[i, w] = sun_irradiance[w] * math.exp(-tau) * mu_s * visible
+    return out
+
+
+@njit(parallel=True, cache=True)
+def phase_matrices(phase_table, cos_direct, cos_mirror, solid_angle):
+    """Phase matrices of the sphere integral, (n_s, n_wl, n_out, n_in) float32:
+    P[o, i] = (p(cos_direct[o, i]) + p(cos_mirror[o, i])) solid_angle[i], each row normalised
+    to sum 1; p from `phase_table` (n_s, n_angle, n_wl) as in `phase_values`."""
+    n_s, n_angle, n_wl = phase_table.shape
+    n_out, n_in = cos_direct.shape
+    out = np.empty((n_s, n_wl, n_out, n_in), dtype=np.float32)
+    for o in prange(n_out):
+        row = np.empty((n_s, n_wl, n_in))
+        direct = np.empty(n_s * n_wl)
+        mirror = np.empty(n_s * n_wl)
+        for i in range(n_in):
+            phase_values(phase_table, cos_direct[o, i], direct)
+            phase_values(phase_table, cos_mirror[o, i], mirror)
+            for s in range(n_s):
+                for w in range(n_wl):
+                    row[s, w, i] = (direct[s * n_wl + w] + mirror[s * n_wl + w]) * solid_angle[i]
+        for s in range(n_s):
+            for w in range(n_wl):
+                total = 0.0
+                for i in range(n_in):
+                    total += row[s, w, i]
+                for i in range(n_in):
+                    out[s, w, o, i] = row[s, w, i] / total
+    return out
+
+
+@njit(cache=True)
+def node_densities(n_r, bottom_radius, top_radius, h_step, density):
+    """Densities (n_c, n_r) at the r nodes of the scattering table."""
+    out = np.empty((density.shape[0], n_r))
+    value = np.empty(density.shape[0])
+    for k in range(n_r):
+        r = scattering_r_from_u((k + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        density_at(r - bottom_radius, h_step, density, value)
+        out[:, k] = value
     return out
 
 
@@ -418,17 +486,16 @@ def _ground_radiance(r, mu, mu_s, nu, bottom_radius, top_radius, columns, extinc
 
 @njit(parallel=True, cache=True)
 def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, mu_s_min,
-                      tables, n_mu, n_nu, use_phase, phase_table, ground_irradiance, albedo,
+                      tables, n_mu, n_nu, n_t, use_phase, phase_table, ground_irradiance, albedo,
                       columns, extinction):
     """Radiance of the previous order arriving at the scattering-density nodes, from the
     directions (theta_in[a], phi_in[p]) (phi from the sun's vertical plane): the scattering
     lookup (with phase functions when `use_phase`, i.e. the single-scattering tables; `tables`
-    as from `flat_tables`, n_mu and n_nu their axes) plus the ground lit by
+    as from `flat_tables`, n_mu and n_nu their axes, n_t tables) plus the ground lit by
     `ground_irradiance` for directions that hit it. Returns
     (n_wl, n_a n_p, n_r n_mu_s), the layout of the matrix product that follows.
     Bruneton 2017, `ComputeScatteringDensity`, the inner part."""
     n_c, n_wl = extinction.shape
-    n_t = tables.shape[0]
     n_a = theta_in.size
     n_p = phi_in.size
     radiance = np.zeros((n_wl, n_a * n_p, n_r * n_mu_s))
@@ -439,7 +506,9 @@ def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, 
         mu_s = scattering_mu_s_from_u((l + 0.5) / n_mu_s, bottom_radius, top_radius, mu_s_min,
                                       n_mu_s)
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-        weights = np.ones((n_t, n_wl))
+        weights = np.ones(n_t * n_wl)
+        pair_weights = np.empty(2 * n_t * n_wl)
+        pair_values = np.empty(2 * n_t * n_wl)
         value = np.empty(n_wl)
         col_a = np.empty(n_c)
         col_b = np.empty(n_c)
@@ -455,8 +524,8 @@ def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, 
                 i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
                     r, mu_in, mu_s, nu_in, hits_ground, bottom_radius, top_radius, mu_s_min,
                     n_r, n_mu, n_mu_s, n_nu)
-                scattering_accumulate(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu,
-                                      a_mu, i_s, a_s, i_nu, a_nu, value)
+                scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
+                                  i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 if hits_ground:
                     _ground_radiance(r, mu_in, mu_s, nu_in, bottom_radius, top_radius, columns,
                                      extinction, ground_irradiance, albedo, col_a, col_b, value)
@@ -467,14 +536,13 @@ def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, 
 
 @njit(parallel=True, cache=True)
 def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radius, mu_s_min,
-                        tables, n_r, n_mu, n_mu_s, n_nu, use_phase, phase_table):
+                        tables, n_r, n_mu, n_mu_s, n_nu, n_t, use_phase, phase_table):
     """Irradiance on a horizontal surface from the sky radiance of one order,
     E = int_{mu > 0} L(r, mu, mu_s, nu) mu d omega, on the irradiance nodes (r = R_b + i (R_t -
     R_b) / (n_r_e - 1), mu_s = -1 + 2 j / (n_mu_s_e - 1)); midpoint rule with n_theta polar
     angles in [0, pi/2] and n_phi azimuths in [0, pi] (L is even in the azimuth); `tables`
     from `flat_tables`, (n_r, n_mu, n_mu_s, n_nu) their axes. Returns (n_r_e, n_mu_s_e,
     n_wl). Bruneton 2017, `ComputeIndirectIrradiance`."""
-    n_t = tables.shape[0]
     n_wl = phase_table.shape[2]
     out = np.zeros((n_r_e, n_mu_s_e, n_wl))
     d_theta = 0.5 * math.pi / n_theta
@@ -485,7 +553,9 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radi
         r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1), bottom_radius,
                                            top_radius)
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-        weights = np.ones((n_t, n_wl))
+        weights = np.ones(n_t * n_wl)
+        pair_weights = np.empty(2 * n_t * n_wl)
+        pair_values = np.empty(2 * n_t * n_wl)
         value = np.empty(n_wl)
         for a in range(n_theta):
             theta = (a + 0.5) * d_theta
@@ -501,8 +571,8 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radi
                 i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
                     r, mu_in, mu_s, nu_in, False, bottom_radius, top_radius, mu_s_min, n_r,
                     n_mu, n_mu_s, n_nu)
-                scattering_accumulate(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu,
-                                      a_mu, i_s, a_s, i_nu, a_nu, value)
+                scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
+                                  i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 for w in range(n_wl):
                     out[i, j, w] += value[w] * solid
     return out
@@ -510,19 +580,19 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radi
 
 @njit(parallel=True, cache=True)
 def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
-                              mu_s_min, h_step, density, columns, extinction, scatterers,
-                              scattering_density, n_phi):
-    """One order of multiple scattering: int_0^d T(x, p) J(p, v) dt for every cell,
-    J(p, v) = sum_s n_s(p) J_s(r, theta, mu_s, phi) interpolated in `scattering_density`
-    (n_s, n_r, n_theta, n_mu_s * n_phi * n_wl) (r, mu_s on the scattering-table nodes; theta
-    = view zenith and phi = azimuth from the sun on regular grids over [0, pi]). For each ray
-    sample the (r, theta) interpolation and the densities are applied once, to a (mu_s, phi)
-    slab shared by the n_mu_s x n_nu cells of the ray. Returns (n_r, n_mu, n_mu_s, n_nu,
-    n_wl) float32. Bruneton 2017, `ComputeMultipleScattering`."""
+                              mu_s_min, h_step, density, columns, extinction, scattering,
+                              source, n_phi):
+    """One order of multiple scattering: int_0^d T(x, p) J(p, v) dt for every cell, with
+    J(p, v) = beta_s(p) S(r, theta, mu_s, phi): beta_s(p) = sum_c n_c(p) scattering[c] the
+    exact scattering coefficient at the sample, S the source function J / beta_s interpolated
+    in `source` (n_r, n_theta, n_mu_s * n_phi * n_wl) (r, mu_s on the scattering-table nodes;
+    theta = view zenith and phi = azimuth from the sun on regular grids over [0, pi]). For each
+    ray sample the (r, theta) interpolation is done once, to a (mu_s, phi) slab shared by the
+    n_mu_s x n_nu cells of the ray. Returns (n_r, n_mu, n_mu_s, n_nu, n_wl) float32.
+    Bruneton 2017, `ComputeMultipleScattering`."""
     n_c, n_wl = extinction.shape
-    n_s = scatterers.size
-    n_theta = scattering_density.shape[2]
-    n_block = scattering_density.shape[3]
+    n_theta = source.shape[1]
+    n_block = source.shape[2]
     table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
     n_max = n_samples + 8
     mu_s_nodes = np.empty(n_mu_s)
@@ -548,6 +618,12 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
             continue
         view = np.empty((total, n_wl))
         _view_transmittance(total, weight, col_view, extinction, view)
+        for j in range(total):  # T(x, p) dt beta_s(p)
+            for w in range(n_wl):
+                beta = 0.0
+                for c in range(n_c):
+                    beta += dens[j, c] * scattering[c, w]
+                view[j, w] *= beta
         nu_cells = np.empty((n_mu_s, n_nu))
         for i_s in range(n_mu_s):
             mu_s = mu_s_nodes[i_s]
@@ -556,25 +632,22 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
                 nu = scattering_nu_from_u(i_nu / (n_nu - 1))
                 nu_cells[i_s, i_nu] = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
         acc = np.zeros((n_mu_s, n_nu, n_wl))
-        slab = np.empty(n_block)
+        slab = np.empty(n_block, dtype=np.float32)
         for j in range(total):
             k, a_r = _axis(texel_index(scattering_u_r(radius[j], bottom_radius, top_radius,
                                                       n_r), n_r), n_r)
             o, a_th = _axis(math.acos(mu_t[j]) / math.pi * (n_theta - 1), n_theta)
-            slab[:] = 0.0
-            for s in range(n_s):
-                ds = dens[j, scatterers[s]]
-                if ds == 0.0:
-                    continue
-                for dr in range(2):
-                    wr = ds * (a_r if dr == 1 else 1.0 - a_r)
-                    for dt in range(2):
-                        wt = wr * (a_th if dt == 1 else 1.0 - a_th)
-                        if wt == 0.0:
-                            continue
-                        block = scattering_density[s, k + dr, o + dt]
-                        for q in range(n_block):
-                            slab[q] += wt * block[q]
+            c00 = np.float32((1.0 - a_r) * (1.0 - a_th))
+            c01 = np.float32((1.0 - a_r) * a_th)
+            c10 = np.float32(a_r * (1.0 - a_th))
+            c11 = np.float32(a_r * a_th)
+            block00 = source[k, o]
+            block01 = source[k, o + 1]
+            block10 = source[k + 1, o]
+            block11 = source[k + 1, o + 1]
+            for q in range(n_block):
+                slab[q] = (c00 * block00[q] + c01 * block01[q] + c10 * block10[q]
+                           + c11 * block11[q])
             sin_t = math.sqrt(max(1.0 - mu_t[j] * mu_t[j], 0.0))
             rj = radius[j]
             tj = t[j]
@@ -612,13 +685,14 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
 @njit(parallel=True, cache=True)
 def order_statistics(tables, use_phase, phase_table, bottom_radius, top_radius, mu_s_min):
     """(mean over all cells, value at the ground looking at the zenith with the sun there) of
-    the radiance of one order [W m^-2 sr^-1 nm^-1], each (n_wl,); with phase functions applied
-    (`use_phase`) for the single-scattering tables."""
-    n_t, n_r, n_mu, n_mu_s, n_nu, n_wl = tables.shape
+    the radiance of one order [W m^-2 sr^-1 nm^-1], each (n_wl,), from interleaved tables
+    (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl); with phase functions applied (`use_phase`) for the
+    single-scattering tables."""
+    n_r, n_mu, n_mu_s, n_nu, n_t, n_wl = tables.shape
     partial = np.zeros((n_r, n_wl))
     for i_r in prange(n_r):
         r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
-        weights = np.ones((n_t, n_wl))
+        weights = np.ones(n_t * n_wl)
         for i_mu in range(n_mu):
             mu, _ = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
                                          n_mu)
@@ -633,15 +707,16 @@ def order_statistics(tables, use_phase, phase_table, bottom_radius, top_radius, 
                         phase_values(phase_table, nu, weights)
                     for t in range(n_t):
                         for w in range(n_wl):
-                            partial[i_r, w] += weights[t, w] * tables[t, i_r, i_mu, i_s, i_nu, w]
+                            partial[i_r, w] += (weights[t * n_wl + w]
+                                                * tables[i_r, i_mu, i_s, i_nu, t, w])
     mean = partial.sum(axis=0) / (n_r * n_mu * n_mu_s * n_nu)
-    weights = np.ones((n_t, n_wl))
+    weights = np.ones(n_t * n_wl)
     if use_phase:
         phase_values(phase_table, 1.0, weights)
     zenith = np.zeros(n_wl)
     for t in range(n_t):
         for w in range(n_wl):
-            zenith[w] += weights[t, w] * tables[t, 0, n_mu // 2, n_mu_s - 1, n_nu - 1, w]
+            zenith[w] += weights[t * n_wl + w] * tables[0, n_mu // 2, n_mu_s - 1, n_nu - 1, t, w]
     return mean, zenith
 
 
@@ -670,22 +745,23 @@ def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_rad
                       scattering, shape, phase_table, transmittance, irradiance, sun_irradiance,
                       ground_albedo, sun_angular_radius, out):
     """Radiance from the tables into out (n_ray, n_wl) [W m^-2 sr^-1 nm^-1]:
-    sum_s p_s(nu) S_s + M (`scattering` = (S_1..S_n_s, M) stacked, from `flat_tables`; shape =
-    (n_r, n_mu, n_mu_s, n_nu)), plus for rays that hit the ground the Lambertian ground
+    sum_s p_s(nu) S_s + M (`scattering` = the interleaved (S_1..S_n_s, M) from `flat_tables`;
+    shape = (n_r, n_mu, n_mu_s, n_nu)), plus for rays that hit the ground the Lambertian ground
     albedo / pi (E_sun T_sun max(mu_s, 0) V + E_indirect) seen through T(x, g). origins is
     (1, 3) or (n_ray, 3); directions (n_ray, 3), normalised here. Observers in space start at
     the top boundary; rays that miss the atmosphere get 0. Bruneton 2017, `GetSkyRadiance`
     and the demo's ground shading."""
     n_ray = directions.shape[0]
     n_r, n_mu, n_mu_s, n_nu = shape
-    n_t = scattering.shape[0]
     n_wl = out.shape[1]
     n_s = phase_table.shape[0]
+    n_t = n_s + 1
     single_origin = origins.shape[0] == 1
     n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        weights = np.ones((n_t, n_wl))
-        phase = np.empty((n_s, n_wl))
+        weights = np.ones(n_t * n_wl)
+        pair_weights = np.empty(2 * n_t * n_wl)
+        pair_values = np.empty(2 * n_t * n_wl)
         value = np.empty(n_wl)
         t_view = np.empty(n_wl)
         t_sun = np.empty(n_wl)
@@ -709,16 +785,13 @@ def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_rad
             nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
             r = min(max(r, bottom_radius), top_radius)
             hits_ground = ray_intersects_ground(r, mu, bottom_radius)
-            phase_values(phase_table, nu, phase)
-            for s in range(n_s):
-                for w in range(n_wl):
-                    weights[s, w] = phase[s, w]
+            phase_values(phase_table, nu, weights)
             value[:] = 0.0
             i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
                 r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
                 n_mu_s, n_nu)
-            scattering_accumulate(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
-                                  i_s, a_s, i_nu, a_nu, value)
+            scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s,
+                              a_s, i_nu, a_nu, pair_weights, pair_values, value)
             if hits_ground:
                 d = distance_to_bottom_boundary(r, mu, bottom_radius)
                 mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)

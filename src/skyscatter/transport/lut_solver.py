@@ -71,7 +71,7 @@ class LutSolver:
                              value=tables.wavelengths_nm, allowed="the profile's wavelengths")
         self.tables = tables
         self._scattering = _table_kernels.flat_tables(tables.scattering)
-        self._shape = tuple(int(n) for n in tables.scattering.shape[1:5])
+        self._shape = tuple(int(n) for n in tables.scattering.shape[:4])
         self._albedo = np.ascontiguousarray(profile.ground_albedo, dtype=np.float64)
         self._sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
 

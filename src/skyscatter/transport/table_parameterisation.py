@@ -70,6 +70,8 @@ __all__ = [
     "texture_coord_from_unit_range",
     "transmittance_r_mu_from_x",
     "transmittance_x_from_r_mu",
+    "transmittance_x_mu",
+    "transmittance_x_r",
     "unit_range_from_texture_coord",
 ]
 
@@ -128,18 +130,33 @@ def ray_intersects_ground(r, mu, bottom_radius):
 # --------------------------------------------------------------------------------------------
 
 @njit(cache=True)
+def transmittance_x_r(r, bottom_radius, top_radius):
+    """(x_r, d_min, d_max) of the transmittance mapping at radius r: x_r = rho / H (clamped to
+    [0, 1]), d_min = R_t - r, d_max = rho + H [m]. The part of `transmittance_x_from_r_mu` that
+    does not depend on mu, for kernels that look up many mu at one r."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
+    return min(max(rho / big_h, 0.0), 1.0), top_radius - r, rho + big_h
+
+
+@njit(cache=True)
+def transmittance_x_mu(r, mu, top_radius, d_min, d_max):
+    """x_mu = (d - d_min) / (d_max - d_min) (clamped to [0, 1]), d = distance to the top; d_min
+    and d_max from `transmittance_x_r`."""
+    if d_max <= d_min:
+        return 0.0
+    d = distance_to_top_boundary(r, mu, top_radius)
+    return min(max((d - d_min) / (d_max - d_min), 0.0), 1.0)
+
+
+@njit(cache=True)
 def transmittance_x_from_r_mu(r, mu, bottom_radius, top_radius):
     """(r, mu) -> (x_mu, x_r) in [0, 1] for a ray that does not hit the ground:
     x_r = rho / H, x_mu = (d - d_min) / (d_max - d_min), d = distance to the top,
     d_min = R_t - r, d_max = rho + H (Bruneton 2017, `GetTransmittanceTextureUvFromRMu`,
     before the texel-centre mapping). Results are clamped to [0, 1]."""
-    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
-    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
-    d = distance_to_top_boundary(r, mu, top_radius)
-    d_min = top_radius - r
-    d_max = rho + big_h
-    x_mu = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
-    return min(max(x_mu, 0.0), 1.0), min(max(rho / big_h, 0.0), 1.0)
+    x_r, d_min, d_max = transmittance_x_r(r, bottom_radius, top_radius)
+    return transmittance_x_mu(r, mu, top_radius, d_min, d_max), x_r
 
 
 @njit(cache=True)

@@ -1,0 +1,124 @@
+"""Benchmark: precomputed tables (Bruneton's default resolution, 4 orders, 15 wavelengths, the
+`earth` preset) and a 1920x1080 render from them. Prints wall time, the peak memory the
+precomputation adds to the process (resident set, sampled every 5 ms: numba's arrays are not
+seen by tracemalloc), the convergence of the orders, and the time of `sky_radiance` for
+1920 x 1080 rays.
+
+Run: python benchmarks/bench_tables.py [--wavelengths 15] [--orders 4]
+Goals (issue 3): precompute < 30 s on 2 cores (stretch 10 s), peak < 2 GB; render < 1 s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import threading
+import time
+
+import numba
+import numpy as np
+
+from skyscatter.atmosphere.config import load_atmosphere
+from skyscatter.render.camera import PerspectiveCamera
+from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.transport.geometry import local_frame_directions
+from skyscatter.transport.lut_solver import LutSolver
+from skyscatter.transport.single_scattering import observer_position
+from skyscatter.transport.tables import TableResolution, precompute_tables
+
+
+def resident_mib() -> float:
+    """Resident set size of this process [MiB] (Linux /proc)."""
+    with open("/proc/self/statm") as statm:
+        pages = int(statm.read().split()[1])
+    return pages * 4096 / 2**20
+
+
+class PeakMemory:
+    """Peak resident memory above the level at entry, sampled in a background thread."""
+
+    def __enter__(self) -> PeakMemory:
+        self.base = resident_mib()
+        self.peak = self.base
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._sample, daemon=True)
+        self._thread.start()
+        return self
+
+    def _sample(self) -> None:
+        while not self._stop.is_set():
+            self.peak = max(self.peak, resident_mib())
+            time.sleep(0.005)
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.peak = max(self.peak, resident_mib())
+
+    @property
+    def added_mib(self) -> float:
+        return self.peak - self.base
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--wavelengths", type=int, default=15)
+    parser.add_argument("--orders", type=int, default=4)
+    args = parser.parse_args()
+
+    wavelengths = wavelength_grid(args.wavelengths)
+    profile = load_atmosphere("earth").optical_profile(wavelengths)
+    resolution = TableResolution()
+    print(f"numba threads: {numba.get_num_threads()}; {args.wavelengths} wavelengths, "
+          f"{args.orders} orders, constituents {', '.join(profile.names)}")
+    print(f"resolution: {resolution}")
+
+    small = TableResolution(scattering_r=4, scattering_mu=8, scattering_mu_s=4,
+                            scattering_nu=2, transmittance_r=4, transmittance_mu=8)
+    precompute_tables(profile, small, orders=2)  # JIT warm-up (cached on disk after a run)
+
+    stages: list[tuple[float, str]] = []
+    start = time.perf_counter()
+
+    def progress(done: int, total: int, stage: str) -> None:
+        stages.append((time.perf_counter() - start, stage))
+
+    with PeakMemory() as memory:
+        start = time.perf_counter()
+        tables = precompute_tables(profile, resolution, orders=args.orders, progress=progress)
+        seconds = time.perf_counter() - start
+    previous = 0.0
+    for at, stage in stages:
+        print(f"  {at:7.2f} s  (+{at - previous:5.2f})  {stage}")
+        previous = at
+    print(f"precompute: {seconds:.2f} s, peak memory added {memory.added_mib:.0f} MiB "
+          f"(tables themselves {tables.nbytes / 2**20:.0f} MiB)")
+
+    zenith = tables.order_zenith_radiance
+    mean = tables.order_mean_radiance
+    pick = [int(np.argmin(np.abs(wavelengths - w))) for w in (440.0, 550.0, 680.0)]
+    print("convergence with orders (radiance of each order alone; ratio to the previous one):")
+    for w in pick:
+        z = ", ".join(f"{v:.3g}" for v in zenith[:, w])
+        m = ", ".join(f"{v:.3g}" for v in mean[:, w])
+        ratio = ", ".join(f"{v:.3f}" for v in mean[1:, w] / mean[:-1, w])
+        print(f"  {wavelengths[w]:6.1f} nm  zenith (sun at zenith) [{z}]  "
+              f"table mean [{m}]  mean ratios [{ratio}]")
+
+    solver = LutSolver(profile, tables=tables)
+    camera = PerspectiveCamera(1920, 1080, 60.0, heading_deg=180.0, pitch_deg=5.0)
+    directions, _ = camera.directions()
+    origin = observer_position(1000.0, profile.bottom_radius_m)
+    sun = local_frame_directions(np.radians(70.0), np.pi)
+    solver.sky_radiance(origin, directions[:8], sun)  # JIT warm-up
+    times = []
+    for _ in range(3):
+        begin = time.perf_counter()
+        image = solver.sky_radiance(origin, directions, sun)
+        times.append(time.perf_counter() - begin)
+    print(f"sky_radiance, 1920x1080 rays from 1 km (sky and ground), {args.wavelengths} "
+          f"wavelengths: {min(times):.2f} s (best of 3); output {image.nbytes / 2**20:.0f} MiB, "
+          f"all finite: {bool(np.all(np.isfinite(image)))}")
+
+
+if __name__ == "__main__":
+    main()
