@@ -8,7 +8,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from transport_cases import EARTH_RADIUS_M, exponential_earth
+from transport_cases import EARTH_RADIUS_M, exponential_earth, homogeneous_shell
 
 from skyscatter.transport import _kernels
 from skyscatter.transport.geometry import horizon_cos_zenith, local_frame_directions
@@ -362,6 +362,18 @@ def test_observer_in_space_sees_what_an_observer_at_the_top_sees(small_lut):
                                small_lut.sky_radiance(at_top, view, sun), rtol=1e-9)
     outward = observer_position(400_000.0, EARTH_RADIUS_M)
     assert np.all(small_lut.sky_radiance(outward, [0.0, 0.0, 1.0], sun) == 0.0)
+
+
+def test_an_atmosphere_that_only_absorbs_shows_the_ground_through_beer_lambert():
+    # No scattering constituent: the tables hold no sky light, and the ground seen from above
+    # is albedo / pi E mu_s T_sun T_view with T from the homogeneous shell's chord lengths.
+    shell = homogeneous_shell(2e-5, albedo=0.3, single_scattering_albedo=0.0)
+    solver = LutSolver(shell, resolution=SMALL, orders=3)
+    assert np.all(solver.tables.scattering == 0.0)
+    origin = observer_position(10_000.0, EARTH_RADIUS_M)
+    radiance = solver.sky_radiance(origin, [0.0, 0.0, -1.0], [0.0, 0.0, 1.0])
+    expected = 0.3 / np.pi * 1.5 * np.exp(-2e-5 * 10_000.0) ** 2
+    np.testing.assert_allclose(radiance, expected, rtol=1e-4)
 
 
 def test_lut_solver_is_registered(profile):

@@ -400,14 +400,14 @@ def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, t
     return table
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def direct_ground_irradiance(n_points, bottom_radius, top_radius, columns, extinction,
                              sun_irradiance, sun_angular_radius):
     """Direct sun irradiance on the ground E_sun T_sun max(mu_s, 0) V at mu_s = -1 + 2 i /
     (n_points - 1), (n_points, n_wl) [W m^-2 nm^-1]."""
     n_c, n_wl = extinction.shape
     out = np.zeros((n_points, n_wl))
-    for i in prange(n_points):
+    for i in range(n_points):
         mu_s = -1.0 + 2.0 * i / (n_points - 1)
         visible = sun_visible_fraction(bottom_radius, mu_s, bottom_radius, sun_angular_radius)
         if visible <= 0.0 or mu_s <= 0.0:
@@ -447,18 +447,6 @@ def phase_matrices(phase_table, cos_direct, cos_mirror, solid_angle):
                     total += row[s, w, i]
                 for i in range(n_in):
                     out[s, w, o, i] = row[s, w, i] / total
-    return out
-
-
-@njit(cache=True)
-def node_densities(n_r, bottom_radius, top_radius, h_step, density):
-    """Densities (n_c, n_r) at the r nodes of the scattering table."""
-    out = np.empty((density.shape[0], n_r))
-    value = np.empty(density.shape[0])
-    for k in range(n_r):
-        r = scattering_r_from_u((k + 0.5) / n_r, bottom_radius, top_radius, n_r)
-        density_at(r - bottom_radius, h_step, density, value)
-        out[:, k] = value
     return out
 
 
@@ -682,7 +670,7 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
     return table
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def order_statistics(tables, use_phase, phase_table, bottom_radius, top_radius, mu_s_min):
     """(mean over all cells, value at the ground looking at the zenith with the sun there) of
     the radiance of one order [W m^-2 sr^-1 nm^-1], each (n_wl,), from interleaved tables
@@ -690,7 +678,7 @@ def order_statistics(tables, use_phase, phase_table, bottom_radius, top_radius, 
     single-scattering tables."""
     n_r, n_mu, n_mu_s, n_nu, n_t, n_wl = tables.shape
     partial = np.zeros((n_r, n_wl))
-    for i_r in prange(n_r):
+    for i_r in range(n_r):
         r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
         weights = np.ones(n_t * n_wl)
         for i_mu in range(n_mu):
@@ -826,16 +814,23 @@ def irradiance_lookup(r, mu_s, bottom_radius, top_radius, irradiance, out):
 @njit(parallel=True, cache=True)
 def transmittance_rays(origins, directions, distances, bottom_radius, top_radius,
                        transmittance):
-    """Transmittance (n_ray, n_wl) from each origin along its direction over `distances` [m]
-    from the tables (inf: to the ground or out of the atmosphere; 0 when the ground blocks a
-    finite distance). Observers in space start at the top boundary."""
-    n_ray = origins.shape[0]
+    """Transmittance (n_ray, n_wl) from each origin ((1, 3) or (n_ray, 3)) along its direction
+    (normalised here) over `distances` [m] from the tables (inf: to the ground or out of the
+    atmosphere; 0 when the ground blocks a finite distance). Observers in space start at the
+    top boundary."""
+    n_ray = directions.shape[0]
     n_wl = transmittance.shape[2]
+    single_origin = origins.shape[0] == 1
     out = np.ones((n_ray, n_wl))
     for i in prange(n_ray):
+        o = 0 if single_origin else np.int64(i)  # (prange's index is unsigned)
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        x, y, z, travelled, inside = _enter_atmosphere(origins[i, 0], origins[i, 1],
-                                                       origins[i, 2], dx, dy, dz, top_radius)
+        norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if not norm > 0.0:
+            continue
+        dx, dy, dz = dx / norm, dy / norm, dz / norm
+        x, y, z, travelled, inside = _enter_atmosphere(origins[o, 0], origins[o, 1],
+                                                       origins[o, 2], dx, dy, dz, top_radius)
         distance = distances[i] - travelled
         if not inside or distance <= 0.0:
             continue

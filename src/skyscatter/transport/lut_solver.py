@@ -22,7 +22,6 @@ from numpy.typing import ArrayLike
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport import _table_kernels
-from skyscatter.transport.single_scattering import _broadcast_rays, _unit
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN_EARTH
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
@@ -83,7 +82,7 @@ class LutSolver:
         length), with the sun along `sun_direction` (3,). Returns (..., n_wl). `progress(n)` is
         called with the number of rays done after each chunk."""
         origins, directions, shape = _rays(position, view_directions)
-        sun = _unit(np.asarray(sun_direction, dtype=np.float64))
+        sun = _sun(sun_direction)
         p, t = self.profile, self.tables
         result = np.empty((directions.shape[0], p.n_wavelengths))
         for start in range(0, directions.shape[0], CHUNK_RAYS):
@@ -104,12 +103,12 @@ class LutSolver:
         the ground or out of the atmosphere; 0 when the ground blocks a finite path), from the
         transmittance table (ratio of two lookups, Bruneton 2017 `GetTransmittance`).
         Returns (..., n_wl)."""
-        origins, dirs, shape = _broadcast_rays(position, directions)
-        distances = np.broadcast_to(np.asarray(distance_m, dtype=np.float64), shape).ravel()
+        origins, dirs, shape = _rays(position, directions)
+        distances = _writable(np.broadcast_to(np.asarray(distance_m, dtype=np.float64),
+                                              shape).reshape(-1))
         t = self.tables
         result = _table_kernels.transmittance_rays(
-            origins, dirs, np.ascontiguousarray(distances), t.bottom_radius_m, t.top_radius_m,
-            t.transmittance)
+            origins, dirs, distances, t.bottom_radius_m, t.top_radius_m, t.transmittance)
         return result.reshape(shape + (self.profile.n_wavelengths,))
 
     def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike
@@ -120,8 +119,8 @@ class LutSolver:
         light of orders 1 .. orders-1 (none for orders = 1)."""
         positions = np.asarray(position, dtype=np.float64)
         shape = positions.shape[:-1]
-        flat = np.ascontiguousarray(positions.reshape(-1, 3))
-        sun = _unit(np.asarray(sun_direction, dtype=np.float64))
+        flat = _writable(positions.reshape(-1, 3))
+        sun = _sun(sun_direction)
         p, t = self.profile, self.tables
         direct, diffuse = _table_kernels.ground_irradiance_points(
             flat, sun, t.bottom_radius_m, t.top_radius_m, t.transmittance, t.irradiance,
@@ -131,15 +130,30 @@ class LutSolver:
         return direct.reshape(shape + (n_wl,)), diffuse.reshape(shape + (n_wl,))
 
 
+def _writable(array: np.ndarray) -> np.ndarray:
+    """`array` as a writable C-ordered float64 array, copied only when needed: the kernels
+    then meet one array type and compile once."""
+    array = np.ascontiguousarray(array, dtype=np.float64)
+    return array if array.flags.writeable else array.copy()
+
+
+def _sun(sun_direction: ArrayLike) -> np.ndarray:
+    """Unit sun direction (3,)."""
+    sun = np.array(sun_direction, dtype=np.float64).reshape(3)
+    return sun / np.linalg.norm(sun)
+
+
 def _rays(position: ArrayLike, directions: ArrayLike
           ) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
-    """(origins (1, 3) or (n, 3), directions (n, 3), broadcast shape S): views of the inputs
-    where they are already float64 and C-ordered; directions are normalised by the kernel."""
+    """(origins (1, 3) or (n, 3), directions (n, 3), broadcast shape S) for the kernels, which
+    normalise the directions; the inputs are used in place where they are already writable
+    float64 C-ordered arrays of the full shape."""
     dirs = np.asarray(directions, dtype=np.float64)
     origin = np.asarray(position, dtype=np.float64)
     shape = np.broadcast_shapes(dirs.shape, origin.shape)[:-1]
-    flat_dirs = np.ascontiguousarray(np.broadcast_to(dirs, shape + (3,))).reshape(-1, 3)
+    if dirs.shape != shape + (3,):
+        dirs = np.broadcast_to(dirs, shape + (3,))
+    flat_dirs = _writable(dirs).reshape(-1, 3)
     if origin.ndim == 1:
-        return np.ascontiguousarray(origin.reshape(1, 3)), flat_dirs, shape
-    flat_origins = np.ascontiguousarray(np.broadcast_to(origin, shape + (3,))).reshape(-1, 3)
-    return flat_origins, flat_dirs, shape
+        return _writable(origin.reshape(1, 3)), flat_dirs, shape
+    return _writable(np.broadcast_to(origin, shape + (3,))).reshape(-1, 3), flat_dirs, shape

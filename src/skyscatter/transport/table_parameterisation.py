@@ -6,7 +6,7 @@ atmosphere/functions.glsl, which refines Bruneton & Neyret (2008), "Precomputed 
 scattering", Comput. Graph. Forum 27(4), 1079, doi:10.1111/j.1467-8659.2008.01245.x, §4;
 digest in shared/research/anchor-bruneton.md §1.4.
 
-Symbols (r, mu, mu_s, nu as in docs/nomenclature.md):
+Symbols:
   r     distance to the planet centre [m]; R_b, R_t bottom and top radius [m]
   mu    cos(view zenith angle) [-]; mu_s cos(sun zenith angle) [-]; nu = cos(view-sun angle) [-]
   H   = sqrt(R_t^2 - R_b^2)   distance from the ground to the top along a horizontal ray [m]
