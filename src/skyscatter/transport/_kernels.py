@@ -26,6 +26,10 @@ from skyscatter.transport.geometry import (
     horizon_cos_zenith,
     sun_visible_fraction,
 )
+from skyscatter.transport.table_parameterisation import (
+    transmittance_r_mu_from_x,
+    transmittance_x_from_r_mu,
+)
 
 
 @njit(cache=True)
@@ -108,33 +112,6 @@ def columns_along_segment(r, mu, t_start, t_end, n_samples, bottom_radius, h_ste
         t_prev = t
 
 
-@njit(cache=True)
-def sun_table_mu(x_r, x_mu, bottom_radius, top_radius):
-    """Inverse of the transmittance parameterisation: (x_r, x_mu) in [0, 1] -> (r, mu)."""
-    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
-    rho = big_h * x_r
-    r = math.sqrt(rho * rho + bottom_radius * bottom_radius)
-    d_min = top_radius - r
-    d_max = rho + big_h
-    d = d_min + x_mu * (d_max - d_min)
-    if d <= 0.0:
-        return r, 1.0
-    mu = (big_h * big_h - rho * rho - d * d) / (2.0 * r * d)
-    return r, min(1.0, max(-1.0, mu))
-
-
-@njit(cache=True)
-def sun_table_coordinates(r, mu, bottom_radius, top_radius):
-    """(r, mu) -> (x_r, x_mu) in [0, 1], for rays that do not hit the ground."""
-    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
-    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
-    d = max(distance_to_sphere(r, mu, top_radius, True), 0.0)
-    d_min = top_radius - r
-    d_max = rho + big_h
-    x_mu = (d - d_min) / (d_max - d_min) if d_max > d_min else 0.0
-    return min(1.0, max(0.0, rho / big_h)), min(1.0, max(0.0, x_mu))
-
-
 @njit(parallel=True, cache=True)
 def build_sun_column_table(n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density):
     """Columns to the top of the atmosphere, table (n_c, n_r, n_mu) on the (x_r, x_mu) grid."""
@@ -143,7 +120,8 @@ def build_sun_column_table(n_r, n_mu, n_samples, bottom_radius, top_radius, h_st
     for index in prange(n_r * n_mu):
         i = index // n_mu
         j = index % n_mu
-        r, mu = sun_table_mu(i / (n_r - 1), j / (n_mu - 1), bottom_radius, top_radius)
+        r, mu = transmittance_r_mu_from_x(j / (n_mu - 1), i / (n_r - 1), bottom_radius,
+                                          top_radius)
         t_end = distance_to_sphere(r, mu, top_radius, True)
         out = np.empty(n_c)
         columns_along_segment(r, mu, 0.0, max(t_end, 0.0), n_samples, bottom_radius, h_step,
@@ -158,7 +136,7 @@ def sun_columns(r, mu_s, bottom_radius, top_radius, table, out):
     """Columns from radius r towards the sun (zenith cosine mu_s) to the top, into out (n_c,).
     Below the horizon the horizon ray's column is used; `sun_visible_fraction` cuts the light."""
     mu = max(mu_s, horizon_cos_zenith(r, bottom_radius))
-    x_r, x_mu = sun_table_coordinates(r, mu, bottom_radius, top_radius)
+    x_mu, x_r = transmittance_x_from_r_mu(r, mu, bottom_radius, top_radius)
     n_r = table.shape[1]
     n_mu = table.shape[2]
     fr = x_r * (n_r - 1)
