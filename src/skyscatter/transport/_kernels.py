@@ -22,11 +22,11 @@ from numba import njit, prange
 
 from skyscatter.transport.geometry import (
     atmosphere_segment,
-    distance_to_sphere,
     horizon_cos_zenith,
     sun_visible_fraction,
 )
 from skyscatter.transport.table_parameterisation import (
+    distance_to_top_boundary,
     transmittance_r_mu_from_x,
     transmittance_x_from_r_mu,
 )
@@ -113,8 +113,10 @@ def columns_along_segment(r, mu, t_start, t_end, n_samples, bottom_radius, h_ste
 
 
 @njit(parallel=True, cache=True)
-def build_sun_column_table(n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density):
-    """Columns to the top of the atmosphere, table (n_c, n_r, n_mu) on the (x_r, x_mu) grid."""
+def column_table(n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density):
+    """Column densities [density x m] from each node of the transmittance table to the top,
+    (n_c, n_r, n_mu); node (i, j) is x_r = i / (n_r - 1), x_mu = j / (n_mu - 1). Used for the
+    single-scattering solver's sun columns and for the transmittance table."""
     n_c = density.shape[0]
     table = np.empty((n_c, n_r, n_mu))
     for index in prange(n_r * n_mu):
@@ -122,10 +124,9 @@ def build_sun_column_table(n_r, n_mu, n_samples, bottom_radius, top_radius, h_st
         j = index % n_mu
         r, mu = transmittance_r_mu_from_x(j / (n_mu - 1), i / (n_r - 1), bottom_radius,
                                           top_radius)
-        t_end = distance_to_sphere(r, mu, top_radius, True)
         out = np.empty(n_c)
-        columns_along_segment(r, mu, 0.0, max(t_end, 0.0), n_samples, bottom_radius, h_step,
-                              density, out)
+        columns_along_segment(r, mu, 0.0, distance_to_top_boundary(r, mu, top_radius),
+                              n_samples, bottom_radius, h_step, density, out)
         for c in range(n_c):
             table[c, i, j] = out[c]
     return table

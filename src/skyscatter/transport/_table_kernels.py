@@ -33,7 +33,6 @@ import numpy as np
 from numba import njit, prange
 
 from skyscatter.transport._kernels import (
-    columns_along_segment,
     density_at,
 )
 from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fraction
@@ -54,7 +53,6 @@ from skyscatter.transport.table_parameterisation import (
     scattering_u_nu,
     scattering_u_r,
     texel_index,
-    transmittance_r_mu_from_x,
     transmittance_x_from_r_mu,
     transmittance_x_mu,
     transmittance_x_r,
@@ -218,25 +216,6 @@ def flat_tables(tables: np.ndarray) -> np.ndarray:
 # Precomputation
 # --------------------------------------------------------------------------------------------
 
-@njit(parallel=True, cache=True)
-def column_table(n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density):
-    """Column densities [density x m] from each node of the transmittance table to the top,
-    (n_c, n_r, n_mu); node (i, j) is x_r = i / (n_r - 1), x_mu = j / (n_mu - 1)."""
-    n_c = density.shape[0]
-    table = np.empty((n_c, n_r, n_mu))
-    for index in prange(n_r * n_mu):
-        i = index // n_mu
-        j = index % n_mu
-        r, mu = transmittance_r_mu_from_x(j / (n_mu - 1), i / (n_r - 1), bottom_radius,
-                                          top_radius)
-        out = np.empty(n_c)
-        columns_along_segment(r, mu, 0.0, distance_to_top_boundary(r, mu, top_radius),
-                              n_samples, bottom_radius, h_step, density, out)
-        for c in range(n_c):
-            table[c, i, j] = out[c]
-    return table
-
-
 @njit(cache=True)
 def table_ray_distances(r, mu, d, hits_ground, n_samples, out):
     """Sample distances along the table ray (r, mu) of length d, increasing from 0 to d, into
@@ -320,6 +299,30 @@ def _view_transmittance(total, weight, col_view, extinction, out):
             out[j, w] = math.exp(-tau) * weight[j]
 
 
+@njit(cache=True)
+def _table_ray(i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
+               columns, extinction):
+    """The ray of scattering-table cell (i_r, i_mu): (r, mu, total, t, radius, mu_t, dens,
+    view) with its `total` samples (`_ray_samples`) and the transmittance from the cell's point
+    to each sample, view (total, n_wl)."""
+    n_c, n_wl = extinction.shape
+    n_max = n_samples + 8
+    r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+    mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
+                                           n_mu)
+    t = np.empty(n_max)
+    radius = np.empty(n_max)
+    mu_t = np.empty(n_max)
+    weight = np.empty(n_max)
+    dens = np.empty((n_max, n_c))
+    col_view = np.empty((n_max, n_c))
+    total = _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step,
+                         density, columns, t, radius, mu_t, weight, dens, col_view)
+    view = np.empty((total, n_wl))
+    _view_transmittance(total, weight, col_view, extinction, view)
+    return r, mu, total, t, radius, mu_t, dens, view
+
+
 @njit(parallel=True, cache=True)
 def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
                             mu_s_min, h_step, density, columns, extinction, transmittance,
@@ -330,11 +333,9 @@ def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, t
     float32 (interleaved, `scattering_lookup`). T(x, p) from the column table, T_sun from the
     transmittance table (n_r_t, n_mu_t, n_wl) (no exponential per cell). Bruneton 2017,
     `ComputeSingleScattering`; V = visible part of the sun disk."""
-    n_c = density.shape[0]
     n_s = scatterers.size
     n_wl = extinction.shape[1]
     table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_s, n_wl), dtype=np.float32)
-    n_max = n_samples + 8
     n_r_t = transmittance.shape[0]
     # mu_s >= mu_h + alpha + alpha^2 / 2 >= cos(theta_h - alpha): the whole sun disk is above
     # the horizon, `sun_visible_fraction` = 1 (its own fast exit costs a cos and a sin).
@@ -342,21 +343,11 @@ def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, t
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
-        mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius,
-                                               top_radius, n_mu)
-        t = np.empty(n_max)
-        radius = np.empty(n_max)
-        mu_t = np.empty(n_max)
-        weight = np.empty(n_max)
-        dens = np.empty((n_max, n_c))
-        col_view = np.empty((n_max, n_c))
-        total = _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step,
-                             density, columns, t, radius, mu_t, weight, dens, col_view)
+        r, mu, total, t, radius, mu_t, dens, view = _table_ray(
+            i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
+            columns, extinction)
         if total == 0:
             continue
-        view = np.empty((total, n_wl))
-        _view_transmittance(total, weight, col_view, extinction, view)
         # Per sample: the horizon, and the r part of the transmittance lookup towards the sun.
         mu_h = np.empty(total)
         row_i = np.empty(total, dtype=np.int64)
@@ -582,7 +573,6 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
     n_theta = source.shape[1]
     n_block = source.shape[2]
     table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
-    n_max = n_samples + 8
     mu_s_nodes = np.empty(n_mu_s)
     for i_s in range(n_mu_s):
         mu_s_nodes[i_s] = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius,
@@ -591,21 +581,11 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
-        mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius,
-                                               top_radius, n_mu)
-        t = np.empty(n_max)
-        radius = np.empty(n_max)
-        mu_t = np.empty(n_max)
-        weight = np.empty(n_max)
-        dens = np.empty((n_max, n_c))
-        col_view = np.empty((n_max, n_c))
-        total = _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step,
-                             density, columns, t, radius, mu_t, weight, dens, col_view)
+        r, mu, total, t, radius, mu_t, dens, view = _table_ray(
+            i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
+            columns, extinction)
         if total == 0:
             continue
-        view = np.empty((total, n_wl))
-        _view_transmittance(total, weight, col_view, extinction, view)
         for j in range(total):  # T(x, p) dt beta_s(p)
             for w in range(n_wl):
                 beta = 0.0

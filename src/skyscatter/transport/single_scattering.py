@@ -41,7 +41,7 @@ class SingleScatteringSolver:
         self.profile = profile
         self.n_samples = int(n_samples)
         self._h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
-        self._sun_table = _kernels.build_sun_column_table(
+        self._sun_table = _kernels.column_table(
             table_size[0], table_size[1], table_samples, profile.bottom_radius_m,
             profile.top_radius_m, self._h_step, profile.density)
 

@@ -51,7 +51,7 @@ import numpy as np
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
-from skyscatter.transport import _table_kernels
+from skyscatter.transport import _kernels, _table_kernels
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN_EARTH,
     scattering_r_from_u,
@@ -301,8 +301,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         if progress is not None:
             progress(step, total_steps, stage)
 
-    columns = _table_kernels.column_table(res.transmittance_r, res.transmittance_mu,
-                                          res.transmittance_samples, bottom, top, h_step, density)
+    columns = _kernels.column_table(res.transmittance_r, res.transmittance_mu,
+                                    res.transmittance_samples, bottom, top, h_step, density)
     transmittance = np.exp(-np.einsum("cw,crm->rmw", profile.extinction_per_density, columns))
     report("transmittance")
     phase = sample_phase_functions(profile, scatterers, res.phase_angles)
