@@ -1,8 +1,10 @@
 """Render the shipped default scenes into a folder (what `make run` does).
 
-Earth at noon, Earth at sunset (fisheye + equirectangular panorama), Mars in the afternoon:
-tone-mapped PNGs and linear EXRs (linear sRGB, 1.0 = 1 cd m^-2). Each line printed names the
-command-line equivalent, so every picture can be made again by hand.
+Earth at noon, Earth at sunset (fisheye + equirectangular panorama), mountains fading into
+the haze, Earth from space, Mars in the afternoon, all with multiple scattering from the
+precomputed tables (computed once per atmosphere, then reused from the cache): tone-mapped PNGs
+and linear EXRs (linear sRGB, 1.0 = 1 cd m^-2). Each line printed names the command-line
+equivalent, so every picture can be made again by hand.
 """
 
 from __future__ import annotations
@@ -18,6 +20,12 @@ SCENES = [
     ("earth_sunset", ["earth", "--sun-elevation", "2", "--sun-azimuth", "270"]),
     ("earth_sunset_panorama", ["earth", "--sun-elevation", "2", "--sun-azimuth", "270",
                                "--camera", "panorama", "--heading", "270", "--size", "512"]),
+    ("earth_mountains", ["earth", "--sun-elevation", "12", "--sun-azimuth", "235",
+                         "--camera", "perspective", "--heading", "180", "--pitch", "3",
+                         "--fov", "50", "--size", "540", "--altitude", "300",
+                         "--terrain", "demo"]),
+    ("earth_from_space", ["earth", "--camera", "orbit", "--distance-km", "20000", "--lat",
+                          "30", "--sun-elevation", "15", "--sun-azimuth", "90"]),
     ("mars_afternoon", ["mars-costa", "--sun-elevation", "35", "--sun-azimuth", "240"]),
 ]
 

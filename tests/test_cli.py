@@ -22,7 +22,7 @@ PERCENT = 1e-2
 RADIANCE_KEYS = ["sun_zenith_deg", "view_zenith_deg", "relative_azimuth_deg", "wavelength_nm",
                  "radiance", "toa_irradiance"]
 RADIANCE_ARGS = ["radiance", "earth", "--sun-zenith", "30", "--view-zenith", "0,60",
-                 "--view-azimuth", "0,180", "--wavelengths", "450,550"]
+                 "--view-azimuth", "0,180", "--wavelengths", "450,550", "--solver", "single"]
 
 
 def _run(capsys, argv):
@@ -112,7 +112,7 @@ def test_radiance_is_mirror_symmetric_about_the_sun_vertical(capsys):
     # through the sun: relative azimuth +90 and -90 (= 270) see the same sky. Tolerance: rounding.
     code, out, _ = _run(capsys, ["radiance", "earth", "--sun-zenith", "50", "--view-zenith",
                                  "40,80", "--view-azimuth", "0,90,-90,270", "--wavelengths",
-                                 "450,650", "--format", "json"])
+                                 "450,650", "--orders", "2", "--format", "json"])
     assert code == 0
     radiance, towards_sun = {}, {}
     for row in json.loads(out):
@@ -200,7 +200,7 @@ def test_config_file_with_a_bad_value_exits_2_naming_file_key_and_value(capsys, 
 def test_render_fisheye_writes_png_and_linear_exr(capsys, tmp_path):
     png, exr = tmp_path / "out" / "x.png", tmp_path / "out" / "x.exr"
     code, out, err = _run(capsys, ["render", "earth", "--size", "32", "--camera", "fisheye",
-                                   "-o", str(png), "--exr", str(exr)])
+                                   "--solver", "single", "-o", str(png), "--exr", str(exr)])
     assert code == 0, err
     assert str(png) in err and str(exr) in err
     with Image.open(png) as image:
@@ -223,7 +223,7 @@ def test_render_other_cameras_at_small_sizes(capsys, tmp_path, camera, size, exp
     png = tmp_path / f"{camera}.png"
     code, _, err = _run(capsys, ["render", "earth", "--size", str(size), "--camera", camera,
                                  "--sun-elevation", "20", "--wavelengths", "8", "--samples", "16",
-                                 "-o", str(png)])
+                                 "--solver", "single", "-o", str(png)])
     assert code == 0, err
     with Image.open(png) as image:
         assert image.size == expected_wh
@@ -238,8 +238,74 @@ def test_orbit_camera_sees_the_lit_side_towards_the_sun(capsys, tmp_path):
                                  "20000", "--lat", "0", "--sun-elevation", "10",
                                  "--sun-azimuth", "90", "--size", "24", "-o",
                                  str(tmp_path / "orbit.png"), "--exr", str(exr),
-                                 "--wavelengths", "4"])
+                                 "--wavelengths", "4", "--orders", "2"])
     assert code == 0, err
     image, _ = read_exr(exr)
     luminance = image.sum(axis=-1)
     assert luminance[:, 16:].mean() > 3.0 * luminance[:, :8].mean()
+
+
+# --- precompute and the table cache -------------------------------------------------------------
+
+PRECOMPUTE_ARGS = ["--wavelengths", "550", "--orders", "1"]
+
+
+def test_precompute_stores_tables_that_radiance_then_reuses(capsys, tmp_path):
+    cache = tmp_path / "cache"
+    code, _, err = _run(capsys, ["precompute", "earth", "--monochromatic", *PRECOMPUTE_ARGS,
+                                 "--cache-dir", str(cache)])
+    assert code == 0, err
+    assert "precomputing 1 orders for 1 wavelengths (not cached yet" in err
+    assert "earth: 1 orders, 1 wavelengths" in err
+    (entry,) = cache.glob("*.npz")
+    code, out, err = _run(capsys, ["radiance", "earth", "--sun-zenith", "30", *PRECOMPUTE_ARGS,
+                                   "--cache-dir", str(cache)])
+    assert code == 0, err
+    assert f"using {entry}" in err
+    lut_radiance = float(out.splitlines()[1].split(",")[4])
+    # order 1 from the tables is the single-scattering solver's answer (0.5 %: table
+    # interpolation, measured 0.05 % median in tests/transport)
+    code, out, _ = _run(capsys, ["radiance", "earth", "--sun-zenith", "30", "--wavelengths",
+                                 "550", "--solver", "single"])
+    assert lut_radiance == pytest.approx(float(out.splitlines()[1].split(",")[4]),
+                                         rel=0.5 * PERCENT)
+
+
+def test_a_corrupt_cache_entry_is_rebuilt_not_used(capsys, tmp_path):
+    cache = tmp_path / "cache"
+    argv = ["precompute", "earth", "--monochromatic", *PRECOMPUTE_ARGS, "--cache-dir",
+            str(cache)]
+    assert _run(capsys, argv)[0] == 0
+    (entry,) = cache.glob("*.npz")
+    entry.write_bytes(entry.read_bytes()[:1000])  # truncated, as by a full disk
+    code, _, err = _run(capsys, argv)
+    assert code == 0, err
+    assert "unreadable cache file" in err and "precomputing" in err
+    code, _, err = _run(capsys, argv)
+    assert "using" in err
+    assert not list(cache.glob(".*tmp"))  # no temporary files left behind
+
+
+def test_no_cache_writes_nothing(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(tmp_path / "cache"))
+    code, _, err = _run(capsys, ["radiance", "earth", "--sun-zenith", "30", *PRECOMPUTE_ARGS,
+                                 "--no-cache"])
+    assert code == 0, err
+    assert not (tmp_path / "cache").exists()
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["render", "earth", "--look-at", "10,20"], "--look-at is for --camera orbit"),
+    (["render", "earth", "--camera", "orbit", "--look-at", "10"], "LAT,LON or LAT,LON,ALT_KM"),
+    (["render", "earth", "--terrain", "nowhere.png"], "nowhere.png"),
+    (["render", "earth", "--albedo-map", "nowhere.png"], "nowhere.png: no such file"),
+    (["render", "earth", "--terrain", "demo", "--solver", "single", "--size", "8"],
+     "needs the table solver"),
+    (["precompute", "earth", "--orders", "0"], "--orders: 0 must be > 0"),
+])
+def test_bad_scene_arguments_get_one_clear_line(capsys, tmp_path, argv, message):
+    code, _, err = _run(capsys, [*argv, "-o", str(tmp_path / "x.png")] if argv[0] == "render"
+                        else argv)
+    assert code == 2
+    assert message in _error_line(err)
+    assert not (tmp_path / "x.png").exists()

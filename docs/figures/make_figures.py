@@ -2,16 +2,22 @@
 repo root: python docs/figures/make_figures.py
 
 README pictures, and for docs/physics/tables.md the same sunset panorama with single scattering
-(ray marched) and with the precomputed tables (4 orders)."""
+(ray marched) and with the precomputed tables. The albedo map of the views from space is made
+here too: procedural continents (docs/images/demo_albedo.png), since no Earth map ships."""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from skyscatter.cli import main
+from skyscatter.render.image_io import write_png
+from skyscatter.spectrum.colour import encode_srgb_transfer
 
 IMAGES = Path(__file__).resolve().parents[1] / "images"
+ALBEDO_MAP = IMAGES / "demo_albedo.png"
 TABLES_SCENE = ["earth", "--sun-elevation", "4", "--sun-azimuth", "270", "--camera",
                 "panorama", "--heading", "270", "--size", "160", "--exposure", "12"]
 FIGURES = {
@@ -25,11 +31,47 @@ FIGURES = {
     "earth_from_space.png": ["earth", "--camera", "orbit", "--distance-km", "20000", "--lat",
                              "30", "--sun-elevation", "15", "--sun-azimuth", "90", "--size",
                              "256"],
+    "earth_mountains.png": ["earth", "--sun-elevation", "12", "--sun-azimuth", "235",
+                            "--camera", "perspective", "--heading", "180", "--pitch", "3",
+                            "--fov", "50", "--size", "270", "--altitude", "300", "--terrain",
+                            "demo"],
+    "earth_from_space_map.png": ["earth", "--camera", "orbit", "--distance-km", "12000",
+                                 "--lat", "15", "--lon", "20", "--sun-elevation", "25",
+                                 "--sun-azimuth", "260", "--size", "320", "--albedo-map",
+                                 str(ALBEDO_MAP)],
+    "earth_terminator.png": ["earth", "--camera", "orbit", "--distance-km", "800", "--lat",
+                             "0", "--sun-elevation", "-4", "--sun-azimuth", "90", "--size",
+                             "270", "--look-at", "0,25", "--fov", "70", "--exposure", "13",
+                             "--albedo-map", str(ALBEDO_MAP)],
     "tables_sunset_single.png": [*TABLES_SCENE, "--solver", "single"],
     "tables_sunset_lut.png": [*TABLES_SCENE, "--solver", "lut"],
 }
 
+
+
+def make_albedo_map(path: Path, width: int = 1024, seed: int = 4) -> None:
+    """Procedural continents on an equirectangular map: smooth noise (Gaussian-filtered in
+    Fourier space) thresholded to 30 % land; deep blue sea, green and desert land by latitude,
+    ice caps. Linear reflectances, written sRGB-encoded."""
+    height = width // 2
+    rng = np.random.default_rng(seed)
+    ky = np.fft.fftfreq(height)[:, None]
+    kx = np.fft.fftfreq(width)[None, :]
+    field = np.fft.ifft2(np.fft.fft2(rng.normal(size=(height, width)))
+                         * np.exp(-(kx**2 + ky**2) / (2 * 0.012**2))).real
+    latitude = np.linspace(90.0, -90.0, height)[:, None] * np.ones((1, width))
+    land = field > np.quantile(field, 0.70)
+    dry = np.clip(1.0 - np.abs(np.abs(latitude) - 25.0) / 15.0, 0.0, 1.0)
+    ground = ((1.0 - dry)[..., None] * np.array([0.07, 0.11, 0.05])
+              + dry[..., None] * np.array([0.36, 0.28, 0.17]))
+    rgb = np.where(land[..., None], ground, np.array([0.015, 0.03, 0.07]))
+    ice = np.abs(latitude) > 72.0 - 4.0 * np.tanh(field / field.std())
+    rgb[ice] = [0.75, 0.78, 0.82]
+    write_png(path, np.round(255.0 * encode_srgb_transfer(rgb)).astype(np.uint8))
+
+
 if __name__ == "__main__":
+    make_albedo_map(ALBEDO_MAP)
     for name, arguments in FIGURES.items():
         argv = ["render", *arguments, "-o", str(IMAGES / name)]
         print("skyscatter " + " ".join(argv))

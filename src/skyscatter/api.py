@@ -17,33 +17,54 @@ import numpy as np
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.model import Atmosphere
 from skyscatter.errors import InputError
+from skyscatter.render.albedo_map import AlbedoMap
 from skyscatter.render.camera import Camera, EquirectangularCamera, FisheyeCamera, PerspectiveCamera
 from skyscatter.render.image_io import write_exr, write_png
 from skyscatter.render.scene import (
     SkyImage,
+    Viewpoint,
     ground_viewpoint,
     orbit_viewpoint,
     render_sky,
     sun_direction,
 )
-from skyscatter.render.tonemap import auto_ev100, exposure_scale, to_srgb8, tonemap
-from skyscatter.spectrum.colour import xyz_to_rgb
+from skyscatter.render.surfaces import Ground
+from skyscatter.render.terrain import Heightfield, demo_mountains
+from skyscatter.render.tonemap import (
+    auto_ev100,
+    exposure_scale,
+    incident_ev100,
+    to_srgb8,
+    tonemap,
+)
+from skyscatter.spectrum.colour import spectral_to_xyz, xyz_to_rgb
 from skyscatter.spectrum.grid import checked_grid, checked_wavelengths, wavelength_grid
+from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.single_scattering import observer_position
-from skyscatter.transport.solvers import make_solver
+from skyscatter.transport.solvers import SolverOptions, make_solver
 
 __all__ = [
+    "AlbedoMap",
     "EquirectangularCamera",
     "FisheyeCamera",
+    "Ground",
+    "Heightfield",
     "PerspectiveCamera",
     "SkyImage",
+    "SolverOptions",
+    "demo_mountains",
     "list_presets",
     "load_atmosphere",
+    "load_solver",
+    "look_at_direction",
     "orbit_field_of_view_deg",
     "render",
     "save_image",
     "sky_radiance_rows",
+    "solver_options",
+    "sun_direction",
+    "viewpoint_at",
 ]
 
 EXR_UNITS = {"rgb": "linear RGB, Y = 1 for 1 cd/m^2", "luminance": "cd/m^2",
@@ -51,30 +72,87 @@ EXR_UNITS = {"rgb": "linear RGB, Y = 1 for 1 cd/m^2", "luminance": "cd/m^2",
 EXR_CONTENTS = tuple(EXR_UNITS)
 
 
+def solver_options(atmosphere: Atmosphere, orders: int | None = None, n_samples: int = 64,
+                   cache_dir: str | Path | None = None, use_cache: bool = True,
+                   force: bool = False,
+                   progress: Callable[[int, int, str], None] | None = None,
+                   log: Callable[[str], None] | None = None) -> SolverOptions:
+    """Solver settings for `atmosphere`: `orders` defaults to its config's `[tables] orders`;
+    tables are cached in `cache_dir` (default: `default_cache_directory()`) unless
+    `use_cache` is False; `force` recomputes them."""
+    return SolverOptions(
+        n_samples=n_samples,
+        orders=atmosphere.scattering_orders if orders is None else orders,
+        cache=TableCache(cache_dir) if use_cache else None, force=force, progress=progress,
+        log=log)
+
+
+def load_solver(atmosphere: Atmosphere, wavelengths_nm: Sequence[float] | None = None,
+                solver: str = "lut", options: SolverOptions | None = None,
+                monochromatic: bool = False):
+    """A solver (`transport.solvers.SOLVERS`) of `atmosphere` on `wavelengths_nm` (default:
+    16 bins over 360-830 nm; `monochromatic`: 1 nm cells at each wavelength, as
+    `sky_radiance_rows`). With the "lut" solver the tables come from the cache or are
+    precomputed once and stored (`options`, default `solver_options(atmosphere)`)."""
+    if wavelengths_nm is None:
+        wavelengths = wavelength_grid(16)
+    elif monochromatic:
+        wavelengths = checked_wavelengths(np.atleast_1d(wavelengths_nm), "wavelength")
+    else:
+        wavelengths = checked_grid(wavelengths_nm)
+    profile = atmosphere.optical_profile(wavelengths, monochromatic=monochromatic)
+    return make_solver(solver, profile, options or solver_options(atmosphere))
+
+
 def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
            sun_azimuth_deg: float = 180.0, altitude_m: float = 0.0,
-           wavelengths_nm: Sequence[float] | None = None, solver: str = "single",
-           n_samples: int = 64, progress: Callable[[int], None] | None = None,
-           orbit_latitude_deg: float | None = None,
-           orbit_longitude_deg: float = 0.0) -> SkyImage:
+           wavelengths_nm: Sequence[float] | None = None, solver: str = "lut",
+           options: SolverOptions | None = None,
+           progress: Callable[[int], None] | None = None,
+           orbit_latitude_deg: float | None = None, orbit_longitude_deg: float = 0.0,
+           ground: Ground | None = None) -> SkyImage:
     """Render what `camera` sees from `altitude_m` [m] above the ground, with the sun at
     `sun_zenith_deg` and `sun_azimuth_deg` (from north towards east) in the observer's local
     frame. Spectral, on `wavelengths_nm` (default: 16 bins over 360-830 nm). With
     `orbit_latitude_deg` the camera hangs above that latitude/longitude (views from space;
-    pitch -90 looks at the planet's centre); otherwise above the north pole."""
+    pitch -90 looks at the planet's centre); otherwise above the north pole. `ground` adds an
+    albedo map and/or terrain (table solver). `options`: `solver_options(atmosphere)` by
+    default (the config's orders, tables cached)."""
     _check_range("sun_zenith_deg", sun_zenith_deg, 0.0, 180.0)
     _check_range("altitude_m", altitude_m, 0.0, 1e12)
-    wavelengths = wavelength_grid(16) if wavelengths_nm is None else checked_grid(wavelengths_nm)
-    profile = atmosphere.optical_profile(wavelengths)
-    engine = make_solver(solver, profile, n_samples=n_samples)
-    if orbit_latitude_deg is None:
-        viewpoint = ground_viewpoint(altitude_m, profile.bottom_radius_m)
-    else:
+    if orbit_latitude_deg is not None:
         _check_range("latitude", orbit_latitude_deg, -90.0, 90.0)
-        viewpoint = orbit_viewpoint(altitude_m, orbit_latitude_deg, orbit_longitude_deg,
-                                    profile.bottom_radius_m)
+    engine = load_solver(atmosphere, wavelengths_nm, solver, options)
+    viewpoint = viewpoint_at(altitude_m, engine.profile.bottom_radius_m, orbit_latitude_deg,
+                             orbit_longitude_deg)
     return render_sky(engine, camera, viewpoint, sun_direction(sun_zenith_deg, sun_azimuth_deg),
-                      atmosphere.planet.star, progress)
+                      atmosphere.planet.star, progress, ground)
+
+
+def viewpoint_at(altitude_m: float, planet_radius_m: float, latitude_deg: float | None = None,
+                 longitude_deg: float = 0.0) -> Viewpoint:
+    """The camera's place: above the north pole (`latitude_deg` None, the frame of
+    `ground_viewpoint`), or above (latitude, longitude) with that point's east-north-up
+    frame."""
+    if latitude_deg is None:
+        return ground_viewpoint(altitude_m, planet_radius_m)
+    return orbit_viewpoint(altitude_m, latitude_deg, longitude_deg, planet_radius_m)
+
+
+def look_at_direction(viewpoint: Viewpoint, target_latitude_deg: float,
+                      target_longitude_deg: float, target_altitude_m: float,
+                      planet_radius_m: float) -> np.ndarray:
+    """Unit direction (local east-north-up of `viewpoint`) from the camera towards the point
+    `target_altitude_m` above (latitude, longitude)."""
+    _check_range("look-at latitude", target_latitude_deg, -90.0, 90.0)
+    target = orbit_viewpoint(target_altitude_m, target_latitude_deg, target_longitude_deg,
+                             planet_radius_m).position_m
+    offset = target - viewpoint.position_m
+    distance = float(np.linalg.norm(offset))
+    if not distance > 0.0:
+        raise InputError("the look-at point is where the camera is; pick another point",
+                         key="look_at", value=(target_latitude_deg, target_longitude_deg))
+    return viewpoint.to_world.T @ (offset / distance)
 
 
 def orbit_field_of_view_deg(altitude_m: float, planet_radius_m: float,
@@ -94,12 +172,16 @@ def save_image(image: SkyImage, png_path: str | Path | None = None,
 
     EXR contents: "rgb" (linear `colour_space`, 1.0 = 1 cd m^-2 of luminance), "luminance"
     (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
-    `ev100=None` picks the exposure from the sky pixels (geometric-mean metering)."""
+    `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
+    views from space from the starlight (incident-light metering: sunlit white is white)."""
     if exr_content not in EXR_CONTENTS:
         raise InputError(f"unknown EXR content {exr_content!r}; choose one of: "
                          f"{', '.join(EXR_CONTENTS)}", key="exr_content", value=exr_content)
     xyz = image.xyz(balance_to_light)
-    if ev100 is None:
+    if ev100 is None and image.from_space:
+        ev100 = incident_ev100(float(spectral_to_xyz(image.light_spectrum,
+                                                     image.wavelengths_nm)[1]))
+    elif ev100 is None:
         ev100 = auto_ev100(xyz[..., 1], image.sky)
     linear = xyz_to_rgb(xyz, colour_space)
     if png_path is not None:
@@ -124,19 +206,20 @@ def save_image(image: SkyImage, png_path: str | Path | None = None,
 def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                       view_zeniths_deg: Sequence[float], relative_azimuths_deg: Sequence[float],
                       wavelengths_nm: Sequence[float], altitude_m: float = 0.0,
-                      solver: str = "single", n_samples: int = 512) -> list[dict[str, float]]:
+                      solver: str = "lut", options: SolverOptions | None = None
+                      ) -> list[dict[str, float]]:
     """Diffuse sky radiance for every combination of the inputs, one dict per row with the keys
     sun_zenith_deg, view_zenith_deg, relative_azimuth_deg, wavelength_nm, radiance
     [W m^-2 sr^-1 nm^-1] and toa_irradiance [W m^-2 nm^-1]. Relative azimuth 0 looks towards
-    the sun. Each wavelength is monochromatic (a 1 nm cell)."""
+    the sun. Each wavelength is monochromatic (a 1 nm cell). `options`:
+    `solver_options(atmosphere)` by default."""
     for value in sun_zeniths_deg:
         _check_range("sun zenith", value, 0.0, 180.0)
     for value in view_zeniths_deg:
         _check_range("view zenith", value, 0.0, 180.0)
     _check_range("altitude_m", altitude_m, 0.0, 1e12)
-    wavelengths = checked_wavelengths(np.atleast_1d(wavelengths_nm), "wavelength")
-    profile = atmosphere.optical_profile(wavelengths, monochromatic=True)
-    engine = make_solver(solver, profile, n_samples=n_samples)
+    engine = load_solver(atmosphere, wavelengths_nm, solver, options, monochromatic=True)
+    profile = engine.profile
     position = observer_position(altitude_m, profile.bottom_radius_m)
     view_zenith, azimuth = np.meshgrid(np.radians(view_zeniths_deg),
                                        np.radians(relative_azimuths_deg), indexing="ij")

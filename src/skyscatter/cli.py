@@ -1,4 +1,5 @@
-"""Command line: `skyscatter render | radiance | presets`. Thin: parse, call `api`, print.
+"""Command line: `skyscatter render | radiance | precompute | presets`. Thin: parse, call `api`,
+print.
 
 User errors (`SkyscatterError`) print one line and exit with code 2; anything else is our bug
 and exits with 1 (the traceback only with --debug). Progress bars appear only on a terminal.
@@ -11,7 +12,8 @@ import csv
 import json
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 from skyscatter import __version__
@@ -53,13 +55,52 @@ def _exposure(text: str) -> float | None:
             f"'{text}' is neither 'auto' nor an EV100 number") from None
 
 
+MAX_BINS = 471  # 1 nm bins over 360-830 nm, the resolution of the CIE tables
+
+
 def _wavelengths(text: str) -> list[float]:
     """'16' -> a 16-bin grid over 360-830 nm; '440,550,680' -> those wavelengths."""
     if "," not in text:
         count = _positive_int(text)
+        if count > MAX_BINS:
+            raise argparse.ArgumentTypeError(
+                f"{count} bins is more than the {MAX_BINS} 1-nm bins of 360-830 nm; for one "
+                "wavelength write it as a list, e.g. 550,")
         from skyscatter.spectrum.grid import wavelength_grid
         return list(wavelength_grid(count))
     return _float_list(text)
+
+
+def _look_at(text: str) -> tuple[float, float, float]:
+    """'LAT,LON' or 'LAT,LON,ALT_KM' -> (lat, lon, altitude_km)."""
+    values = _float_list(text)
+    if len(values) not in (2, 3):
+        raise argparse.ArgumentTypeError(
+            f"'{text}' should be LAT,LON or LAT,LON,ALT_KM (degrees, degrees, km)")
+    return values[0], values[1], values[2] if len(values) == 3 else 0.0
+
+
+def _add_solver_arguments(command: argparse.ArgumentParser, samples_default: int) -> None:
+    """--solver, --orders, --samples and the table cache options."""
+    command.add_argument("--solver", default="lut",
+                         help="lut: precomputed tables with multiple scattering (default; "
+                         "computed once per atmosphere and wavelength set, then cached); "
+                         "single: ray-marched single scattering, the independent check")
+    command.add_argument("--orders", type=_positive_int, default=None,
+                         help="scattering orders of the tables (default: the config's "
+                         "[tables] orders: 8 for the earth preset)")
+    command.add_argument("--samples", type=_positive_int, default=samples_default,
+                         help="ray-marching samples per view ray, single solver "
+                         f"(default {samples_default})")
+    _add_cache_arguments(command)
+
+
+def _add_cache_arguments(command: argparse.ArgumentParser) -> None:
+    command.add_argument("--cache-dir", type=Path, default=None, metavar="DIR",
+                         help="where tables are cached (default: $SKYSCATTER_CACHE_DIR, else "
+                         "$XDG_CACHE_HOME/skyscatter or ~/.cache/skyscatter)")
+    command.add_argument("--no-cache", action="store_true",
+                         help="compute the tables in memory; neither read nor write the cache")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -109,6 +150,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="orbit camera: latitude below the camera in degrees (default 0)")
     render.add_argument("--lon", type=float, default=0.0, metavar="DEG",
                         help="orbit camera: longitude below the camera in degrees (default 0)")
+    render.add_argument("--look-at", type=_look_at, default=None, metavar="LAT,LON[,ALT_KM]",
+                        help="orbit camera: aim at this point instead of the planet's centre "
+                        "(north stays up)")
     render.add_argument("--heading", type=float, default=180.0, metavar="DEG",
                         help="view azimuth from north towards east for perspective and "
                         "panorama centre, degrees (default 180: south)")
@@ -119,9 +163,20 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
                         help="N bins over 360-830 nm, or a comma-separated list in nm "
                         "(default 16 bins)")
-    render.add_argument("--samples", type=_positive_int, default=64,
-                        help="ray-marching samples per view ray (default 64)")
-    render.add_argument("--solver", default="single", help="solver name (default single)")
+    _add_solver_arguments(render, 64)
+    render.add_argument("--albedo-map", type=Path, default=None, metavar="IMAGE",
+                        help="equirectangular ground albedo (PNG/JPEG sRGB, EXR or .npy linear; "
+                        "column 0 at longitude -180, row 0 at the north pole), e.g. for "
+                        "--camera orbit")
+    render.add_argument("--terrain", default=None, metavar="IMAGE|demo",
+                        help="heightmap around the observer (grayscale PNG/EXR/.npy, row 0 = "
+                        "north, centred on the observer), or 'demo' for procedural mountains "
+                        "10-60 km to the south")
+    render.add_argument("--terrain-spacing", type=float, default=250.0, metavar="M",
+                        help="distance between heightmap samples in metres (default 250)")
+    render.add_argument("--terrain-height", type=float, default=4500.0, metavar="M",
+                        help="height of full white in the heightmap in metres; for 'demo', "
+                        "the highest peak (default 4500)")
     render.add_argument("--exposure", type=_exposure, default=None, metavar="EV100|auto",
                         help="exposure value EV100, or auto (default auto)")
     render.add_argument("--exposure-compensation", type=float, default=1.0, metavar="EV",
@@ -160,12 +215,33 @@ def build_parser() -> argparse.ArgumentParser:
                           metavar="NM,...", help="wavelengths in nm (default 440,550,680)")
     radiance.add_argument("--altitude", type=float, default=0.0, metavar="M",
                           help="observer altitude in metres (default 0)")
-    radiance.add_argument("--solver", default="single", help="solver name (default single)")
-    radiance.add_argument("--samples", type=_positive_int, default=512,
-                          help="ray-marching samples per view ray (default 512)")
+    _add_solver_arguments(radiance, 512)
     radiance.add_argument("--format", choices=("csv", "json"), default="csv",
                           help="output format (default csv)")
     radiance.set_defaults(run=_radiance)
+
+    precompute = commands.add_parser(
+        "precompute", help="precompute the scattering tables of an atmosphere into the cache",
+        description="Precompute the tables (transmittance, single and multiple scattering, "
+        "ground irradiance) that `render` and `radiance` use with the lut solver, and store "
+        "them in the cache, so that later renders start at once. The cache entry is keyed by "
+        "the atmosphere's optical profile, the orders, the table resolution, the wavelengths "
+        "and the package version; a stale or damaged entry is recomputed.")
+    precompute.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
+                            help="a preset name (see `skyscatter presets`) or a TOML file")
+    precompute.add_argument("--wavelengths", default=None, metavar="N|LIST",
+                            help="as for render: N bins over 360-830 nm or a list in nm "
+                            "(default 16 bins, what render uses); with --monochromatic a list "
+                            "as for radiance")
+    precompute.add_argument("--monochromatic", action="store_true",
+                            help="tables for `radiance` at exactly the listed wavelengths "
+                            "(1 nm cells) rather than for images")
+    precompute.add_argument("--orders", type=_positive_int, default=None,
+                            help="scattering orders (default: the config's [tables] orders)")
+    precompute.add_argument("--force", action="store_true",
+                            help="recompute even when a valid entry is cached")
+    _add_cache_arguments(precompute)
+    precompute.set_defaults(run=_precompute)
     return parser
 
 
@@ -187,29 +263,85 @@ def _render(args: argparse.Namespace) -> None:
               else 90.0 - (30.0 if args.sun_elevation is None else args.sun_elevation))
     orbit = args.camera == "orbit"
     altitude = args.altitude
+    radius = atmosphere.planet.radius_m
     if orbit:
-        radius = atmosphere.planet.radius_m
         altitude = radius if args.distance_km is None else args.distance_km * 1000.0
         if not altitude > 0.0:
             raise InputError(f"--distance-km {args.distance_km} must be > 0", key="distance_km",
                              value=args.distance_km)
-        fov = args.fov if args.fov is not None else api.orbit_field_of_view_deg(altitude,
-                                                                                radius)
-        camera = api.PerspectiveCamera(args.size, args.size, fov, heading_deg=0.0,
-                                       pitch_deg=-90.0)
+        camera = _orbit_camera(args, altitude, radius)
+    elif args.look_at is not None:
+        raise InputError("--look-at is for --camera orbit; aim other cameras with --heading "
+                         "and --pitch", key="look_at", value=args.look_at)
     else:
         camera = _camera(args)
+    ground = _ground(args, radius)
     directions, valid = camera.directions()
-    with progress(int(valid.sum()), "rendering", unit="ray") as bar:
+    with _solver_options(args, atmosphere) as options, progress(
+            int(valid.sum()), "rendering", unit="ray") as bar:
         image = api.render(atmosphere, camera, zenith, args.sun_azimuth, altitude,
-                           args.wavelengths, args.solver, args.samples, bar.update,
+                           args.wavelengths, args.solver, options, bar.update,
                            orbit_latitude_deg=args.lat if orbit else None,
-                           orbit_longitude_deg=args.lon)
+                           orbit_longitude_deg=args.lon, ground=ground)
     ev100 = api.save_image(image, args.output, args.exr, args.exposure,
                            args.exposure_compensation, args.tonemap, args.colour_space,
                            args.white_balance == "star", args.exr_content)
     written = [str(args.output)] + ([str(args.exr)] if args.exr else [])
     print(f"wrote {', '.join(written)} (EV100 {ev100:.2f})", file=sys.stderr)
+
+
+def _orbit_camera(args: argparse.Namespace, altitude_m: float, radius_m: float):
+    """Perspective camera `altitude_m` above --lat/--lon, looking at the planet's centre or at
+    --look-at, north up."""
+    from skyscatter import api
+    fov = args.fov if args.fov is not None else api.orbit_field_of_view_deg(altitude_m,
+                                                                            radius_m)
+    if args.look_at is None:
+        return api.PerspectiveCamera(args.size, args.size, fov, heading_deg=0.0,
+                                     pitch_deg=-90.0)
+    latitude, longitude, altitude_km = args.look_at
+    viewpoint = api.viewpoint_at(altitude_m, radius_m, args.lat, args.lon)
+    forward = api.look_at_direction(viewpoint, latitude, longitude, altitude_km * 1000.0,
+                                    radius_m)
+    up = (0.0, 1.0, 0.0) if abs(forward[1]) < 0.99 else (0.0, 0.0, 1.0)
+    width = max(1, round(args.size * args.aspect))
+    return api.PerspectiveCamera.from_forward_up(width, args.size, fov, forward, up)
+
+
+def _ground(args: argparse.Namespace, radius_m: float):
+    """The albedo map and terrain of --albedo-map/--terrain, or None."""
+    from skyscatter import api
+    if args.albedo_map is None and args.terrain is None:
+        return None
+    terrain = None
+    if args.terrain == "demo":
+        terrain = api.demo_mountains(peak_m=args.terrain_height, spacing_m=args.terrain_spacing,
+                                     planet_radius_m=radius_m)
+    elif args.terrain is not None:
+        terrain = api.Heightfield.from_image(args.terrain, args.terrain_spacing,
+                                             args.terrain_height, radius_m)
+    albedo = None if args.albedo_map is None else api.AlbedoMap.from_image(args.albedo_map)
+    return api.Ground(albedo_map=albedo, terrain=terrain)
+
+
+@contextmanager
+def _solver_options(args: argparse.Namespace, atmosphere) -> Iterator:
+    """Solver options from --orders/--samples/--cache-dir/--no-cache/--force, with a progress
+    bar for the tables' precomputation and a log line saying where they came from."""
+    from skyscatter import api
+    from skyscatter.render.progress import progress
+
+    with progress(1, "precomputing tables", unit="step") as bar:
+        def advance(done: int, total: int, stage: str) -> None:
+            bar.total = total
+            bar.set_postfix_str(stage, refresh=False)
+            bar.update(done - bar.n)
+
+        def log(message: str) -> None:
+            bar.write(f"skyscatter: {message}", file=sys.stderr)
+
+        yield api.solver_options(atmosphere, args.orders, args.samples, args.cache_dir,
+                                 not args.no_cache, getattr(args, "force", False), advance, log)
 
 
 def _camera(args: argparse.Namespace):
@@ -227,9 +359,10 @@ def _camera(args: argparse.Namespace):
 def _radiance(args: argparse.Namespace) -> None:
     from skyscatter import api
     atmosphere = api.load_atmosphere(args.atmosphere)
-    rows = api.sky_radiance_rows(atmosphere, args.sun_zenith, args.view_zenith,
-                                 args.view_azimuth, args.wavelengths, args.altitude,
-                                 args.solver, args.samples)
+    with _solver_options(args, atmosphere) as options:
+        rows = api.sky_radiance_rows(atmosphere, args.sun_zenith, args.view_zenith,
+                                     args.view_azimuth, args.wavelengths, args.altitude,
+                                     args.solver, options)
     if args.format == "json":
         json.dump(rows, sys.stdout, indent=1)
         sys.stdout.write("\n")
@@ -237,6 +370,29 @@ def _radiance(args: argparse.Namespace) -> None:
         writer = csv.DictWriter(sys.stdout, fieldnames=list(rows[0]), lineterminator="\n")
         writer.writeheader()
         writer.writerows({key: f"{value:.10g}" for key, value in row.items()} for row in rows)
+
+
+def _precompute(args: argparse.Namespace) -> None:
+    import time
+
+    from skyscatter import api
+    from skyscatter.errors import InputError
+    atmosphere = api.load_atmosphere(args.atmosphere)
+    args.samples = 1  # not used by the tables
+    if args.wavelengths is not None:
+        parse = _float_list if args.monochromatic else _wavelengths
+        try:
+            args.wavelengths = parse(args.wavelengths)
+        except argparse.ArgumentTypeError as error:
+            raise InputError(f"--wavelengths: {error}", key="wavelengths",
+                             value=args.wavelengths) from None
+    start = time.perf_counter()
+    with _solver_options(args, atmosphere) as options:
+        tables = api.load_solver(atmosphere, args.wavelengths, "lut", options,
+                                 args.monochromatic).tables
+    print(f"{args.atmosphere}: {tables.orders} orders, {tables.wavelengths_nm.size} "
+          f"wavelengths, {tables.nbytes / 2**20:.0f} MiB of tables, "
+          f"{time.perf_counter() - start:.1f} s", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

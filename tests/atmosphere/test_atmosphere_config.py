@@ -5,6 +5,7 @@ The worked example is read from the ```toml block under "## Worked example" in d
 so the docs cannot drift from what the loader accepts and computes.
 """
 
+import dataclasses
 import math
 import re
 import tomllib
@@ -391,3 +392,53 @@ def test_optical_depth_is_exact_on_the_solver_levels_even_for_thin_layers(tmp_pa
     tau, _ = _vertical_optical_depth(atmosphere, [500.0, 550.0])
     assert tau[0, 1] == pytest.approx(0.1, rel=1e-12)
     assert tau[0, 0] == pytest.approx(0.1 * (500.0 / 550.0) ** -1.3, rel=1e-12)
+
+
+# --- [tables] -----------------------------------------------------------------------------------
+
+def test_tables_orders_is_read_and_defaults_to_bruneton_4(tmp_path):
+    # Default: Bruneton 2017 model.h `Init(num_scattering_orders = 4)`.
+    assert load_atmosphere(_config(tmp_path, BASE, name="default.toml")).scattering_orders == 4
+    text = BASE.replace("[planet]", "[tables]\norders = 12\n[planet]", 1)
+    assert load_atmosphere(_config(tmp_path, text, name="twelve.toml")).scattering_orders == 12
+    empty = BASE.replace("[planet]", "[tables]\n[planet]", 1)
+    assert load_atmosphere(_config(tmp_path, empty, name="empty.toml")).scattering_orders == 4
+
+
+@pytest.mark.parametrize(("tables", "key", "shown", "allowed"), [
+    ("orders = 0", "tables.orders", "tables.orders = 0", ">= 1"),
+    ("orders = -3", "tables.orders", "tables.orders = -3", ">= 1"),
+    ("orders = 1001", "tables.orders", "tables.orders = 1001", "<= 1000"),
+    ("orders = 2.5", "tables.orders", "tables.orders = 2.5", "an integer"),
+    ("orders = 4.0", "tables.orders", "tables.orders = 4.0", "an integer"),
+    ('orders = "four"', "tables.orders", "tables.orders = 'four'", "an integer"),
+    ("orders = true", "tables.orders", "tables.orders = True", "an integer"),
+    ("order = 10", "tables.order", "unknown key 'tables.order'", "did you mean 'tables.orders'"),
+])
+def test_bad_tables_orders_is_a_config_error_naming_file_key_and_value(tmp_path, tables, key,
+                                                                       shown, allowed):
+    path = _config(tmp_path, BASE.replace("[planet]", f"[tables]\n{tables}\n[planet]", 1),
+                   name="bad.toml")
+    with pytest.raises(ConfigError) as info:
+        load_atmosphere(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ")
+    assert shown in message and allowed in message
+    assert info.value.key == key
+    assert "\n" not in message
+
+
+def test_tables_that_is_not_a_table_and_misspelt_tables_are_rejected(tmp_path):
+    path = _config(tmp_path, 'tables = 4\n' + BASE, name="scalar.toml")
+    with pytest.raises(ConfigError, match=r"tables = 4 is not allowed: a table"):
+        load_atmosphere(path)
+    path = _config(tmp_path, BASE.replace("[planet]", "[table]\norders = 4\n[planet]", 1),
+                   name="typo.toml")
+    with pytest.raises(ConfigError, match=r"unknown key 'table'; did you mean 'tables'\?"):
+        load_atmosphere(path)
+
+
+def test_atmosphere_rejects_scattering_orders_below_one():
+    atmosphere = load_atmosphere("earth")
+    with pytest.raises(InputError, match="scattering_orders = 0 must be an integer >= 1"):
+        dataclasses.replace(atmosphere, scattering_orders=0)

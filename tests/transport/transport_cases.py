@@ -6,8 +6,15 @@ import numpy as np
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.optics.phase import HenyeyGreensteinPhase, RayleighPhase
+from skyscatter.transport.tables import TableResolution
 
 EARTH_RADIUS_M = 6_360_000.0
+# Small tables for the tests that check behaviour rather than accuracy (about 1 s each).
+SMALL = TableResolution(transmittance_r=32, transmittance_mu=128, scattering_r=16,
+                        scattering_mu=64, scattering_mu_s=16, scattering_nu=8, irradiance_r=8,
+                        irradiance_mu_s=32, ray_samples=32, multiple_ray_samples=16,
+                        sphere_theta=16, sphere_phi=8, density_theta=17, density_phi=9,
+                        irradiance_theta=8, irradiance_phi=16, phase_angles=1025)
 
 
 def homogeneous_shell(extinction_per_m: float, albedo: float = 0.0, thickness_m: float = 10_000.0,

@@ -16,7 +16,12 @@ from typing import Any
 
 import numpy as np
 
-from skyscatter.atmosphere.model import Atmosphere, Constituent, Planet
+from skyscatter.atmosphere.model import (
+    DEFAULT_SCATTERING_ORDERS,
+    Atmosphere,
+    Constituent,
+    Planet,
+)
 from skyscatter.atmosphere.profiles import (
     ExponentialProfile,
     LayeredProfile,
@@ -118,6 +123,18 @@ class _Table:
             raise self.error(key, value, "must be " + " and ".join(parts))
         return float(value)
 
+    def integer(self, key: str, default: int, *, low: int, high: int) -> int:
+        """An integer in [low, high]; floats (even 4.0), booleans and strings are rejected."""
+        self.asked.add(key)
+        if key not in self.data:
+            return default
+        value = self.data.pop(key)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.error(key, value, f"an integer from {low} to {high}")
+        if not low <= value <= high:
+            raise self.error(key, value, f"must be >= {low} and <= {high}")
+        return value
+
     def text(self, key: str, default: str | None = None, choices: tuple[str, ...] = ()) -> str:
         self.asked.add(key)
         if key not in self.data:
@@ -199,7 +216,10 @@ class _Table:
 
 
 KNOWN_TOP_LEVEL = ("name", "description", "sources", "planet", "star", "atmosphere",
-                   "constituent")
+                   "constituent", "tables")
+# Bounds of [tables] orders: 1 is single scattering only; past 1000 a typo is likelier than a
+# need (each order costs about as much as the single-scattering table; docs/physics/orders.md).
+MAX_SCATTERING_ORDERS = 1000
 
 
 def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
@@ -217,6 +237,12 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
     atmosphere_table = root.table("atmosphere")
     top = atmosphere_table.number("top_altitude_m", low=0.0, low_open=True)
     atmosphere_table.finish()
+    orders = DEFAULT_SCATTERING_ORDERS
+    tables_table = root.table("tables", required=False)
+    if tables_table is not None:
+        orders = tables_table.integer("orders", DEFAULT_SCATTERING_ORDERS, low=1,
+                                      high=MAX_SCATTERING_ORDERS)
+        tables_table.finish()
     constituents_raw = root.data.pop("constituent", None)
     if not isinstance(constituents_raw, list) or not constituents_raw:
         raise ConfigError("[[constituent]] is missing: an atmosphere needs at least one",
@@ -239,7 +265,8 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
         raise ConfigError(f"unknown key {key!r}{hint}", path=path, key=key)
     planet = Planet(name=name, radius_m=radius, ground_albedo=albedo, star=star)
     return Atmosphere(planet=planet, top_altitude_m=top, constituents=tuple(constituents),
-                      name=name, description=description, source=str(path))
+                      name=name, description=description, source=str(path),
+                      scattering_orders=orders)
 
 
 def _parse_star(table: _Table) -> Star:

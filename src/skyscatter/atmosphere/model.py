@@ -16,11 +16,13 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skyscatter.errors import InputError
 from skyscatter.optics.phase import PhaseFunction
 from skyscatter.spectrum.star import Star
 from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = [
+    "DEFAULT_SCATTERING_ORDERS",
     "Atmosphere",
     "Constituent",
     "ConstituentOptics",
@@ -28,6 +30,11 @@ __all__ = [
     "OpticalProfile",
     "Planet",
 ]
+
+# Scattering orders of the tables when a config does not say: Earth's value in Bruneton 2017
+# (model.h, `Model::Init(num_scattering_orders = 4)`; shared/research/anchor-bruneton.md §1.2);
+# docs/physics/orders.md measures what thicker atmospheres need.
+DEFAULT_SCATTERING_ORDERS = 4
 
 
 class DensityProfile(Protocol):
@@ -84,6 +91,15 @@ class Atmosphere:
     name: str = "atmosphere"
     description: str = ""
     source: str = ""  # file or preset it came from, for messages
+    # Scattering orders the table solver iterates by default ([tables] orders in a config;
+    # thick or dusty air needs more than Earth's 4: docs/physics/orders.md)
+    scattering_orders: int = DEFAULT_SCATTERING_ORDERS
+
+    def __post_init__(self) -> None:
+        orders = self.scattering_orders
+        if isinstance(orders, bool) or not isinstance(orders, int | np.integer) or orders < 1:
+            raise InputError(f"Atmosphere.scattering_orders = {orders!r} must be an integer >= 1",
+                             key="scattering_orders", value=orders, allowed="integer >= 1")
 
     @property
     def bottom_radius_m(self) -> float:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skyscatter.render.camera import Camera
+from skyscatter.render.surfaces import Ground, surface_radiance
 from skyscatter.spectrum.colour import spectral_to_xyz, white_balance, xyz_to_rgb
 from skyscatter.spectrum.star import Star
 from skyscatter.transport.single_scattering import observer_position
@@ -47,9 +48,11 @@ class SkyImage:
 
     spectral: np.ndarray  # (h, w, n_wl) [W m^-2 sr^-1 nm^-1]; 0 outside the lens
     valid: np.ndarray  # (h, w) bool
-    sky: np.ndarray  # (h, w) bool: valid pixels looking above the horizontal (for metering)
+    sky: np.ndarray  # (h, w) bool: the pixels to meter: valid ones looking above the
+    # horizontal, else (views from space) the lit ones
     wavelengths_nm: np.ndarray  # (n_wl,)
     light_spectrum: np.ndarray  # (n_wl,) the star's irradiance at the top [W m^-2 nm^-1]
+    from_space: bool = False  # camera above the atmosphere: meter the starlight, not the frame
 
     def xyz(self, balance_to_light: bool = False) -> np.ndarray:
         """CIE 1931 XYZ (h, w, 3), Y = luminance [cd m^-2]; optionally adapted from the
@@ -93,22 +96,42 @@ def orbit_viewpoint(altitude_m: float, latitude_deg: float, longitude_deg: float
 
 
 def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray, star: Star,
-               progress: Callable[[int], None] | None = None) -> SkyImage:
+               progress: Callable[[int], None] | None = None,
+               ground: Ground | None = None) -> SkyImage:
     """Spectral image seen by `camera` from `viewpoint` with the sun along `sun_dir` (both in
-    the viewpoint's local frame). `solver` answers `sky_radiance` and `transmittance`."""
+    the viewpoint's local frame). `solver` answers `sky_radiance` and `transmittance`; with
+    `ground` (an albedo map and/or terrain) the rays that meet it are shaded by
+    `surfaces.surface_radiance` (table solver only)."""
     profile = solver.profile
     directions, valid = camera.directions()
     world_directions = viewpoint.direction_to_world(directions)
     world_sun = viewpoint.direction_to_world(sun_dir)
     spectral = np.zeros(directions.shape[:2] + (profile.n_wavelengths,))
-    spectral[valid] = solver.sky_radiance(viewpoint.position_m, world_directions[valid],
-                                          world_sun, progress)
+    rays = np.ascontiguousarray(world_directions[valid])
+    radiance = np.empty((rays.shape[0], profile.n_wavelengths))
+    sky_rays = np.ones(rays.shape[0], dtype=bool)
+    if ground is not None and (ground.albedo_map is not None or ground.terrain is not None):
+        surface, hit = surface_radiance(solver, viewpoint.position_m, rays, world_sun, ground)
+        radiance[hit] = surface
+        sky_rays = ~hit
+        if progress is not None:
+            progress(int(hit.sum()))
+    radiance[sky_rays] = solver.sky_radiance(viewpoint.position_m, rays[sky_rays], world_sun,
+                                             progress)
+    spectral[valid] = radiance
     sun_transmittance = solver.transmittance(viewpoint.position_m, world_sun)
+    if ground is not None and ground.terrain is not None and ground.terrain.shadowed(
+            viewpoint.position_m, world_sun)[0]:
+        sun_transmittance = np.zeros_like(sun_transmittance)  # the sun is behind a mountain
     add_sun_disk(spectral, camera, directions, valid, sun_dir, star,
                  profile.wavelengths_nm, sun_transmittance)
     sky = valid & (directions[..., 2] > 0.0)
-    return SkyImage(spectral, valid, sky if np.any(sky) else valid, profile.wavelengths_nm,
-                    profile.toa_irradiance)
+    if not np.any(sky):  # looking down from space: meter on what is lit, not on black space
+        lit = valid & np.any(spectral > 0.0, axis=-1)
+        sky = lit if np.any(lit) else valid
+    from_space = bool(np.linalg.norm(viewpoint.position_m) > profile.top_radius_m)
+    return SkyImage(spectral, valid, sky, profile.wavelengths_nm, profile.toa_irradiance,
+                    from_space)
 
 
 def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,

@@ -53,6 +53,7 @@ __all__ = [
 ]
 
 METER_CALIBRATION_K = 12.5  # cd s m⁻², reflected-light meter calibration constant (ISO 2720)
+INCIDENT_CALIBRATION_C = 250.0  # lx s, incident-light meter, flat receptor (ISO 2720: 240-400)
 _ISO_SPEED = 100.0  # EV100 is defined for ISO 100
 _SATURATION_FACTOR = 78.0 / (0.65 * _ISO_SPEED)  # = 1.2; 78/(q S), q = 0.65 (Lagarde 2014)
 _LARGEST_INPUT = 1e150  # inputs are clipped here so x² stays finite in float64
@@ -101,6 +102,17 @@ def auto_ev100(luminance: ArrayLike, valid: ArrayLike | None = None) -> float:
                          "give an explicit EV100 instead", key="luminance")
     log_average = float(np.exp(np.mean(np.log(lum[use]))))
     return float(np.log2(log_average * _ISO_SPEED / METER_CALIBRATION_K))
+
+
+def incident_ev100(illuminance_lux: float) -> float:
+    """EV100 an incident-light meter would choose under `illuminance_lux` [lx]: log2(E S / C),
+    S = 100, C = 250 (ISO 2720, flat receptor). A white Lambertian surface facing the light
+    then maps to 0.66 with `exposure_scale` (grey cards to middle grey), whatever else the
+    frame holds: the choice for sunlit objects against black space. [EV]"""
+    if not (np.isfinite(illuminance_lux) and illuminance_lux > 0.0):
+        raise InputError(f"cannot meter the exposure: illuminance {illuminance_lux!r} lx is not "
+                         "positive; give an explicit EV100 instead", key="illuminance_lux")
+    return float(np.log2(illuminance_lux * _ISO_SPEED / INCIDENT_CALIBRATION_C))
 
 
 def exponential(x: ArrayLike) -> np.ndarray:

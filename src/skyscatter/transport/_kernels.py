@@ -155,16 +155,18 @@ RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loop
 
 
 @njit(parallel=True, cache=True)
-def single_scattering(origins, directions, sun_direction, n_samples, bottom_radius, top_radius,
-                      h_step, density, extinction, sun_table, sun_angular_radius):
-    """Single scattering along many rays with one sun direction.
+def single_scattering(origins, directions, max_distances, sun_direction, n_samples,
+                      bottom_radius, top_radius, h_step, density, extinction, sun_table,
+                      sun_angular_radius):
+    """Single scattering along many rays with one sun direction, each ray ending where it
+    leaves the atmosphere, at the ground, or after `max_distances` [m] (inf: no limit).
 
     Returns
     - inscatter (n_ray, n_c, n_wl): integral over the ray of T(x, p) density_c(p) T_sun(p) ds
       [density x m]; radiance = E_sun * sum_c scattering_c * phase_c(nu) * inscatter_c.
     - transmittance (n_ray, n_wl): along the whole segment inside the atmosphere [-].
     - ground (n_ray, n_wl): T(x, g) T_sun(g) max(mu_s(g), 0) at the ground hit g (0 if the ray
-      misses the ground); Lambertian radiance = E_sun * albedo / pi * ground.
+      misses the ground or ends before it); Lambertian radiance = E_sun * albedo / pi * ground.
     """
     n_ray = origins.shape[0]
     n_c, n_wl = extinction.shape
@@ -188,6 +190,9 @@ def single_scattering(origins, directions, sun_direction, n_samples, bottom_radi
             mu_s0 = (ox * sun_direction[0] + oy * sun_direction[1] + oz * sun_direction[2]) / r
             nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
             t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+            if max_distances[i] < t_end:
+                t_end = max(max_distances[i], t_start)
+                hits_ground = False
             if t_end <= t_start:
                 if hits_ground:  # standing on the ground, looking down: the lit ground
                     sun_fraction = sun_visible_fraction(r, mu_s0, bottom_radius,

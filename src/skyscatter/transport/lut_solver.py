@@ -47,9 +47,6 @@ class LutSolver:
         Tables computed before for this profile (e.g. from a cache); skips the precomputation.
     progress : callable(done, total, stage), optional
         Passed to `precompute_tables`.
-    n_samples : int, optional
-        Accepted for the common solver interface (`make_solver(..., n_samples=...)`); the
-        tables' quadrature is set by `resolution`, so it is not used.
     """
 
     name = "lut"
@@ -57,8 +54,7 @@ class LutSolver:
     def __init__(self, profile: OpticalProfile, resolution: TableResolution | None = None,
                  orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN_EARTH,
                  tables: AtmosphereTables | None = None,
-                 progress: Callable[[int, int, str], None] | None = None,
-                 n_samples: int | None = None) -> None:
+                 progress: Callable[[int, int, str], None] | None = None) -> None:
         self.profile = profile
         if tables is None:
             tables = precompute_tables(profile, resolution, orders, min_cos_sun_zenith,
@@ -111,21 +107,46 @@ class LutSolver:
             origins, dirs, distances, t.bottom_radius_m, t.top_radius_m, t.transmittance)
         return result.reshape(shape + (self.profile.n_wavelengths,))
 
-    def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike
-                          ) -> tuple[np.ndarray, np.ndarray]:
-        """(direct, diffuse) spectral irradiance on a horizontal surface at `position`
-        (planet-centred [m], (..., 3)) [W m^-2 nm^-1], each (..., n_wl). Direct: E_sun T_sun
-        mu_s times the visible part of the disk; diffuse: the indirect-irradiance table, sky
-        light of orders 1 .. orders-1 (none for orders = 1)."""
+    def aerial_perspective(self, position: ArrayLike, points: ArrayLike,
+                           sun_direction: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """(inscattered, transmittance) between the observer at `position` (planet-centred
+        [m], (3,) or broadcastable) and `points` (..., 3) [m] in the atmosphere or on the
+        ground: the radiance the air between them scatters towards the observer
+        [W m^-2 sr^-1 nm^-1] and the fraction of the points' own radiance that reaches it [-],
+        each (..., n_wl). An object at p with radiance L_p is seen as T L_p + inscattered."""
+        origins, targets, shape = _rays(position, points)
+        sun = _sun(sun_direction)
+        p, t = self.profile, self.tables
+        inscattered = np.empty((targets.shape[0], p.n_wavelengths))
+        transmittance = np.empty_like(inscattered)
+        _table_kernels.aerial_perspective_points(
+            origins, targets, sun, t.bottom_radius_m, t.top_radius_m, t.min_cos_sun_zenith,
+            self._scattering, self._shape, t.phase, t.transmittance, inscattered,
+            transmittance)
+        return (inscattered.reshape(shape + (p.n_wavelengths,)),
+                transmittance.reshape(shape + (p.n_wavelengths,)))
+
+    def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike,
+                          normals: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(direct, diffuse) spectral irradiance [W m^-2 nm^-1] on surfaces at `position`
+        (planet-centred [m], (..., 3)), each (..., n_wl); horizontal unless unit `normals`
+        (broadcastable to the positions) are given. Direct: E_sun T_sun V max(n . s, 0) with
+        V the visible part of the disk; diffuse: the indirect-irradiance table (sky light of
+        orders 1 .. orders-1; none for orders = 1) times the part of the sky the surface sees,
+        (1 + n . up) / 2."""
         positions = np.asarray(position, dtype=np.float64)
         shape = positions.shape[:-1]
         flat = _writable(positions.reshape(-1, 3))
+        if normals is None:
+            facing = flat / np.linalg.norm(flat, axis=1, keepdims=True)
+        else:
+            facing = _writable(np.broadcast_to(np.asarray(normals, dtype=np.float64),
+                                               positions.shape).reshape(-1, 3))
         sun = _sun(sun_direction)
         p, t = self.profile, self.tables
         direct, diffuse = _table_kernels.ground_irradiance_points(
-            flat, sun, t.bottom_radius_m, t.top_radius_m, t.transmittance, t.irradiance,
-            np.ascontiguousarray(p.toa_irradiance, dtype=np.float64),
-            float(p.sun_angular_radius_rad))
+            flat, facing, sun, t.bottom_radius_m, t.top_radius_m, t.transmittance, t.irradiance,
+            self._sun_irradiance, float(p.sun_angular_radius_rad))
         n_wl = p.n_wavelengths
         return direct.reshape(shape + (n_wl,)), diffuse.reshape(shape + (n_wl,))
 

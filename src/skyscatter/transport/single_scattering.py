@@ -53,26 +53,51 @@ class SingleScatteringSolver:
         sun along unit `sun_direction` (3,). Returns (..., n_wl). `progress(n)` is called with
         the number of rays done after each chunk."""
         origins, directions, shape = _broadcast_rays(position, view_directions)
+        distances = np.full(directions.shape[0], np.inf)
+        radiance, _ = self._march(origins, directions, distances, sun_direction, True, progress)
+        return radiance.reshape(shape + (self.profile.n_wavelengths,))
+
+    def aerial_perspective(self, position: ArrayLike, points: ArrayLike,
+                           sun_direction: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """(inscattered [W m^-2 sr^-1 nm^-1], transmittance [-]) between `position` and
+        `points` (..., 3) [m], each (..., n_wl): single scattering of the air in between,
+        ray marched (`LutSolver.aerial_perspective` has the meaning)."""
+        origins, targets, shape = _broadcast_rays(position, points, normalise=False)
+        offsets = targets - origins
+        distances = np.linalg.norm(offsets, axis=1)
+        directions = np.ascontiguousarray(offsets / np.where(distances > 0, distances,
+                                                             1.0)[:, None])
+        inscattered, transmittance = self._march(origins, directions, distances,
+                                                 sun_direction, False, None)
+        n_wl = self.profile.n_wavelengths
+        return inscattered.reshape(shape + (n_wl,)), transmittance.reshape(shape + (n_wl,))
+
+    def _march(self, origins: np.ndarray, directions: np.ndarray, distances: np.ndarray,
+               sun_direction: ArrayLike, with_ground: bool,
+               progress: Callable[[int], None] | None) -> tuple[np.ndarray, np.ndarray]:
+        """(radiance, transmittance) (n, n_wl) along rays that end after `distances` at the
+        latest; the lit Lambertian ground is added `with_ground`."""
         sun = _unit(np.asarray(sun_direction, dtype=np.float64))
         p = self.profile
-        result = np.empty((directions.shape[0], p.n_wavelengths))
+        radiance = np.empty((directions.shape[0], p.n_wavelengths))
+        transmittance = np.empty_like(radiance)
         for start in range(0, directions.shape[0], CHUNK_RAYS):
             stop = min(start + CHUNK_RAYS, directions.shape[0])
-            inscatter, _, ground = _kernels.single_scattering(
-                origins[start:stop], directions[start:stop], sun, self.n_samples,
-                p.bottom_radius_m, p.top_radius_m, self._h_step, p.density,
+            inscatter, transmittance[start:stop], ground = _kernels.single_scattering(
+                origins[start:stop], directions[start:stop], distances[start:stop], sun,
+                self.n_samples, p.bottom_radius_m, p.top_radius_m, self._h_step, p.density,
                 p.extinction_per_density, self._sun_table, p.sun_angular_radius_rad)
             nu = directions[start:stop] @ sun
-            radiance = ground * (p.ground_albedo / np.pi)
+            chunk = ground * (p.ground_albedo / np.pi) if with_ground else np.zeros_like(ground)
             for c, phase in enumerate(p.phases):
                 if phase is None:
                     continue
-                radiance += (phase.evaluate(nu, p.wavelengths_nm)
-                             * p.scattering_per_density[c] * inscatter[:, c, :])
-            result[start:stop] = radiance * p.toa_irradiance
+                chunk += (phase.evaluate(nu, p.wavelengths_nm)
+                          * p.scattering_per_density[c] * inscatter[:, c, :])
+            radiance[start:stop] = chunk * p.toa_irradiance
             if progress is not None:
                 progress(stop - start)
-        return result.reshape(shape + (p.n_wavelengths,))
+        return radiance, transmittance
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
                       distance_m: ArrayLike = np.inf, n_samples: int = 256) -> np.ndarray:
@@ -139,13 +164,16 @@ def _tangent_frame(up: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return east, np.cross(up, east)
 
 
-def _broadcast_rays(position: ArrayLike, directions: ArrayLike
+def _broadcast_rays(position: ArrayLike, directions: ArrayLike, normalise: bool = True
                     ) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
-    """Flatten broadcast origins and unit directions to (n, 3) C-contiguous arrays."""
+    """Flatten broadcast origins and (unit, if `normalise`) directions to (n, 3) C-contiguous
+    arrays."""
     dirs = np.asarray(directions, dtype=np.float64)
     origins = np.asarray(position, dtype=np.float64)
     shape = np.broadcast_shapes(dirs.shape, origins.shape)[:-1]
-    dirs = _unit(np.broadcast_to(dirs, shape + (3,)))
+    dirs = np.broadcast_to(dirs, shape + (3,))
+    if normalise:
+        dirs = _unit(dirs)
     origins = np.broadcast_to(origins, shape + (3,))
     return (np.ascontiguousarray(origins.reshape(-1, 3)),
             np.ascontiguousarray(dirs.reshape(-1, 3)), shape)

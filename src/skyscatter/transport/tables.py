@@ -242,7 +242,8 @@ def _phase_matrices(phase: np.ndarray, resolution: TableResolution) -> np.ndarra
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
                       orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN_EARTH,
                       wavelength_batch: int = 16,
-                      progress: Callable[[int, int, str], None] | None = None
+                      progress: Callable[[int, int, str], None] | None = None,
+                      on_order: Callable[[int, slice, np.ndarray, np.ndarray], None] | None = None
                       ) -> AtmosphereTables:
     """Precompute the tables of `profile` with `orders` scattering orders (module docstring).
 
@@ -263,6 +264,11 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         wavelengths at the default resolution) besides the result tables.
     progress : callable(done, total, stage), optional
         Called after each step.
+    on_order : callable(order, batch, multiple, irradiance), optional
+        Called after each order n of each wavelength batch (a slice) with read-only views of
+        the sum of orders 2 .. n (n_r, n_mu, n_mu_s, n_nu, n_wl) and of the sky light on the
+        ground of orders 1 .. n - 1 (n_r_e, n_mu_s_e, n_wl) so far: the tables truncated at n
+        orders, for convergence studies (benchmarks/bench_orders.py).
 
     Returns
     -------
@@ -342,6 +348,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         order_mean[0, batch], order_zenith[0, batch] = _table_kernels.order_statistics(
             single, True, phase_b, *geometry)
         report(f"single scattering, {label}")
+        if on_order is not None:
+            on_order(1, batch, _read_only(scattering[..., n_s, :]),
+                     _read_only(irradiance))
         if orders == 1 or n_s == 0:  # nothing scatters: no higher orders
             continue
         matrices = _phase_matrices(phase_b, res)
@@ -373,6 +382,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             order_mean[order - 1, batch], order_zenith[order - 1, batch] = (
                 _table_kernels.order_statistics(previous, False, phase_b, *geometry))
             report(f"order {order}, {label}")
+            if on_order is not None:
+                on_order(order, batch, _read_only(scattering[..., n_s, :]),
+                         _read_only(irradiance))
         del previous, single
 
     return AtmosphereTables(
@@ -382,6 +394,12 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         scattering_constituents=scatterers, transmittance=transmittance,
         scattering=scattering, irradiance=irradiance, phase=phase,
         order_mean_radiance=order_mean, order_zenith_radiance=order_zenith)
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    view = array.view()
+    view.flags.writeable = False
+    return view
 
 
 def _source_function(matrices: np.ndarray, incoming: np.ndarray, beta_s: np.ndarray,

@@ -1,0 +1,77 @@
+"""Lit surfaces seen through the atmosphere: the planet's ground (with an albedo map) and
+heightfield terrain, with aerial perspective.
+
+A ray that meets a surface at p, with normal n and spectral albedo a, carries
+
+    L = L_in(x, p) + T(x, p) a / pi (E_sun(p, n) [not in the terrain's shadow] + E_sky(p, n))
+
+with L_in and T the solver's `aerial_perspective` (the light the air between the observer and
+p scatters towards the observer, and the transmittance), E_sun the direct sunlight on a surface
+facing n and E_sky the sky light it sees (`ground_irradiance`, Bruneton 2017
+`GetSunAndSkyIrradiance` and the demo's ground shading). Light reflected by the ground enters
+the tables' higher orders with the atmosphere's single albedo, not the map's (an
+approximation of the same kind as Bruneton's; the direct reflection uses the map exactly).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from skyscatter.errors import InputError
+from skyscatter.render.albedo_map import AlbedoMap
+from skyscatter.render.terrain import Heightfield
+
+__all__ = ["Ground", "surface_radiance"]
+
+
+@dataclass(frozen=True)
+class Ground:
+    """What replaces the plain sphere of constant albedo: an albedo map, terrain, or both."""
+
+    albedo_map: AlbedoMap | None = None
+    terrain: Heightfield | None = None
+
+
+def _sphere_hits(origin: np.ndarray, directions: np.ndarray,
+                 radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """(distance (n,), hit (n,)) of rays from one origin to the sphere of `radius` (first
+    crossing in front of the origin; origins inside the sphere do not hit)."""
+    b = directions @ origin
+    c = origin @ origin - radius * radius
+    discriminant = b * b - c
+    hit = (discriminant >= 0.0) & (b < 0.0) & (c > 0.0)
+    root = np.sqrt(np.maximum(discriminant, 0.0))
+    # -b - root, written without cancellation for rays that graze the sphere
+    distance = np.where(hit, c / np.maximum(-b + root, 1e-300), np.inf)
+    return distance, hit
+
+
+def surface_radiance(solver, position: np.ndarray, directions: np.ndarray,
+                     sun_direction: np.ndarray, ground: Ground
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(radiance (n_hit, n_wl) [W m^-2 sr^-1 nm^-1], hit (n,) bool) of the rays from
+    `position` along unit `directions` (n, 3) that meet the ground or the terrain."""
+    if not hasattr(solver, "aerial_perspective") or getattr(solver, "name", "") != "lut":
+        raise InputError("an albedo map or terrain needs the table solver (--solver lut)",
+                         key="solver", value=getattr(solver, "name", solver), allowed="lut")
+    profile = solver.profile
+    origin = np.asarray(position, dtype=np.float64)
+    if ground.terrain is not None:
+        _, points, normals, hit = ground.terrain.intersect(origin, directions)
+        points, normals = points[hit], normals[hit]
+        lit = ~ground.terrain.shadowed(points, sun_direction)
+    else:
+        distance, hit = _sphere_hits(origin, directions, profile.bottom_radius_m)
+        points = origin + distance[hit, None] * directions[hit]
+        normals = points / np.linalg.norm(points, axis=1, keepdims=True)
+        lit = np.ones(points.shape[0], dtype=bool)
+    if ground.albedo_map is not None:
+        albedo = ground.albedo_map.spectral(points, profile.wavelengths_nm)
+    else:
+        albedo = np.broadcast_to(profile.ground_albedo, (points.shape[0], profile.n_wavelengths))
+    inscattered, transmittance = solver.aerial_perspective(origin, points, sun_direction)
+    direct, diffuse = solver.ground_irradiance(points, sun_direction, normals)
+    reflected = albedo / np.pi * (direct * lit[:, None] + diffuse)
+    return inscattered + transmittance * reflected, hit

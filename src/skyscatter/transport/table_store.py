@@ -1,0 +1,114 @@
+"""Precomputed tables on disk: load them from the cache when they match, else compute and store.
+
+An entry is keyed by a hash of its metadata: the atmosphere's fingerprint (a hash of every
+number of its optical profile, so of everything in the config that changes the tables), the
+table resolution, the orders, mu_s_min, the wavelengths, the package version and a hash of the
+source files that compute the tables. A file that is corrupt, truncated or made from other
+inputs is reported and recomputed, never used (`transport/cache.py`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skyscatter import __version__
+from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.errors import InputError
+from skyscatter.transport.cache import TableCache, profile_fingerprint
+from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN_EARTH
+from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
+
+__all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_arrays"]
+
+TABLE_FORMAT = 1  # bump when the arrays stored change meaning
+_ARRAYS = ("wavelengths_nm", "transmittance", "scattering", "irradiance", "phase",
+           "order_mean_radiance", "order_zenith_radiance")
+# The files whose code decides the tables' numbers: an edit to them invalidates old entries.
+_CODE_FILES = ("tables.py", "_table_kernels.py", "table_parameterisation.py", "_kernels.py")
+
+
+def _code_fingerprint() -> str:
+    digest = hashlib.sha256()
+    for name in _CODE_FILES:
+        digest.update((Path(__file__).parent / name).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def table_metadata(profile: OpticalProfile, resolution: TableResolution, orders: int,
+                   min_cos_sun_zenith: float) -> dict[str, Any]:
+    """What an entry was made from; two entries with equal metadata hold equal tables."""
+    return {"format": TABLE_FORMAT, "version": __version__, "code": _code_fingerprint(),
+            "atmosphere_fingerprint": profile_fingerprint(profile),
+            "resolution": dataclasses.asdict(resolution), "orders": int(orders),
+            "min_cos_sun_zenith": float(min_cos_sun_zenith),
+            "wavelengths_nm": [float(w) for w in profile.wavelengths_nm]}
+
+
+def _key(metadata: dict[str, Any]) -> str:
+    text = json.dumps(metadata, sort_keys=True)
+    return "tables-" + hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def tables_to_arrays(tables: AtmosphereTables) -> dict[str, np.ndarray]:
+    """The arrays of `tables` plus its scalars, for `TableCache.store`."""
+    arrays = {name: getattr(tables, name) for name in _ARRAYS}
+    arrays["radii_m"] = np.array([tables.bottom_radius_m, tables.top_radius_m])
+    arrays["scattering_constituents"] = np.array(tables.scattering_constituents, dtype=np.int64)
+    arrays["scattering_names"] = np.array(tables.scattering_names, dtype=np.str_)
+    return arrays
+
+
+def tables_from_arrays(arrays: dict[str, np.ndarray],
+                       metadata: dict[str, Any]) -> AtmosphereTables:
+    """Inverse of `tables_to_arrays` (with the metadata the entry was checked against)."""
+    bottom, top = (float(v) for v in arrays["radii_m"])
+    return AtmosphereTables(
+        bottom_radius_m=bottom, top_radius_m=top,
+        min_cos_sun_zenith=float(metadata["min_cos_sun_zenith"]),
+        resolution=TableResolution(**metadata["resolution"]), orders=int(metadata["orders"]),
+        scattering_names=tuple(str(n) for n in arrays["scattering_names"]),
+        scattering_constituents=tuple(int(c) for c in arrays["scattering_constituents"]),
+        **{name: arrays[name] for name in _ARRAYS})
+
+
+def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
+                  orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN_EARTH,
+                  cache: TableCache | None = None, force: bool = False,
+                  progress: Callable[[int, int, str], None] | None = None,
+                  log: Callable[[str], None] | None = None) -> AtmosphereTables:
+    """The tables of `profile`: from `cache` when a valid entry exists (and not `force`),
+    otherwise precomputed (`precompute_tables`) and stored. `log` gets one line saying which
+    happened and why. Without a cache the tables are computed and kept in memory only."""
+    resolution = resolution or TableResolution()
+    say = log or (lambda message: None)
+    if cache is None:
+        return precompute_tables(profile, resolution, orders, min_cos_sun_zenith,
+                                 progress=progress)
+    metadata = table_metadata(profile, resolution, orders, min_cos_sun_zenith)
+    key = _key(metadata)
+    path = cache.path(key)
+    if force:
+        reason = "recomputing as asked"
+    else:
+        arrays, reason = cache.load(key, metadata)
+        if arrays is not None:
+            try:
+                tables = tables_from_arrays(arrays, metadata)
+            except (KeyError, ValueError, TypeError, InputError) as error:
+                reason = f"incomplete cache file ({type(error).__name__}: {error})"
+            else:
+                say(f"tables: using {path}")
+                return tables
+    say(f"tables: precomputing {orders} orders for {profile.n_wavelengths} wavelengths "
+        f"({reason}; will be stored in {path})")
+    tables = precompute_tables(profile, resolution, orders, min_cos_sun_zenith,
+                               progress=progress)
+    cache.store(key, tables_to_arrays(tables), metadata)
+    return tables

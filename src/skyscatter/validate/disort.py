@@ -1,0 +1,344 @@
+"""An independent plane-parallel multiple-scattering reference: an `OpticalProfile` solved by
+PythonicDISORT (discrete ordinates, all orders).
+
+The spherical shell becomes a stack of homogeneous plane-parallel layers (top first). For layer
+k between altitudes z_k+1 < z_k and constituent c with density n_c(z):
+
+    dtau_k      = sum_c  k_ext,c  int n_c dz               (extinction optical thickness)
+    omega_k     = sum_c  k_sca,c  int n_c dz / dtau_k      (single-scattering albedo)
+    chi_l,k     = sum_c  k_sca,c  int n_c dz chi_l,c / sum_c k_sca,c int n_c dz
+    chi_l,c     = 2 pi int_-1^1 p_c(nu) P_l(nu) dnu        (Legendre moments, chi_0 = 1)
+
+with the integrals taken by the trapezoid rule on the profile's own altitude levels (exact for
+its linearly interpolated densities) and chi_l,c by Gauss-Legendre quadrature of the very
+`phase.evaluate` the solvers use. The ground is Lambertian with the profile's albedo, the beam
+has the profile's top-of-atmosphere irradiance normal to it. DISORT: Stamnes et al. (1988),
+Appl. Opt. 27, 2502, doi:10.1364/AO.27.002502; PythonicDISORT: Ho (2024), J. Open Source
+Softw. 9, 6442, doi:10.21105/joss.06442 (PyPI `PythonicDISORT`, MIT). Delta-M scaling:
+Wiscombe (1977), J. Atmos. Sci. 34, 1408; Nakajima & Tanaka (1988), JQSRT 40, 51.
+
+What a plane-parallel atmosphere leaves out (why it differs from the spherical solvers): the
+curvature of the sun's slant path (relative air mass about 5.6 instead of sec 80 deg = 5.76;
+Kasten & Young 1989, Appl. Opt. 28, 4735) and of the view paths near the horizon.
+docs/physics/disort_comparison.md gives the measured agreement.
+
+Public names: `PlaneParallelLayers`, `plane_parallel_layers`, `legendre_moments`,
+`disort_sky_radiance`, `plane_parallel_single_scattering`, `DisortComparison`,
+`compare_with_disort`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.polynomial import legendre
+from numpy.typing import ArrayLike
+from scipy.special import roots_legendre
+
+from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.errors import InputError
+from skyscatter.optics.phase import PhaseFunction
+from skyscatter.transport.geometry import local_frame_directions
+
+__all__ = [
+    "DisortComparison",
+    "PlaneParallelLayers",
+    "compare_with_disort",
+    "disort_sky_radiance",
+    "legendre_moments",
+    "plane_parallel_layers",
+    "plane_parallel_single_scattering",
+]
+
+# PythonicDISORT requires omega < 1; layers of pure air (no ozone, no aerosol) are clamped to
+# this, which adds an absorption of 1e-9 per scattering.
+MAX_SINGLE_SCATTERING_ALBEDO = 1.0 - 1e-9
+
+
+@dataclass(frozen=True)
+class PlaneParallelLayers:
+    """Homogeneous layers, top of the atmosphere first; wavelength last.
+
+    altitudes_m        (n_layers + 1,) layer boundaries, from the top down to the ground [m]
+    optical_depth      (n_layers, n_wl) optical depth from the top to each layer's bottom [-]
+    single_scattering_albedo (n_layers, n_wl) [-]
+    moments            (n_layers, n_moments, n_wl) Legendre moments chi_l of the layer's
+                       scattering-weighted phase function, chi_0 = 1 [-]
+    """
+
+    altitudes_m: np.ndarray
+    optical_depth: np.ndarray
+    single_scattering_albedo: np.ndarray
+    moments: np.ndarray
+
+
+def legendre_moments(phase: PhaseFunction, wavelengths_nm: np.ndarray, n_moments: int,
+                     n_nodes: int = 1024) -> np.ndarray:
+    """Legendre moments chi_l = 2 pi int_-1^1 p(nu) P_l(nu) dnu, l = 0 .. n_moments - 1.
+
+    Gauss-Legendre quadrature with `n_nodes` nodes of `phase.evaluate` (normalised to 1 over
+    4 pi sr, so chi_0 = 1; Rayleigh gives chi_2 = 0.1, Henyey-Greenstein chi_l = g^l).
+    Returns (n_moments, n_wl). [-]
+    """
+    nu, weight = roots_legendre(n_nodes)
+    p = phase.evaluate(nu, wavelengths_nm)  # (n_nodes, n_wl)
+    basis = legendre.legvander(nu, n_moments - 1)  # (n_nodes, n_moments)
+    return 2.0 * np.pi * (basis * weight[:, None]).T @ p
+
+
+def _layer_boundaries(profile: OpticalProfile, n_layers: int) -> np.ndarray:
+    """Indices into `profile.altitudes_m` of the layer boundaries, ground (0) to top.
+
+    Half the boundaries split the extinction column (summed over wavelengths) into equal parts,
+    the other half are equally spaced in altitude, so that layers follow both the dense air
+    and aerosol near the ground and the ozone layer higher up."""
+    z = profile.altitudes_m
+    extinction = (profile.density.T @ profile.extinction_per_density).sum(axis=1)
+    column = np.concatenate([[0.0], np.cumsum(0.5 * (extinction[1:] + extinction[:-1])
+                                              * np.diff(z))])
+    n_tau = n_layers // 2
+    by_tau = np.searchsorted(column, np.linspace(0.0, column[-1], n_tau + 1)[1:-1])
+    by_z = np.rint(np.linspace(0, z.size - 1, n_layers - n_tau + 1)).astype(int)
+    levels = np.unique(np.concatenate([by_tau, by_z]))
+    if levels.size < 2:
+        raise InputError("the profile has too few altitude levels for plane-parallel layers",
+                         key="n_layers", value=n_layers)
+    return levels
+
+
+def plane_parallel_layers(profile: OpticalProfile, n_layers: int = 60,
+                          n_moments: int = 128) -> PlaneParallelLayers:
+    """The profile as homogeneous plane-parallel layers (module docstring for the formulas).
+
+    Parameters
+    ----------
+    profile : OpticalProfile
+        The atmosphere; only its vertical structure is used (no curvature).
+    n_layers : int
+        About how many layers (boundaries that coincide are merged). [-]
+    n_moments : int
+        Legendre moments kept per layer. [-]
+    """
+    levels = _layer_boundaries(profile, n_layers)
+    z = profile.altitudes_m
+    wl = profile.wavelengths_nm
+    # Column of each constituent in each layer, trapezoid on the profile's levels.
+    cell = 0.5 * (profile.density[:, 1:] + profile.density[:, :-1]) * np.diff(z)  # (n_c, n_z-1)
+    cumulative = np.concatenate([np.zeros((cell.shape[0], 1)), np.cumsum(cell, axis=1)], axis=1)
+    column = np.diff(cumulative[:, levels], axis=1)[:, ::-1]  # (n_c, n_layers), top first
+    extinction = np.einsum("ck,cw->kcw", column, profile.extinction_per_density)
+    scattering = np.einsum("ck,cw->kcw", column, profile.scattering_per_density)
+    dtau = extinction.sum(axis=1)  # (n_layers, n_wl)
+    if np.any(dtau <= 0.0):
+        raise InputError("plane_parallel_layers: some layers have no extinction (DISORT needs "
+                         "every layer's optical thickness > 0)", key="n_layers",
+                         value=n_layers, allowed="layers that all contain matter")
+    scattering_total = scattering.sum(axis=1)
+    omega = np.minimum(scattering_total / dtau, MAX_SINGLE_SCATTERING_ALBEDO)
+
+    moments = np.zeros((dtau.shape[0], n_moments, wl.size))
+    for c, phase in enumerate(profile.phases):
+        if phase is None:
+            continue
+        moments += scattering[:, c, None, :] * legendre_moments(phase, wl, n_moments)[None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        moments = np.where(scattering_total[:, None, :] > 0.0,
+                           moments / scattering_total[:, None, :], 0.0)
+    moments[:, 0, :] = 1.0
+    return PlaneParallelLayers(altitudes_m=z[levels][::-1], optical_depth=np.cumsum(dtau, axis=0),
+                               single_scattering_albedo=omega, moments=moments)
+
+
+def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
+                        relative_azimuth_rad: ArrayLike, max_view_zenith_rad: float = 0.5 * np.pi,
+                        n_streams: int = 32, layers: PlaneParallelLayers | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """Diffuse sky radiance at the ground of the plane-parallel twin of `profile`, by
+    PythonicDISORT, along DISORT's own downward quadrature directions.
+
+    PythonicDISORT gives intensities at arbitrary polar angles only by polynomial
+    interpolation between its Gauss nodes, which is poor towards the zenith (an extrapolation
+    beyond the last node: 2 % at mu = 1 for the Earth atmosphere, 32 against 64 streams), so
+    the radiance is returned where it is computed: at the nodes, and exactly in azimuth
+    (the Fourier sum). The direct beam is excluded, as in the solvers. Delta-M scaling with
+    the moment `n_streams` and the Nakajima-Tanaka corrections at the nodes handle the part of
+    a phase function beyond the streams.
+
+    PythonicDISORT's angles describe the direction light travels: the radiance seen along
+    (zenith theta, azimuth phi) travels along mu = -cos theta, azimuth phi + pi, and the beam
+    along -mu0, azimuth phi0 + pi; with phi0 = 0 the relative azimuth carries over unchanged.
+
+    Parameters
+    ----------
+    profile : OpticalProfile
+        The atmosphere (`plane_parallel_layers`); its ground albedo is taken as Lambertian.
+    sun_zenith_rad : float
+        Sun zenith angle, in [0, pi/2). [rad]
+    relative_azimuth_rad : array_like, shape (n_az,)
+        Azimuth of the line of sight minus the sun's; 0 looks towards the sun. [rad]
+    max_view_zenith_rad : float
+        Keep the nodes up to this view zenith angle. [rad]
+    n_streams : int
+        DISORT's NQuad (even): n_streams / 2 downward directions. [-]
+    layers : PlaneParallelLayers, optional
+        Layers made before (default: `plane_parallel_layers(profile)`).
+
+    Returns
+    -------
+    view_zenith_rad : ndarray, shape (n_view,)
+        Zenith angles of the lines of sight, increasing. [rad]
+    radiance : ndarray, shape (n_view, n_az, n_wl)
+        Diffuse spectral radiance. [W m^-2 sr^-1 nm^-1]
+    """
+    try:
+        from PythonicDISORT import pydisort
+    except ImportError as error:  # pragma: no cover - depends on the environment
+        raise ImportError("skyscatter.validate.disort needs PythonicDISORT: "
+                          "pip install PythonicDISORT") from error
+    if not 0.0 <= sun_zenith_rad < 0.5 * np.pi:
+        raise InputError(f"disort_sky_radiance: sun_zenith_rad = {sun_zenith_rad} must lie in "
+                         "[0, pi/2)", key="sun_zenith_rad", value=sun_zenith_rad,
+                         allowed="[0, pi/2)")
+    if layers is None:
+        layers = plane_parallel_layers(profile, n_moments=max(128, 2 * n_streams))
+    if layers.moments.shape[1] <= n_streams:
+        raise InputError(f"disort_sky_radiance: {n_streams} streams need more than "
+                         f"{n_streams} Legendre moments; the layers have "
+                         f"{layers.moments.shape[1]}", key="n_streams", value=n_streams,
+                         allowed=f"< {layers.moments.shape[1]}")
+    phi = np.mod(np.atleast_1d(np.asarray(relative_azimuth_rad, dtype=np.float64)), 2.0 * np.pi)
+    mu0 = float(np.cos(sun_zenith_rad))
+    half = n_streams // 2
+    radiance = []
+    for w in range(profile.n_wavelengths):
+        moments = layers.moments[:, :, w]
+        tau = layers.optical_depth[:, w]
+        with warnings.catch_warnings():
+            # Pure-air layers have omega = MAX_SINGLE_SCATTERING_ALBEDO by design.
+            warnings.filterwarnings("ignore", message="Some delta-scaled single-scattering")
+            mu, _, _, _, u = pydisort(
+                tau, layers.single_scattering_albedo[:, w], n_streams, moments,
+                mu0, float(profile.toa_irradiance[w]), 0.0,
+                f_arr=np.clip(moments[:, n_streams], 0.0, None), NT_cor=True,
+                BDRF_Fourier_modes=[float(profile.ground_albedo[w])])
+        # Rows half: hold the downward nodes mu = -mu_i with mu_i increasing: reversed, the
+        # view zenith angle increases.
+        radiance.append(np.reshape(u(tau[-1], phi), (n_streams, phi.size))[half:][::-1])
+    view_zenith = np.arccos(-mu[half:][::-1])
+    keep = view_zenith <= max_view_zenith_rad
+    return view_zenith[keep], np.stack(radiance, axis=-1)[keep]
+
+
+def plane_parallel_single_scattering(layers: PlaneParallelLayers, toa_irradiance: ArrayLike,
+                                     sun_zenith_rad: float, view_zenith_rad: ArrayLike,
+                                     relative_azimuth_rad: ArrayLike) -> np.ndarray:
+    """Single scattering at the ground of plane-parallel layers, in closed form, no ground.
+
+    Radiance seen along mu = cos(view zenith) at the bottom (optical depth T) of layers k
+    between optical depths t_k-1 < t_k, with mu0 = cos(sun zenith) and a = 1/mu0 - 1/mu:
+
+        L = E0 sum_k omega_k p_k(nu) (1/mu) int_{t_k-1}^{t_k} exp(-t/mu0 - (T - t)/mu) dt
+          = E0 sum_k omega_k p_k(nu) exp(-t_k-1/mu0 - (T - t_k-1)/mu) (1 - exp(-a dt_k)) / (a mu)
+
+    (dt_k at a = 0), p_k(nu) = sum_l (2l + 1) chi_l,k P_l(nu) / (4 pi) from the layers' moments:
+    the textbook single-scattering solution of the plane-parallel transfer equation (e.g.
+    Thomas & Stamnes 1999, Radiative Transfer in the Atmosphere and Ocean). With
+    `disort_sky_radiance` it splits DISORT's radiance into single and multiple scattering, and
+    next to a spherical single-scattering solver it measures the effect of the curvature alone.
+
+    Parameters
+    ----------
+    layers : PlaneParallelLayers
+        From `plane_parallel_layers`.
+    toa_irradiance : array_like, shape (n_wl,)
+        Irradiance normal to the beam at the top. [W m^-2 nm^-1]
+    sun_zenith_rad : float
+        Sun zenith angle, in [0, pi/2). [rad]
+    view_zenith_rad : array_like, shape (n_view,)
+        Zenith angles of the lines of sight, in [0, pi/2). [rad]
+    relative_azimuth_rad : array_like, shape (n_az,)
+        Azimuth of the line of sight minus the sun's. [rad]
+
+    Returns
+    -------
+    ndarray, shape (n_view, n_az, n_wl)
+        Singly scattered spectral radiance. [W m^-2 sr^-1 nm^-1]
+    """
+    mu0 = float(np.cos(sun_zenith_rad))
+    theta = np.atleast_1d(np.asarray(view_zenith_rad, dtype=np.float64))
+    phi = np.atleast_1d(np.asarray(relative_azimuth_rad, dtype=np.float64))
+    mu = np.cos(theta)[:, None, None]  # (n_view, 1, 1)
+    nu = (mu0 * np.cos(theta)[:, None]
+          + np.sin(sun_zenith_rad) * np.sin(theta)[:, None] * np.cos(phi)[None, :])
+    n_moments = layers.moments.shape[1]
+    basis = legendre.legvander(nu, n_moments - 1) * (2 * np.arange(n_moments) + 1) / (4 * np.pi)
+    bottom = layers.optical_depth  # (n_layers, n_wl)
+    top = np.concatenate([np.zeros((1, bottom.shape[1])), bottom[:-1]])
+    total = bottom[-1]
+    a = 1.0 / mu0 - 1.0 / mu  # (n_view, 1, 1)
+    radiance = np.zeros(nu.shape + (bottom.shape[1],))
+    for k in range(bottom.shape[0]):
+        thickness = bottom[k] - top[k]  # (n_wl,)
+        entry = np.exp(-top[k] / mu0 - (total - top[k]) / mu)  # (n_view, 1, n_wl)
+        small = np.abs(a * thickness) < 1e-8
+        safe = np.where(small, 1.0, a)
+        path = np.where(small, thickness, -np.expm1(-a * thickness) / safe)
+        phase = np.einsum("val,lw->vaw", basis, layers.moments[k])
+        radiance += layers.single_scattering_albedo[k] * phase * entry * path / mu
+    return radiance * np.asarray(toa_irradiance, dtype=np.float64)
+
+
+class SkyRadianceSolver(Protocol):
+    """Anything that answers `sky_radiance` (the solvers of `transport`)."""
+
+    def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
+                     sun_direction: ArrayLike) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class DisortComparison:
+    """A solver's ground-level sky radiance next to the plane-parallel DISORT reference.
+
+    sun_zenith_rad (n_sun,), view_zenith_rad (n_view,) (DISORT's nodes), relative_azimuth_rad
+    (n_az,) [rad]; ours and reference (n_sun, n_view, n_az, n_wl) [W m^-2 sr^-1 nm^-1].
+    """
+
+    wavelengths_nm: np.ndarray
+    sun_zenith_rad: np.ndarray
+    view_zenith_rad: np.ndarray
+    relative_azimuth_rad: np.ndarray
+    ours: np.ndarray
+    reference: np.ndarray
+
+    @property
+    def relative_difference(self) -> np.ndarray:
+        """ours / reference - 1, (n_sun, n_view, n_az, n_wl). [-]"""
+        return self.ours / self.reference - 1.0
+
+
+def compare_with_disort(solver: SkyRadianceSolver, profile: OpticalProfile,
+                        sun_zenith_rad: ArrayLike, relative_azimuth_rad: ArrayLike,
+                        max_view_zenith_rad: float = np.radians(70.0), n_streams: int = 32,
+                        layers: PlaneParallelLayers | None = None) -> DisortComparison:
+    """Sky radiance seen from the ground by `solver` and by `disort_sky_radiance` for the same
+    profile, on DISORT's view zenith nodes up to `max_view_zenith_rad` x the relative azimuths
+    [rad] x the sun zenith angles [rad]. The observer stands at the north pole, where the local
+    east-north-up frame is the world frame; the sun is at azimuth 0."""
+    sun_zenith = np.atleast_1d(np.asarray(sun_zenith_rad, dtype=np.float64))
+    azimuth = np.atleast_1d(np.asarray(relative_azimuth_rad, dtype=np.float64))
+    if layers is None:
+        layers = plane_parallel_layers(profile, n_moments=max(128, 2 * n_streams))
+    position = np.array([0.0, 0.0, profile.bottom_radius_m])
+    ours, reference = [], []
+    for theta_s in sun_zenith:
+        view_zenith, radiance = disort_sky_radiance(profile, float(theta_s), azimuth,
+                                                    max_view_zenith_rad, n_streams, layers)
+        zenith, phi = np.meshgrid(view_zenith, azimuth, indexing="ij")
+        sun = local_frame_directions(theta_s, 0.0)
+        ours.append(solver.sky_radiance(position, local_frame_directions(zenith, phi), sun))
+        reference.append(radiance)
+    return DisortComparison(profile.wavelengths_nm, sun_zenith, view_zenith, azimuth,
+                            np.stack(ours), np.stack(reference))
