@@ -106,19 +106,25 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     directions, valid = camera.directions()
     world_directions = viewpoint.direction_to_world(directions)
     world_sun = viewpoint.direction_to_world(sun_dir)
-    spectral = np.zeros(directions.shape[:2] + (profile.n_wavelengths,))
-    rays = np.ascontiguousarray(world_directions[valid])
+    every_pixel = bool(valid.all())  # perspective and panorama: no masking, no copies
+    rays = (world_directions.reshape(-1, 3) if every_pixel
+            else np.ascontiguousarray(world_directions[valid]))
     radiance = np.empty((rays.shape[0], profile.n_wavelengths))
-    sky_rays = np.ones(rays.shape[0], dtype=bool)
     if ground is not None and (ground.albedo_map is not None or ground.terrain is not None):
         surface, hit = surface_radiance(solver, viewpoint.position_m, rays, world_sun, ground)
-        radiance[hit] = surface
-        sky_rays = ~hit
+        hits, misses = np.flatnonzero(hit), np.flatnonzero(~hit)
+        radiance[hits] = surface
         if progress is not None:
-            progress(int(hit.sum()))
-    radiance[sky_rays] = solver.sky_radiance(viewpoint.position_m, rays[sky_rays], world_sun,
-                                             progress)
-    spectral[valid] = radiance
+            progress(hits.size)
+        radiance[misses] = solver.sky_radiance(viewpoint.position_m, rays[misses], world_sun,
+                                               progress)
+    else:
+        radiance[:] = solver.sky_radiance(viewpoint.position_m, rays, world_sun, progress)
+    if every_pixel:
+        spectral = radiance.reshape(directions.shape[:2] + (profile.n_wavelengths,))
+    else:
+        spectral = np.zeros(directions.shape[:2] + (profile.n_wavelengths,))
+        spectral[valid] = radiance
     sun_transmittance = solver.transmittance(viewpoint.position_m, world_sun)
     if ground is not None and ground.terrain is not None and ground.terrain.shadowed(
             viewpoint.position_m, world_sun)[0]:

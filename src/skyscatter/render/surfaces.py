@@ -5,10 +5,10 @@ A ray that meets a surface at p, with normal n and spectral albedo a, carries
 
     L = L_in(x, p) + T(x, p) a / pi (E_sun(p, n) [not in the terrain's shadow] + E_sky(p, n))
 
-with L_in and T the solver's `aerial_perspective` (the light the air between the observer and
+with L_in and T the solver's aerial perspective (the light the air between the observer and
 p scatters towards the observer, and the transmittance), E_sun the direct sunlight on a surface
-facing n and E_sky the sky light it sees (`ground_irradiance`, Bruneton 2017
-`GetSunAndSkyIrradiance` and the demo's ground shading). Light reflected by the ground enters
+facing n and E_sky the sky light it sees (Bruneton 2017 `GetSunAndSkyIrradiance` and the demo's
+ground shading), all in `LutSolver.surface_radiance`. Light reflected by the ground enters
 the tables' higher orders with the atmosphere's single albedo, not the map's (an
 approximation of the same kind as Bruneton's; the direct reflection uses the map exactly).
 """
@@ -53,7 +53,7 @@ def surface_radiance(solver, position: np.ndarray, directions: np.ndarray,
                      ) -> tuple[np.ndarray, np.ndarray]:
     """(radiance (n_hit, n_wl) [W m^-2 sr^-1 nm^-1], hit (n,) bool) of the rays from
     `position` along unit `directions` (n, 3) that meet the ground or the terrain."""
-    if not hasattr(solver, "aerial_perspective") or getattr(solver, "name", "") != "lut":
+    if not hasattr(solver, "surface_radiance"):
         raise InputError("an albedo map or terrain needs the table solver (--solver lut)",
                          key="solver", value=getattr(solver, "name", solver), allowed="lut")
     profile = solver.profile
@@ -70,8 +70,5 @@ def surface_radiance(solver, position: np.ndarray, directions: np.ndarray,
     if ground.albedo_map is not None:
         albedo = ground.albedo_map.spectral(points, profile.wavelengths_nm)
     else:
-        albedo = np.broadcast_to(profile.ground_albedo, (points.shape[0], profile.n_wavelengths))
-    inscattered, transmittance = solver.aerial_perspective(origin, points, sun_direction)
-    direct, diffuse = solver.ground_irradiance(points, sun_direction, normals)
-    reflected = albedo / np.pi * (direct * lit[:, None] + diffuse)
-    return inscattered + transmittance * reflected, hit
+        albedo = profile.ground_albedo
+    return solver.surface_radiance(origin, points, normals, albedo, sun_direction, lit), hit

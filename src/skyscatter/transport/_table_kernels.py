@@ -779,18 +779,69 @@ def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_rad
                 out[i, w] = value[w]
 
 
+@njit(cache=True)
+def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radius, mu_s_min,
+                  scattering, shape, phase_table, transmittance, weights, pair_weights,
+                  pair_values, at_point, scratch, inscatter_out, transmittance_out):
+    """Light scattered towards the observer o between o and the point p, into inscatter_out
+    (n_wl,) [W m^-2 sr^-1 nm^-1], and the transmittance of that segment into
+    transmittance_out (n_wl,): S(x, v) - T(x, p) S(p, v) with both lookups in the half of the
+    mu axis of the ray at x (Bruneton 2017, `GetSkyRadianceToPoint`, without light shafts).
+    Observers in space start at the top boundary; the part of a segment outside the
+    atmosphere, or beyond the ground, adds nothing. The other arrays are scratch."""
+    n_r, n_mu, n_mu_s, n_nu = shape
+    n_wl = inscatter_out.size
+    for w in range(n_wl):
+        inscatter_out[w] = 0.0
+        transmittance_out[w] = 1.0
+    dx, dy, dz = px - ox, py - oy, pz - oz
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if not d > 0.0:
+        return
+    dx, dy, dz = dx / d, dy / d, dz / d
+    x, y, z, travelled, inside = _enter_atmosphere(ox, oy, oz, dx, dy, dz, top_radius)
+    d -= travelled
+    if not inside or d <= 0.0:
+        return
+    r = math.sqrt(x * x + y * y + z * z)
+    mu = (x * dx + y * dy + z * dz) / r
+    mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
+    nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
+    r = min(max(r, bottom_radius), top_radius)
+    hits_ground = ray_intersects_ground(r, mu, bottom_radius)
+    if hits_ground:
+        d = min(d, distance_to_bottom_boundary(r, mu, bottom_radius))
+    else:
+        d = min(d, distance_to_top_boundary(r, mu, top_radius))
+    r_p = math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0))
+    mu_p = min(max((r * mu + d) / r_p, -1.0), 1.0)
+    mu_s_p = min(max((r * mu_s + d * nu) / r_p, -1.0), 1.0)
+    r_p = min(max(r_p, bottom_radius), top_radius)
+    phase_values(phase_table, nu, weights)
+    at_point[:] = 0.0
+    i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
+        r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu, n_mu_s,
+        n_nu)
+    scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
+                      i_nu, a_nu, pair_weights, pair_values, inscatter_out)
+    i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
+        r_p, mu_p, mu_s_p, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
+        n_mu_s, n_nu)
+    scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
+                      i_nu, a_nu, pair_weights, pair_values, at_point)
+    transmittance_along(r, mu, d, hits_ground, bottom_radius, top_radius, transmittance,
+                        transmittance_out, scratch)
+    for w in range(n_wl):
+        inscatter_out[w] = max(inscatter_out[w] - transmittance_out[w] * at_point[w], 0.0)
+
+
 @njit(parallel=True, cache=True)
 def aerial_perspective_points(origins, points, sun_direction, bottom_radius, top_radius,
                               mu_s_min, scattering, shape, phase_table, transmittance,
                               inscatter_out, transmittance_out):
-    """Light scattered towards the observer between each origin ((1, 3) or (n, 3)) and each
-    point (n, 3), into inscatter_out (n, n_wl) [W m^-2 sr^-1 nm^-1], and the transmittance of
-    that segment into transmittance_out (n, n_wl): S(x, v) - T(x, p) S(p, v) with both lookups
-    in the half of the mu axis of the ray at x (Bruneton 2017, `GetSkyRadianceToPoint`, without
-    light shafts). Observers in space start at the top boundary; the part of a segment outside
-    the atmosphere, or beyond the ground, adds nothing."""
+    """`_aerial_point` from each origin ((1, 3) or (n, 3)) to each point (n, 3), into
+    inscatter_out and transmittance_out (n, n_wl)."""
     n_points = points.shape[0]
-    n_r, n_mu, n_mu_s, n_nu = shape
     n_wl = inscatter_out.shape[1]
     n_t = phase_table.shape[0] + 1
     single_origin = origins.shape[0] == 1
@@ -799,60 +850,53 @@ def aerial_perspective_points(origins, points, sun_direction, bottom_radius, top
         weights = np.ones(n_t * n_wl)
         pair_weights = np.empty(2 * n_t * n_wl)
         pair_values = np.empty(2 * n_t * n_wl)
-        at_observer = np.empty(n_wl)
         at_point = np.empty(n_wl)
-        t_view = np.empty(n_wl)
         scratch = np.empty(n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
-            for w in range(n_wl):
-                inscatter_out[i, w] = 0.0
-                transmittance_out[i, w] = 1.0
             o = 0 if single_origin else i
-            dx = points[i, 0] - origins[o, 0]
-            dy = points[i, 1] - origins[o, 1]
-            dz = points[i, 2] - origins[o, 2]
-            d = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if not d > 0.0:
-                continue
-            dx, dy, dz = dx / d, dy / d, dz / d
-            x, y, z, travelled, inside = _enter_atmosphere(origins[o, 0], origins[o, 1],
-                                                           origins[o, 2], dx, dy, dz,
-                                                           top_radius)
-            d -= travelled
-            if not inside or d <= 0.0:
-                continue
-            r = math.sqrt(x * x + y * y + z * z)
-            mu = (x * dx + y * dy + z * dz) / r
-            mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
-            nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
-            r = min(max(r, bottom_radius), top_radius)
-            hits_ground = ray_intersects_ground(r, mu, bottom_radius)
-            if hits_ground:
-                d = min(d, distance_to_bottom_boundary(r, mu, bottom_radius))
-            else:
-                d = min(d, distance_to_top_boundary(r, mu, top_radius))
-            r_p = math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0))
-            mu_p = min(max((r * mu + d) / r_p, -1.0), 1.0)
-            mu_s_p = min(max((r * mu_s + d * nu) / r_p, -1.0), 1.0)
-            r_p = min(max(r_p, bottom_radius), top_radius)
-            phase_values(phase_table, nu, weights)
-            at_observer[:] = 0.0
-            at_point[:] = 0.0
-            i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
-                r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
-                n_mu_s, n_nu)
-            scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s,
-                              a_s, i_nu, a_nu, pair_weights, pair_values, at_observer)
-            i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
-                r_p, mu_p, mu_s_p, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r,
-                n_mu, n_mu_s, n_nu)
-            scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s,
-                              a_s, i_nu, a_nu, pair_weights, pair_values, at_point)
-            transmittance_along(r, mu, d, hits_ground, bottom_radius, top_radius, transmittance,
-                                t_view, scratch)
+            _aerial_point(origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0],
+                          points[i, 1], points[i, 2], sun_direction, bottom_radius, top_radius,
+                          mu_s_min, scattering, shape, phase_table, transmittance, weights,
+                          pair_weights, pair_values, at_point, scratch, inscatter_out[i],
+                          transmittance_out[i])
+
+
+@njit(parallel=True, cache=True)
+def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction, bottom_radius,
+                            top_radius, mu_s_min, scattering, shape, phase_table, transmittance,
+                            irradiance, sun_irradiance, sun_angular_radius, out):
+    """Radiance (n, n_wl) reaching `origin` (3,) from Lambertian surfaces at `points` (n, 3)
+    facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the sun
+    where `lit` (n,) (not in a terrain shadow):
+    L_in + T albedo / pi (E_sun [lit] + E_sky), `_aerial_point` and `_surface_irradiance`
+    in one pass."""
+    n_points = points.shape[0]
+    n_wl = out.shape[1]
+    n_t = phase_table.shape[0] + 1
+    one_albedo = albedo.shape[0] == 1
+    n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
+    for block in prange(n_blocks):
+        weights = np.ones(n_t * n_wl)
+        pair_weights = np.empty(2 * n_t * n_wl)
+        pair_values = np.empty(2 * n_t * n_wl)
+        at_point = np.empty(n_wl)
+        scratch = np.empty(n_wl)
+        t_view = np.empty(n_wl)
+        direct = np.empty(n_wl)
+        diffuse = np.empty(n_wl)
+        for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
+            _aerial_point(origin[0], origin[1], origin[2], points[i, 0], points[i, 1],
+                          points[i, 2], sun_direction, bottom_radius, top_radius, mu_s_min,
+                          scattering, shape, phase_table, transmittance, weights, pair_weights,
+                          pair_values, at_point, scratch, out[i], t_view)
+            _surface_irradiance(points[i], normals[i], sun_direction, bottom_radius,
+                                top_radius, transmittance, irradiance, sun_irradiance,
+                                sun_angular_radius, direct, diffuse)
+            a = 0 if one_albedo else i
+            sun = 1.0 if lit[i] else 0.0
             for w in range(n_wl):
-                transmittance_out[i, w] = t_view[w]
-                inscatter_out[i, w] = max(at_observer[w] - t_view[w] * at_point[w], 0.0)
+                out[i, w] += (t_view[w] * albedo[a, w] / math.pi
+                              * (sun * direct[w] + diffuse[w]))
 
 
 @njit(cache=True)
@@ -910,34 +954,45 @@ def transmittance_rays(origins, directions, distances, bottom_radius, top_radius
     return out
 
 
+@njit(cache=True)
+def _surface_irradiance(position, normal, sun_direction, bottom_radius, top_radius,
+                        transmittance, irradiance, sun_irradiance, sun_angular_radius, direct,
+                        diffuse):
+    """(direct, diffuse) irradiance (n_wl,) each [W m^-2 nm^-1] on a surface at `position`
+    facing unit `normal`: E_sun T_sun V max(n . s, 0), and the indirect-irradiance table times
+    (1 + n . up) / 2, the part of the sky a tilted surface sees (Bruneton 2017,
+    `GetSunAndSkyIrradiance`)."""
+    x, y, z = position[0], position[1], position[2]
+    r = math.sqrt(x * x + y * y + z * z)
+    mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
+    facing_up = (x * normal[0] + y * normal[1] + z * normal[2]) / r
+    facing_sun = (normal[0] * sun_direction[0] + normal[1] * sun_direction[1]
+                  + normal[2] * sun_direction[2])
+    r = min(max(r, bottom_radius), top_radius)
+    irradiance_lookup(r, mu_s, bottom_radius, top_radius, irradiance, diffuse)
+    sky_view = 0.5 * (1.0 + facing_up)
+    for w in range(diffuse.size):
+        diffuse[w] *= sky_view
+        direct[w] = 0.0
+    visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
+    if visible > 0.0 and facing_sun > 0.0:
+        transmittance_to_top(r, max(mu_s, horizon_cos_zenith(r, bottom_radius)),
+                             bottom_radius, top_radius, transmittance, direct)
+        for w in range(direct.size):
+            direct[w] *= sun_irradiance[w] * facing_sun * visible
+
+
 @njit(parallel=True, cache=True)
 def ground_irradiance_points(positions, normals, sun_direction, bottom_radius, top_radius,
                              transmittance, irradiance, sun_irradiance, sun_angular_radius):
-    """(direct, diffuse) irradiance on surfaces at `positions` (n, 3) facing unit `normals`
-    (n, 3), each (n, n_wl) [W m^-2 nm^-1]: E_sun T_sun V max(n . s, 0), and the
-    indirect-irradiance table times (1 + n . up) / 2, the part of the sky a tilted surface sees
-    (Bruneton 2017, `GetSunAndSkyIrradiance`)."""
+    """`_surface_irradiance` at `positions` (n, 3) facing unit `normals` (n, 3): (direct,
+    diffuse), each (n, n_wl) [W m^-2 nm^-1]."""
     n = positions.shape[0]
     n_wl = transmittance.shape[2]
     direct = np.zeros((n, n_wl))
     diffuse = np.zeros((n, n_wl))
     for i in prange(n):
-        x, y, z = positions[i, 0], positions[i, 1], positions[i, 2]
-        r = math.sqrt(x * x + y * y + z * z)
-        mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
-        facing_up = (x * normals[i, 0] + y * normals[i, 1] + z * normals[i, 2]) / r
-        facing_sun = (normals[i, 0] * sun_direction[0] + normals[i, 1] * sun_direction[1]
-                      + normals[i, 2] * sun_direction[2])
-        r = min(max(r, bottom_radius), top_radius)
-        out = np.empty(n_wl)
-        irradiance_lookup(r, mu_s, bottom_radius, top_radius, irradiance, out)
-        sky_view = 0.5 * (1.0 + facing_up)
-        for w in range(n_wl):
-            diffuse[i, w] = out[w] * sky_view
-        visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
-        if visible > 0.0 and facing_sun > 0.0:
-            transmittance_to_top(r, max(mu_s, horizon_cos_zenith(r, bottom_radius)),
-                                 bottom_radius, top_radius, transmittance, out)
-            for w in range(n_wl):
-                direct[i, w] = sun_irradiance[w] * out[w] * facing_sun * visible
+        _surface_irradiance(positions[i], normals[i], sun_direction, bottom_radius, top_radius,
+                            transmittance, irradiance, sun_irradiance, sun_angular_radius,
+                            direct[i], diffuse[i])
     return direct, diffuse

@@ -126,6 +126,31 @@ class LutSolver:
         return (inscattered.reshape(shape + (p.n_wavelengths,)),
                 transmittance.reshape(shape + (p.n_wavelengths,)))
 
+    def surface_radiance(self, position: ArrayLike, points: ArrayLike, normals: ArrayLike,
+                         albedo: ArrayLike, sun_direction: ArrayLike,
+                         lit: ArrayLike | None = None) -> np.ndarray:
+        """Radiance [W m^-2 sr^-1 nm^-1] (n, n_wl) that reaches the observer at `position` (3,)
+        from Lambertian surfaces at `points` (n, 3) facing unit `normals` (n, 3), with spectral
+        `albedo` ((n, n_wl) or (n_wl,)), in sunlight where `lit` (n,) (default everywhere):
+        aerial perspective plus the reflected sun and sky light seen through it,
+        L_in + T albedo / pi (E_sun + E_sky) (`aerial_perspective`, `ground_irradiance`; one
+        pass over the points)."""
+        p, t = self.profile, self.tables
+        targets = _writable(np.asarray(points, dtype=np.float64).reshape(-1, 3))
+        n = targets.shape[0]
+        facing = _writable(np.broadcast_to(np.asarray(normals, dtype=np.float64), (n, 3)))
+        reflectance = _writable(np.asarray(albedo, dtype=np.float64).reshape(
+            -1, p.n_wavelengths))
+        sunlit = (np.ones(n, dtype=np.bool_) if lit is None
+                  else np.ascontiguousarray(np.broadcast_to(lit, (n,)), dtype=np.bool_))
+        out = np.empty((n, p.n_wavelengths))
+        _table_kernels.surface_radiance_points(
+            _writable(np.asarray(position, dtype=np.float64).reshape(3)), targets, facing,
+            sunlit, reflectance, _sun(sun_direction), t.bottom_radius_m, t.top_radius_m,
+            t.min_cos_sun_zenith, self._scattering, self._shape, t.phase, t.transmittance,
+            t.irradiance, self._sun_irradiance, float(p.sun_angular_radius_rad), out)
+        return out
+
     def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike,
                           normals: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(direct, diffuse) spectral irradiance [W m^-2 nm^-1] on surfaces at `position`
