@@ -41,7 +41,7 @@ FIGURES = {
                                  str(ALBEDO_MAP)],
     "earth_terminator.png": ["earth", "--camera", "orbit", "--distance-km", "800", "--lat",
                              "0", "--sun-elevation", "-4", "--sun-azimuth", "90", "--size",
-                             "270", "--look-at", "0,25", "--fov", "70", "--exposure", "13",
+                             "270", "--look-at", "0,25", "--fov", "70",
                              "--albedo-map", str(ALBEDO_MAP)],
     "tables_sunset_single.png": [*TABLES_SCENE, "--solver", "single"],
     "tables_sunset_lut.png": [*TABLES_SCENE, "--solver", "lut"],

@@ -152,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="orbit camera: longitude below the camera in degrees (default 0)")
     render.add_argument("--look-at", type=_look_at, default=None, metavar="LAT,LON[,ALT_KM]",
                         help="orbit camera: aim at this point instead of the planet's centre "
-                        "(north stays up)")
+                        "(the local vertical stays up, so the horizon is level)")
     render.add_argument("--heading", type=float, default=180.0, metavar="DEG",
                         help="view azimuth from north towards east for perspective and "
                         "panorama centre, degrees (default 180: south)")
@@ -303,7 +303,7 @@ def _orbit_camera(args: argparse.Namespace, altitude_m: float, radius_m: float):
     viewpoint = api.viewpoint_at(altitude_m, radius_m, args.lat, args.lon)
     forward = api.look_at_direction(viewpoint, latitude, longitude, altitude_km * 1000.0,
                                     radius_m)
-    up = (0.0, 1.0, 0.0) if abs(forward[1]) < 0.99 else (0.0, 0.0, 1.0)
+    up = (0.0, 0.0, 1.0) if abs(forward[2]) < 0.99 else (0.0, 1.0, 0.0)  # level horizon
     width = max(1, round(args.size * args.aspect))
     return api.PerspectiveCamera.from_forward_up(width, args.size, fov, forward, up)
 
