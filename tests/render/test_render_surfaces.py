@@ -156,6 +156,7 @@ def test_albedo_map_orientation_north_up_longitude_from_minus_180():
     np.testing.assert_allclose(albedo.rgb_at(lon_west), [0.0, 0.0, 0.0])
 
 
+@pytest.mark.filterwarnings("ignore:Aligning")  # colour-science resamples to its CMF range
 def test_reflectance_from_rgb_has_the_pixel_colour_under_d65():
     # Independent check with colour-science's own spectral integration (sd_to_XYZ, D65,
     # CIE 1931) and sRGB conversion: the colour is reproduced within 0.01 for in-gamut

@@ -79,7 +79,11 @@ _SRGB_ENCODED_LIMIT = 0.04045  # same breakpoint, encoded side
 
 
 def _colour():
-    import colour  # lazy: a ~1 s import that pulls in matplotlib
+    import warnings
+
+    with warnings.catch_warnings():  # we use no plotting: its missing-matplotlib notice is noise
+        warnings.filterwarnings("ignore", message='"Matplotlib" related API features')
+        import colour  # lazy: a ~1 s import
 
     return colour
 
