@@ -85,13 +85,14 @@ def _add_solver_arguments(command: argparse.ArgumentParser, samples_default: int
     command.add_argument("--solver", default="lut",
                          help="lut: precomputed tables with multiple scattering (default; "
                          "computed once per atmosphere and wavelength set, then cached); "
-                         "single: ray-marched single scattering, the independent check")
+                         "single: ray-marched single scattering, the independent check; "
+                         "montecarlo: reference path tracer, all orders, noisy and slow")
     command.add_argument("--orders", type=_positive_int, default=None,
                          help="scattering orders of the tables (default: the config's "
                          "[tables] orders: 8 for the earth preset)")
     command.add_argument("--samples", type=_positive_int, default=samples_default,
-                         help="ray-marching samples per view ray, single solver "
-                         f"(default {samples_default})")
+                         help="single: ray-marching samples per view ray; montecarlo: "
+                         f"paths per view ray and wavelength (default {samples_default})")
     _add_cache_arguments(command)
 
 

@@ -15,6 +15,7 @@ from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.lut_solver import LutSolver
+from skyscatter.transport.monte_carlo import MonteCarloSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver
 from skyscatter.transport.table_store import cached_tables
 from skyscatter.transport.tables import TableResolution
@@ -26,6 +27,8 @@ SOLVERS = {
            "config (4 for Earth), cached on disk",
     "single": "single scattering + one Lambertian ground bounce, ray marched (no tables): the "
               "independent check",
+    "montecarlo": "backward Monte Carlo path tracing, all orders, exact up to noise (slow; "
+                  "n_samples paths per ray and wavelength): the reference",
 }
 
 
@@ -33,13 +36,15 @@ SOLVERS = {
 class SolverOptions:
     """What the solvers may be given; each takes the options that concern it.
 
-    n_samples      ray-marching samples per view ray ("single")
+    n_samples      ray-marching samples per view ray ("single"); paths per view ray and
+                   wavelength ("montecarlo")
     orders         scattering orders of the tables ("lut")
     resolution     table sizes ("lut"; None: Bruneton 2017's)
     cache          where tables are kept between runs ("lut"; None: compute, keep in memory)
     force          recompute the tables even when cached ("lut")
     progress       callable(done, total, stage) during the precomputation ("lut")
     log            callable(message): one line on where the tables came from ("lut")
+    seed           seed of the random numbers ("montecarlo")
     """
 
     n_samples: int = 64
@@ -49,10 +54,11 @@ class SolverOptions:
     force: bool = False
     progress: Callable[[int, int, str], None] | None = None
     log: Callable[[str], None] | None = None
+    seed: int = 0
 
 
 def make_solver(name: str, profile: OpticalProfile, options: SolverOptions | None = None
-                ) -> SingleScatteringSolver | LutSolver:
+                ) -> SingleScatteringSolver | LutSolver | MonteCarloSolver:
     """A solver of `profile` by name (`SOLVERS`)."""
     options = options or SolverOptions()
     if name == "single":
@@ -62,5 +68,7 @@ def make_solver(name: str, profile: OpticalProfile, options: SolverOptions | Non
                                cache=options.cache, force=options.force,
                                progress=options.progress, log=options.log)
         return LutSolver(profile, tables=tables)
+    if name == "montecarlo":
+        return MonteCarloSolver(profile, n_samples=options.n_samples, seed=options.seed)
     raise InputError(f"unknown solver {name!r}; available: {', '.join(SOLVERS)}",
                      key="solver", value=name, allowed=", ".join(SOLVERS))

@@ -1,0 +1,151 @@
+"""Monte Carlo solver against the single-scattering solver, the tables, closed forms and energy
+conservation. Tolerances are 4 standard errors (a false failure about 1 in 16 000 per value)
+plus a stated allowance for the reference's own error."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+from transport_cases import EARTH_RADIUS_M, SMALL, exponential_earth, homogeneous_shell
+
+from skyscatter.transport.geometry import local_frame_directions
+from skyscatter.transport.lut_solver import LutSolver
+from skyscatter.transport.monte_carlo import MonteCarloSolver
+from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
+from skyscatter.transport.solvers import SOLVERS, SolverOptions, make_solver
+
+GROUND = observer_position(0.0, EARTH_RADIUS_M)
+# Zenith, 45°, 80° up, and 95°/120° (the lit ground).
+VIEWS = local_frame_directions(np.radians([0.0, 45.0, 80.0, 95.0, 120.0]),
+                               np.radians([0.0, 90.0, 180.0, 30.0, 200.0]))
+
+
+@pytest.fixture(scope="module")
+def earth_profile():
+    return exponential_earth()
+
+
+@pytest.mark.parametrize("sun_zenith_deg", [30.0, 70.0])
+def test_first_order_matches_the_single_scattering_solver(earth_profile, sun_zenith_deg):
+    # max_orders=1: one air scattering or one Lambertian reflection of direct sun, which is
+    # what SingleScatteringSolver computes. Allowance 3e-4 relative: its sun columns come from
+    # a bilinear table and ours from a 128-interval march (they differ by ~1e-4 measured).
+    sun = local_frame_directions(np.radians(sun_zenith_deg), 0.0)
+    mc = MonteCarloSolver(earth_profile, n_samples=8000, max_orders=1, seed=1)
+    mean, error = mc.sky_radiance_with_error(GROUND, VIEWS, sun)
+    reference = SingleScatteringSolver(earth_profile, n_samples=512).sky_radiance(GROUND, VIEWS,
+                                                                                  sun)
+    assert np.all(np.abs(mean - reference) <= 4.0 * error + 3e-4 * reference)
+    assert np.all(error < 0.1 * mean)  # the test has teeth
+
+
+def test_first_order_in_twilight_matches_the_single_scattering_solver(earth_profile):
+    # Sun 6° below the horizon: only high air is lit (planet shadow in the next-event
+    # estimate) and the ground is dark. Few paths collide there, so many are needed.
+    sun = local_frame_directions(np.radians(96.0), 0.0)
+    views = local_frame_directions(np.radians([0.0, 80.0, 95.0]), 0.0)
+    mc = MonteCarloSolver(earth_profile, n_samples=100_000, max_orders=1, seed=6)
+    mean, error = mc.sky_radiance_with_error(GROUND, views, sun)
+    reference = SingleScatteringSolver(earth_profile, n_samples=512).sky_radiance(GROUND, views,
+                                                                                  sun)
+    assert np.all(np.abs(mean - reference) <= 4.0 * error + 3e-4 * reference)
+    assert np.all(error[:2] < 0.25 * mean[:2]) and np.all(mean[2] == 0.0)
+
+
+@pytest.mark.parametrize("sun_zenith_deg", [0.0, 30.0, 60.0])
+def test_all_orders_match_the_tables_with_twenty_orders(earth_profile, sun_zenith_deg):
+    # Allowance 3.5 %: the SMALL tables differ from Bruneton 2017's sizes by up to 1.3 % on
+    # these rays (measured), and the tables' own quadrature and interpolation error is of the
+    # same order; the Monte Carlo noise is 1-3 % per value at these path counts.
+    sun = local_frame_directions(np.radians(sun_zenith_deg), 0.0)
+    lut = _small_tables(earth_profile)
+    mc = MonteCarloSolver(earth_profile, n_samples=12000, seed=2)
+    mean, error = mc.sky_radiance_with_error(GROUND, VIEWS, sun)
+    reference = lut.sky_radiance(GROUND, VIEWS, sun)
+    assert np.all(np.abs(mean - reference) <= 4.0 * error + 0.035 * reference)
+    single = SingleScatteringSolver(earth_profile).sky_radiance(GROUND, VIEWS, sun)
+    assert np.all(mean[:3] > single[:3] * 1.03)  # multiple scattering is really there
+
+
+_TABLES: dict[int, LutSolver] = {}
+
+
+def _small_tables(profile):
+    if id(profile) not in _TABLES:
+        _TABLES[id(profile)] = LutSolver(profile, resolution=SMALL, orders=20)
+    return _TABLES[id(profile)]
+
+
+def test_zenith_first_order_in_a_homogeneous_shell_is_the_closed_form():
+    # Sun and view vertical: L = E omega beta p H exp(-beta H) (see the single-scattering test).
+    beta, height = 3e-5, 10_000.0
+    profile = homogeneous_shell(beta, thickness_m=height, n_wl=1)
+    mc = MonteCarloSolver(profile, n_samples=40000, max_orders=1)
+    mean, error = mc.sky_radiance_with_error(GROUND, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
+    expected = 1.5 * beta / (4.0 * np.pi) * height * np.exp(-beta * height)
+    assert abs(mean[0] - expected) <= 4.0 * error[0] + 1e-4 * expected
+    assert error[0] < 0.02 * expected
+
+
+def test_a_conservative_shell_conserves_energy():
+    # Albedo-1 isotropic shell (tau = 0.3) over a black ground, sun at the zenith: the flux
+    # reflected to space plus the diffuse and direct fluxes on the ground equal E_sun.
+    # Fluxes: pi x the mean radiance over directions at midpoints in mu^2 (cosine-weighted
+    # quadrature; by symmetry one azimuth). Allowance 3e-3: quadrature near the horizon and
+    # the shell's curvature (measured residual -8e-5 with sigma 7e-4).
+    beta, height, n_mu = 3e-5, 10_000.0, 96
+    profile = homogeneous_shell(beta, thickness_m=height, n_wl=1)
+    mc = MonteCarloSolver(profile, n_samples=1500, seed=3)
+    mu = np.sqrt((np.arange(n_mu) + 0.5) / n_mu)
+    up = local_frame_directions(np.arccos(mu), 0.0)
+    down = local_frame_directions(np.pi - np.arccos(mu), 0.0)
+    sun = np.array([0.0, 0.0, 1.0])
+    top = observer_position(height, EARTH_RADIUS_M)
+    reflected, e_r = mc.sky_radiance_with_error(top, down, sun)
+    transmitted, e_t = mc.sky_radiance_with_error(GROUND, up, sun)
+    direct = np.exp(-beta * height)
+    total = np.pi * (reflected.mean() + transmitted.mean()) / 1.5 + direct
+    sigma = np.pi / 1.5 * np.sqrt(np.sum(e_r**2) + np.sum(e_t**2)) / n_mu
+    assert abs(total - 1.0) <= 4.0 * sigma + 3e-3
+    assert sigma < 2e-3
+
+
+def test_observer_in_space_sees_what_an_observer_at_the_entry_point_sees(earth_profile):
+    # The path starts where the view ray enters; rays that miss the atmosphere see nothing.
+    sun = local_frame_directions(np.radians(40.0), 0.0)
+    space = observer_position(500_000.0, EARTH_RADIUS_M)
+    views = local_frame_directions(np.radians([180.0, 160.0, 100.0]), np.radians([0, 90, 0]))
+    mc = MonteCarloSolver(earth_profile, n_samples=4000, seed=4)
+    mean, error = mc.sky_radiance_with_error(space, views, sun)
+    assert np.all(mean[:2] > 0.0) and np.all(mean[2] == 0.0)  # the last one misses
+    r, top = np.linalg.norm(space), earth_profile.top_radius_m
+    mu = views[:2] @ space / r
+    entry = space + (-r * mu - np.sqrt(r * r * (mu * mu - 1.0) + top * top))[:, None] * views[:2]
+    at_entry, error_entry = mc.sky_radiance_with_error(entry * (1.0 - 1e-12), views[:2], sun)
+    assert np.all(np.abs(mean[:2] - at_entry) <= 4.0 * np.hypot(error[:2], error_entry))
+
+
+def test_results_are_reproducible_for_a_seed_and_any_thread_count(earth_profile):
+    sun = local_frame_directions(np.radians(50.0), 0.0)
+    mc = MonteCarloSolver(earth_profile, n_samples=600, seed=7, batch=100)
+    first = mc.sky_radiance(GROUND, VIEWS, sun)
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        single_thread = mc.sky_radiance(GROUND, VIEWS, sun)
+    finally:
+        numba.set_num_threads(threads)
+    np.testing.assert_array_equal(first, single_thread)
+    other = MonteCarloSolver(earth_profile, n_samples=600, seed=8, batch=100)
+    assert not np.array_equal(first[:3], other.sky_radiance(GROUND, VIEWS, sun)[:3])
+
+
+def test_transmittance_and_the_solver_registry(earth_profile):
+    # Transmittance is ray marched like SingleScatteringSolver's (same kernel).
+    assert "montecarlo" in SOLVERS
+    solver = make_solver("montecarlo", earth_profile, SolverOptions(n_samples=16, seed=5))
+    assert isinstance(solver, MonteCarloSolver) and solver.seed == 5
+    reference = SingleScatteringSolver(earth_profile).transmittance(GROUND, VIEWS)
+    np.testing.assert_allclose(solver.transmittance(GROUND, VIEWS), reference, rtol=1e-12)
+    assert solver.sky_radiance(GROUND, VIEWS[:2], VIEWS[0]).shape == (2, 3)
