@@ -131,6 +131,16 @@ def sun_attenuation(px, py, pz, sun, w, bottom_radius, top_radius, h_step, densi
 
 
 @njit(cache=True)
+def roulette(weight):
+    """Russian roulette: 0 (the path ends) with probability 1 - q, else weight / q, with
+    q = min(RR_WEIGHT_MAX, weight); unbiased."""
+    survive = min(RR_WEIGHT_MAX, weight)
+    if np.random.random() >= survive:
+        return 0.0
+    return weight / survive
+
+
+@njit(cache=True)
 def trace_path(ox, oy, oz, dx, dy, dz, w, sun, max_orders, rr_start, bottom_radius,
                top_radius, h_step, density, extinction, scattering, scatterers, phase, cdf,
                cos_grid, majorant, albedo, sun_angular_radius, n_sun_samples, dens, column):
@@ -187,10 +197,9 @@ def trace_path(ox, oy, oz, dx, dy, dz, w, sun, max_orders, rr_start, bottom_radi
             if order >= max_orders:
                 return result
             if order >= rr_start:
-                survive = min(RR_WEIGHT_MAX, weight)
-                if np.random.random() >= survive:
+                weight = roulette(weight)
+                if weight == 0.0:
                     return result
-                weight /= survive
             # Constituent in proportion to its scattering coefficient, then its phase function.
             pick = np.random.random() * bs
             chosen = n_s - 1
@@ -223,10 +232,9 @@ def trace_path(ox, oy, oz, dx, dy, dz, w, sun, max_orders, rr_start, bottom_radi
         if weight <= 0.0:
             return result
         if order >= rr_start:
-            survive = min(RR_WEIGHT_MAX, weight)
-            if np.random.random() >= survive:
+            weight = roulette(weight)
+            if weight == 0.0:
                 return result
-            weight /= survive
         dx, dy, dz = rotate(nx, ny, nz, math.sqrt(np.random.random()),
                             TWO_PI * np.random.random())
 

@@ -43,8 +43,8 @@ from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
-from skyscatter.transport import _kernels, _monte_carlo_kernels
-from skyscatter.transport.single_scattering import _broadcast_rays
+from skyscatter.transport import _monte_carlo_kernels
+from skyscatter.transport.single_scattering import _broadcast_rays, ray_marched_transmittance
 from skyscatter.transport.tables import sample_phase_functions, scattering_constituents
 
 __all__ = ["MonteCarloSolver"]
@@ -162,10 +162,5 @@ class MonteCarloSolver:
         """Transmittance [-] from `position` along `directions` over `distance_m` [m] (inf: to
         the ground or out of the atmosphere; 0 when the ground blocks the path), ray marched
         (`_kernels.transmittance_rays`, deterministic). Returns (..., n_wl)."""
-        origins, dirs, shape = _broadcast_rays(position, directions)
-        distances = np.broadcast_to(np.asarray(distance_m, dtype=np.float64), shape).ravel()
-        p = self.profile
-        result = _kernels.transmittance_rays(
-            origins, dirs, np.ascontiguousarray(distances), n_samples, p.bottom_radius_m,
-            p.top_radius_m, self._h_step, self._density, self._extinction)
-        return result.reshape(shape + (p.n_wavelengths,))
+        return ray_marched_transmittance(self.profile, position, directions, distance_m,
+                                         n_samples)

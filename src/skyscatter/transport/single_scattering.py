@@ -19,7 +19,7 @@ from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.transport import _kernels
 from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fraction
 
-__all__ = ["SingleScatteringSolver", "observer_position"]
+__all__ = ["SingleScatteringSolver", "observer_position", "ray_marched_transmittance"]
 
 CHUNK_RAYS = 16384  # rays per kernel call: bounds memory (n_c x n_wl doubles per ray)
 
@@ -103,13 +103,8 @@ class SingleScatteringSolver:
                       distance_m: ArrayLike = np.inf, n_samples: int = 256) -> np.ndarray:
         """Transmittance [-] from `position` along `directions` over `distance_m` (inf: to
         the ground or out of the atmosphere; 0 when the ground blocks the path). (..., n_wl)."""
-        origins, dirs, shape = _broadcast_rays(position, directions)
-        distances = np.broadcast_to(np.asarray(distance_m, dtype=np.float64), shape).ravel()
-        p = self.profile
-        result = _kernels.transmittance_rays(
-            origins, dirs, np.ascontiguousarray(distances), n_samples, p.bottom_radius_m,
-            p.top_radius_m, self._h_step, p.density, p.extinction_per_density)
-        return result.reshape(shape + (p.n_wavelengths,))
+        return ray_marched_transmittance(self.profile, position, directions, distance_m,
+                                         n_samples)
 
     def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike,
                           n_zenith: int = 24, n_azimuth: int = 48) -> tuple[np.ndarray, np.ndarray]:
@@ -140,6 +135,22 @@ class SingleScatteringSolver:
         weight = (0.5 * weights * cos_zenith)[:, None, None] * (2.0 * np.pi / n_azimuth)
         diffuse = np.sum(radiance * weight, axis=(0, 1))
         return direct, diffuse
+
+
+def ray_marched_transmittance(profile: OpticalProfile, position: ArrayLike,
+                              directions: ArrayLike, distance_m: ArrayLike = np.inf,
+                              n_samples: int = 256) -> np.ndarray:
+    """Transmittance [-] (..., n_wl) of `profile` from `position` along `directions` over
+    `distance_m` [m] (inf: to the ground or out of the atmosphere; 0 when the ground blocks the
+    path): trapezoid columns with `n_samples` intervals (`_kernels.transmittance_rays`)."""
+    origins, dirs, shape = _broadcast_rays(position, directions)
+    distances = np.broadcast_to(np.asarray(distance_m, dtype=np.float64), shape).ravel()
+    h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
+    result = _kernels.transmittance_rays(
+        origins, dirs, np.ascontiguousarray(distances), n_samples, profile.bottom_radius_m,
+        profile.top_radius_m, h_step, np.ascontiguousarray(profile.density, dtype=np.float64),
+        np.ascontiguousarray(profile.extinction_per_density, dtype=np.float64))
+    return result.reshape(shape + (profile.n_wavelengths,))
 
 
 def _unit(vector: np.ndarray) -> np.ndarray:
