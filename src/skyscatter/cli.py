@@ -277,9 +277,8 @@ def _render(args: argparse.Namespace) -> None:
     else:
         camera = _camera(args)
     ground = _ground(args, radius)
-    directions, valid = camera.directions()
     with _solver_options(args, atmosphere) as options, progress(
-            int(valid.sum()), "rendering", unit="ray") as bar:
+            int(camera.valid_mask().sum()), "rendering", unit="ray") as bar:
         image = api.render(atmosphere, camera, zenith, args.sun_azimuth, altitude,
                            args.wavelengths, args.solver, options, bar.update,
                            orbit_latitude_deg=args.lat if orbit else None,
@@ -341,8 +340,9 @@ def _solver_options(args: argparse.Namespace, atmosphere) -> Iterator:
         def log(message: str) -> None:
             bar.write(f"skyscatter: {message}", file=sys.stderr)
 
-        yield api.solver_options(atmosphere, args.orders, args.samples, args.cache_dir,
-                                 not args.no_cache, getattr(args, "force", False), advance, log)
+        yield api.solver_options(atmosphere, args.orders, getattr(args, "samples", 64),
+                                 args.cache_dir, not args.no_cache, getattr(args, "force", False),
+                                 advance, log)
 
 
 def _camera(args: argparse.Namespace):
@@ -379,7 +379,6 @@ def _precompute(args: argparse.Namespace) -> None:
     from skyscatter import api
     from skyscatter.errors import InputError
     atmosphere = api.load_atmosphere(args.atmosphere)
-    args.samples = 1  # not used by the tables
     if args.wavelengths is not None:
         parse = _float_list if args.monochromatic else _wavelengths
         try:

@@ -210,3 +210,9 @@ def test_perspective_direction_behind_camera_is_nan():
 def test_bad_camera_parameters_raise_input_error(make, match):
     with pytest.raises(InputError, match=match):
         make()
+
+
+@pytest.mark.parametrize("camera", _all_cameras(), ids=type)
+def test_valid_mask_is_the_mask_of_directions(camera):
+    _, valid = camera.directions()
+    np.testing.assert_array_equal(camera.valid_mask(), valid)

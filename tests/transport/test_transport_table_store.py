@@ -76,8 +76,3 @@ def test_a_damaged_entry_is_recomputed_and_replaced(cache, damage):
     _, message = _tables(profile, cache)
     assert "using" in message  # the damaged file was replaced by a good one
 
-
-def test_without_a_cache_nothing_is_written(tmp_path):
-    tables = cached_tables(exponential_earth(), SMALL, 1, cache=None)
-    assert tables.orders == 1
-    assert not any(tmp_path.iterdir())

@@ -64,6 +64,8 @@ class Camera(Protocol):
 
     def directions(self) -> tuple[np.ndarray, np.ndarray]: ...
 
+    def valid_mask(self) -> np.ndarray: ...
+
     def pixel_solid_angles(self) -> np.ndarray: ...
 
 
@@ -160,6 +162,10 @@ class FisheyeCamera:
         dirs[..., 2] = np.cos(theta)
         return dirs, rho <= 1.0
 
+    def valid_mask(self) -> np.ndarray:
+        """Pixels inside the circle (h, w), as `directions` returns them, without the rays."""
+        return np.hypot(*self._normalised_offsets()) <= 1.0
+
     def direction_to_pixel(self, dirs: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Continuous (row, column) of directions (..., 3); each result has shape (...).
 
@@ -228,7 +234,11 @@ class EquirectangularCamera:
         dirs[..., 0] = cos_e * np.sin(azimuth)
         dirs[..., 1] = cos_e * np.cos(azimuth)
         dirs[..., 2] = np.sin(elevation)
-        return dirs, np.ones((self.height, self.width), dtype=bool)
+        return dirs, self.valid_mask()
+
+    def valid_mask(self) -> np.ndarray:
+        """Every pixel (h, w)."""
+        return np.ones((self.height, self.width), dtype=bool)
 
     def direction_to_pixel(self, dirs: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Continuous (row, column) of directions (..., 3); each result has shape (...).
@@ -351,7 +361,11 @@ class PerspectiveCamera:
         x, y = self._image_plane()
         rays = forward + x[..., None] * right + y[..., None] * up
         rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
-        return rays, np.ones((self.height, self.width), dtype=bool)
+        return rays, self.valid_mask()
+
+    def valid_mask(self) -> np.ndarray:
+        """Every pixel (h, w)."""
+        return np.ones((self.height, self.width), dtype=bool)
 
     def direction_to_pixel(self, dirs: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Continuous (row, column) of directions (..., 3); NaN for directions behind the camera."""

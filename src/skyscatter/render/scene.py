@@ -110,7 +110,7 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     rays = (world_directions.reshape(-1, 3) if every_pixel
             else np.ascontiguousarray(world_directions[valid]))
     radiance = np.empty((rays.shape[0], profile.n_wavelengths))
-    if ground is not None and (ground.albedo_map is not None or ground.terrain is not None):
+    if ground is not None:
         surface, hit = surface_radiance(solver, viewpoint.position_m, rays, world_sun, ground)
         hits, misses = np.flatnonzero(hit), np.flatnonzero(~hit)
         radiance[hits] = surface

@@ -22,6 +22,7 @@ import numpy as np
 from skyscatter.errors import InputError
 from skyscatter.render.albedo_map import AlbedoMap
 from skyscatter.render.terrain import Heightfield
+from skyscatter.transport.geometry import ground_distances
 
 __all__ = ["Ground", "surface_radiance"]
 
@@ -32,20 +33,6 @@ class Ground:
 
     albedo_map: AlbedoMap | None = None
     terrain: Heightfield | None = None
-
-
-def _sphere_hits(origin: np.ndarray, directions: np.ndarray,
-                 radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """(distance (n,), hit (n,)) of rays from one origin to the sphere of `radius` (first
-    crossing in front of the origin; origins inside the sphere do not hit)."""
-    b = directions @ origin
-    c = origin @ origin - radius * radius
-    discriminant = b * b - c
-    hit = (discriminant >= 0.0) & (b < 0.0) & (c > 0.0)
-    root = np.sqrt(np.maximum(discriminant, 0.0))
-    # -b - root, written without cancellation for rays that graze the sphere
-    distance = np.where(hit, c / np.maximum(-b + root, 1e-300), np.inf)
-    return distance, hit
 
 
 def surface_radiance(solver, position: np.ndarray, directions: np.ndarray,
@@ -63,7 +50,9 @@ def surface_radiance(solver, position: np.ndarray, directions: np.ndarray,
         points, normals = points[hit], normals[hit]
         lit = ~ground.terrain.shadowed(points, sun_direction)
     else:
-        distance, hit = _sphere_hits(origin, directions, profile.bottom_radius_m)
+        distance = ground_distances(origin, np.ascontiguousarray(directions, dtype=np.float64),
+                                    float(profile.bottom_radius_m))
+        hit = np.isfinite(distance)
         points = origin + distance[hit, None] * directions[hit]
         normals = points / np.linalg.norm(points, axis=1, keepdims=True)
         lit = np.ones(points.shape[0], dtype=bool)

@@ -40,6 +40,7 @@ __all__ = [
     "cmf_weights",
     "decode_srgb_transfer",
     "encode_srgb_transfer",
+    "illuminant_spectrum",
     "luminance",
     "rgb_to_xyz",
     "spectral_to_xyz",
@@ -190,6 +191,15 @@ def _lookup(table: dict[str, str], name: str, what: str) -> str:
 @lru_cache(maxsize=32)
 def _illuminant_names() -> dict[str, str]:
     return {name.lower(): name for name in _colour().CCS_ILLUMINANTS[_OBSERVER]}
+
+
+def illuminant_spectrum(name: str, wavelengths_nm: ArrayLike) -> np.ndarray:
+    """Relative spectral power of a CIE illuminant (colour-science `SDS_ILLUMINANTS`, e.g.
+    "D65", "A"; CIE 015:2018) at `wavelengths_nm`, linear between its tabulated values. [-]"""
+    sds = _colour().SDS_ILLUMINANTS
+    sd = sds[_lookup({k.lower(): k for k in sds}, name, "illuminant")]
+    return np.interp(np.asarray(wavelengths_nm, dtype=np.float64),
+                     np.asarray(sd.wavelengths), np.asarray(sd.values))
 
 
 def white_point_xyz(white: str | ArrayLike) -> np.ndarray:

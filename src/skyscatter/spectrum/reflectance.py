@@ -17,7 +17,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skyscatter.spectrum.colour import _colour, spectral_to_xyz, xyz_to_rgb
+from skyscatter.spectrum.colour import illuminant_spectrum, spectral_to_xyz, xyz_to_rgb
 from skyscatter.spectrum.grid import cell_edges, checked_grid
 
 __all__ = ["BAND_EDGES_NM", "reflectance_from_rgb"]
@@ -39,9 +39,7 @@ def _band_fractions(wavelengths_nm: np.ndarray) -> np.ndarray:
 @lru_cache(maxsize=1)
 def _box_colours() -> np.ndarray:
     """A (3, 3): column c = linear sRGB of box_c under D65, white at Y = 1."""
-    d65 = _colour().SDS_ILLUMINANTS["D65"]
-    illuminant = np.interp(_FINE_GRID_NM, np.asarray(d65.wavelengths),
-                           np.asarray(d65.values))
+    illuminant = illuminant_spectrum("D65", _FINE_GRID_NM)
     boxes = _band_fractions(_FINE_GRID_NM)  # (n, 3)
     white_y = spectral_to_xyz(illuminant, _FINE_GRID_NM)[1]
     xyz = spectral_to_xyz((illuminant[:, None] * boxes).T, _FINE_GRID_NM) / white_y  # (3, 3)

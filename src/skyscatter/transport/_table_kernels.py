@@ -163,6 +163,13 @@ def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, 
 
 
 @njit(cache=True)
+def lookup_scratch(n_t, n_wl):
+    """(weights, pair_weights, pair_values) for `scattering_lookup` of n_t tables of n_wl
+    wavelengths: weights 1 (for the tables without a phase function), the others scratch."""
+    return np.ones(n_t * n_wl), np.empty(2 * n_t * n_wl), np.empty(2 * n_t * n_wl)
+
+
+@njit(cache=True)
 def scattering_lookup(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu,
                       a_nu, pair_weights, pair_values, out):
     """out[w] += sum_t weights[t n_wl + w] * table_t(w) interpolated at the corners of
@@ -485,9 +492,7 @@ def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, 
         mu_s = scattering_mu_s_from_u((l + 0.5) / n_mu_s, bottom_radius, top_radius, mu_s_min,
                                       n_mu_s)
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-        weights = np.ones(n_t * n_wl)
-        pair_weights = np.empty(2 * n_t * n_wl)
-        pair_values = np.empty(2 * n_t * n_wl)
+        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
         value = np.empty(n_wl)
         col_a = np.empty(n_c)
         col_b = np.empty(n_c)
@@ -532,9 +537,7 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radi
         r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1), bottom_radius,
                                            top_radius)
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-        weights = np.ones(n_t * n_wl)
-        pair_weights = np.empty(2 * n_t * n_wl)
-        pair_values = np.empty(2 * n_t * n_wl)
+        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
         value = np.empty(n_wl)
         for a in range(n_theta):
             theta = (a + 0.5) * d_theta
@@ -727,9 +730,7 @@ def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_rad
     single_origin = origins.shape[0] == 1
     n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        weights = np.ones(n_t * n_wl)
-        pair_weights = np.empty(2 * n_t * n_wl)
-        pair_values = np.empty(2 * n_t * n_wl)
+        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
         value = np.empty(n_wl)
         t_view = np.empty(n_wl)
         t_sun = np.empty(n_wl)
@@ -847,9 +848,7 @@ def aerial_perspective_points(origins, points, sun_direction, bottom_radius, top
     single_origin = origins.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        weights = np.ones(n_t * n_wl)
-        pair_weights = np.empty(2 * n_t * n_wl)
-        pair_values = np.empty(2 * n_t * n_wl)
+        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
         at_point = np.empty(n_wl)
         scratch = np.empty(n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
@@ -876,9 +875,7 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
     one_albedo = albedo.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        weights = np.ones(n_t * n_wl)
-        pair_weights = np.empty(2 * n_t * n_wl)
-        pair_values = np.empty(2 * n_t * n_wl)
+        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
         at_point = np.empty(n_wl)
         scratch = np.empty(n_wl)
         t_view = np.empty(n_wl)

@@ -13,11 +13,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 __all__ = [
     "atmosphere_segment",
     "distance_to_sphere",
+    "ground_distances",
     "horizon_cos_zenith",
     "local_frame_directions",
     "sun_visible_fraction",
@@ -33,6 +34,23 @@ def distance_to_sphere(r, mu, radius, far):
         return math.nan
     root = math.sqrt(discriminant)
     return -r * mu + root if far else -r * mu - root
+
+
+@njit(parallel=True, cache=True)
+def ground_distances(origin, directions, radius):
+    """Distance [m] (n,) from `origin` (3,) along unit `directions` (n, 3) to the sphere
+    `radius` where the ray meets it from outside (`distance_to_sphere`'s near root), inf where
+    it does not."""
+    r = math.sqrt(origin[0] ** 2 + origin[1] ** 2 + origin[2] ** 2)
+    out = np.full(directions.shape[0], np.inf)
+    for i in prange(directions.shape[0]):
+        mu = (origin[0] * directions[i, 0] + origin[1] * directions[i, 1]
+              + origin[2] * directions[i, 2]) / r
+        if r > radius and mu < 0.0:
+            d = distance_to_sphere(r, mu, radius, False)
+            if d >= 0.0:  # NaN (a miss) fails this too
+                out[i] = d
+    return out
 
 
 @njit(cache=True)

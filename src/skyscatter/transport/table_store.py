@@ -13,6 +13,7 @@ import dataclasses
 import hashlib
 import json
 from collections.abc import Callable
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +35,7 @@ _ARRAYS = ("wavelengths_nm", "transmittance", "scattering", "irradiance", "phase
 _CODE_FILES = ("tables.py", "_table_kernels.py", "table_parameterisation.py", "_kernels.py")
 
 
+@lru_cache(maxsize=1)
 def _code_fingerprint() -> str:
     digest = hashlib.sha256()
     for name in _CODE_FILES:
