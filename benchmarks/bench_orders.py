@@ -35,8 +35,7 @@ import numba
 import numpy as np
 
 from skyscatter.atmosphere.config import load_atmosphere
-from skyscatter.atmosphere.model import Atmosphere
-from skyscatter.atmosphere.profiles import ScaledProfile
+from skyscatter.atmosphere.variants import load_variant
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import observer_position
@@ -129,27 +128,6 @@ def truncated(tables: AtmosphereTables, snapshots: OrderSnapshots, order: int,
     work[..., -1, :] = snapshots.multiple[order - 1]
     return replace(tables, scattering=work, irradiance=snapshots.irradiance[order - 1],
                    orders=order)
-
-
-def load_variant(spec: str) -> Atmosphere:
-    """A preset or config, or `NAME:CONSTITUENT*FACTOR`: that constituent's density (or its
-    prescribed column) times FACTOR, e.g. `mars-costa:dust*5` for a dustier Mars."""
-    name, _, change = spec.partition(":")
-    atmosphere = load_atmosphere(name)
-    if not change:
-        return atmosphere
-    constituent, _, factor_text = change.partition("*")
-    names = [c.name for c in atmosphere.constituents]
-    if constituent not in names or not factor_text:
-        raise SystemExit(f"{spec}: expected NAME:CONSTITUENT*FACTOR with CONSTITUENT one of "
-                         f"{', '.join(names)}")
-    factor = float(factor_text)
-    scaled = tuple(
-        c if c.name != constituent else
-        replace(c, vertical_column=c.vertical_column * factor) if c.vertical_column is not None
-        else replace(c, profile=ScaledProfile(c.profile, factor))
-        for c in atmosphere.constituents)
-    return replace(atmosphere, constituents=scaled, name=spec)
 
 
 def measure(name: str, orders: int, wavelengths_nm: np.ndarray) -> Convergence:

@@ -1,8 +1,9 @@
-"""Command line: `skyscatter render | radiance | precompute | presets`. Thin: parse, call `api`,
-print.
+"""Command line: `skyscatter render | radiance | precompute | validate | presets`. Thin: parse,
+call the library, print.
 
 User errors (`SkyscatterError`) print one line and exit with code 2; anything else is our bug
-and exits with 1 (the traceback only with --debug). Progress bars appear only on a terminal.
+and exits with 1 (the traceback only with --debug). `validate` exits with 3 when a check fails
+its limit. Progress bars appear only on a terminal.
 """
 
 from __future__ import annotations
@@ -21,6 +22,9 @@ from skyscatter import __version__
 __all__ = ["main"]
 
 CAMERAS = ("fisheye", "panorama", "perspective", "orbit")
+# the keys of skyscatter.validate.suite.CASES (kept here so that --help needs no heavy import;
+# tests/test_cli.py checks that they agree)
+VALIDATION_CASES = ("optical-depth", "lut-vs-montecarlo", "disort", "cie-sky", "spectrl2")
 
 
 def _float_list(text: str) -> list[float]:
@@ -33,6 +37,14 @@ def _float_list(text: str) -> list[float]:
     if not values:
         raise argparse.ArgumentTypeError("the list is empty; give numbers like 0,30,60")
     return values
+
+
+def _name_list(text: str) -> list[str]:
+    """'a,b' -> ['a', 'b'] (argparse type)."""
+    names = [part.strip() for part in text.split(",") if part.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError("the list is empty; give names like disort,cie-sky")
+    return names
 
 
 def _positive_int(text: str) -> int:
@@ -243,6 +255,24 @@ def build_parser() -> argparse.ArgumentParser:
                             help="recompute even when a valid entry is cached")
     _add_cache_arguments(precompute)
     precompute.set_defaults(run=_precompute)
+
+    validate = commands.add_parser(
+        "validate", help="run the validation suite and write a report with plots",
+        description="Compare skyscatter with independent references - the Monte Carlo "
+        "solver, DISORT, the CIE standard skies, SPECTRL2, published optical depths - and "
+        "write report.md, summary.json and PNG plots into the output directory. Exits with 3 "
+        f"when a check fails its limit. Cases: {', '.join(VALIDATION_CASES)}.")
+    validate.add_argument("--quick", action="store_true",
+                          help="the reduced suite: fewer angles, bands and paths (about 2 "
+                          "minutes on 2 cores instead of about 6)")
+    validate.add_argument("--output", type=Path, default=Path("validation"), metavar="DIR",
+                          help="where the report goes (default: ./validation)")
+    validate.add_argument("--cases", type=_name_list, default=None, metavar="LIST",
+                          help="comma-separated subset of the cases (default: all)")
+    validate.add_argument("--seed", type=int, default=0,
+                          help="seed of the Monte Carlo paths (default 0)")
+    _add_cache_arguments(validate)
+    validate.set_defaults(run=_validate)
     return parser
 
 
@@ -395,13 +425,50 @@ def _precompute(args: argparse.Namespace) -> None:
           f"{time.perf_counter() - start:.1f} s", file=sys.stderr)
 
 
+def _validate(args: argparse.Namespace) -> int:
+    from skyscatter.errors import InputError
+    from skyscatter.transport.cache import TableCache
+    from skyscatter.validate.report import ValidationSettings
+    from skyscatter.validate.suite import run_suite
+
+    if args.output.exists() and not args.output.is_dir():
+        raise InputError(f"--output {args.output} is a file; give a directory",
+                         key="output", value=str(args.output))
+
+    def log(message: str) -> None:
+        print(f"skyscatter: {message}", file=sys.stderr, flush=True)
+
+    def on_case(result) -> None:
+        state = "passed" if result.passed else "FAILED"
+        if not result.checks:
+            state = "reported"
+        print(f"{result.key}: {state}, {sum(c.passed for c in result.checks)}/"
+              f"{len(result.checks)} checks within limits, {result.seconds:.0f} s", flush=True)
+        for check in result.checks:
+            if not check.passed:
+                print(f"  FAILED {check.name}: {check.value:.3g}{check.unit} > "
+                      f"{check.limit:.3g}{check.unit}", flush=True)
+
+    settings = ValidationSettings(args.output, quick=args.quick,
+                                  cache=None if args.no_cache else TableCache(args.cache_dir),
+                                  log=log, seed=args.seed)
+    try:
+        outcome = run_suite(settings, args.cases, on_case)
+    except OSError as error:
+        raise InputError(f"cannot write the report into {args.output}: {error.strerror}",
+                         key="output", value=str(args.output)) from None
+    print(f"{'PASSED' if outcome.passed else 'FAILED'} in {outcome.seconds:.0f} s; report: "
+          f"{outcome.report_path}, summary: {outcome.summary_path}")
+    return 0 if outcome.passed else 3
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `skyscatter` command; returns the exit code."""
     from skyscatter.errors import SkyscatterError
 
     args = build_parser().parse_args(argv)
     try:
-        args.run(args)
+        code = args.run(args)
     except SkyscatterError as error:
         if args.debug:
             raise
@@ -419,7 +486,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"skyscatter: internal error: {type(error).__name__}: {error} "
               "(run with --debug for the traceback and please report it)", file=sys.stderr)
         return 1
-    return 0
+    return code or 0
 
 
 if __name__ == "__main__":

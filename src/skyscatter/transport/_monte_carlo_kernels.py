@@ -26,7 +26,13 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skyscatter.transport._kernels import columns_along_segment, density_at
+from skyscatter.transport._kernels import (
+    columns_along_segment,
+    density_at,
+    sample_distance,
+    sample_total,
+    split_sample_count,
+)
 from skyscatter.transport.geometry import (
     atmosphere_segment,
     distance_to_sphere,
@@ -36,6 +42,8 @@ from skyscatter.transport.geometry import (
 
 TWO_PI = 2.0 * math.pi
 RR_WEIGHT_MAX = 0.95  # largest survival probability of Russian roulette
+# States of a path in `random_walk`.
+FLIGHT, SCATTER, GROUND, LEAVE = 0, 1, 2, 3
 
 
 @njit(cache=True)
@@ -108,12 +116,13 @@ def rotate(dx, dy, dz, mu, phi):
 
 
 @njit(cache=True)
-def sun_attenuation(px, py, pz, sun, w, bottom_radius, top_radius, h_step, density,
-                    extinction, sun_angular_radius, n_sun_samples, column):
-    """T_sun V at the point p: transmittance [-] to the top of the atmosphere towards the sun,
-    ray marched (`_kernels.columns_along_segment`), times the visible part of the sun disk
-    (`geometry.sun_visible_fraction`; a point sun when the radius is 0). As in the other solvers
-    a sun below the horizon is attenuated like the horizon ray."""
+def sun_columns(px, py, pz, sun, bottom_radius, top_radius, h_step, density,
+                sun_angular_radius, n_sun_samples, column):
+    """Visible part of the sun disk V [-] at the point p (`geometry.sun_visible_fraction`; a
+    point sun when the radius is 0), with the column densities towards the sun to the top of
+    the atmosphere in `column` (n_c,), ray marched (`_kernels.columns_along_segment`). As in the
+    other solvers a sun below the horizon is attenuated like the horizon ray. Returns 0 (and
+    leaves `column` alone) where the sun is hidden."""
     r = math.sqrt(px * px + py * py + pz * pz)
     mu_s = (px * sun[0] + py * sun[1] + pz * sun[2]) / r
     visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
@@ -124,10 +133,28 @@ def sun_attenuation(px, py, pz, sun, w, bottom_radius, top_radius, h_step, densi
     t_top = distance_to_sphere(r, mu, top_radius, True)
     columns_along_segment(r, mu, 0.0, t_top, n_sun_samples, bottom_radius, h_step, density,
                           column)
+    return visible
+
+
+@njit(cache=True)
+def optical_depth(extinction, w, column):
+    """sum_c extinction[c, w] column[c] [-]."""
     tau = 0.0
-    for c in range(density.shape[0]):
+    for c in range(column.shape[0]):
         tau += extinction[c, w] * column[c]
-    return math.exp(-tau) * visible
+    return tau
+
+
+@njit(cache=True)
+def sun_attenuation(px, py, pz, sun, w, bottom_radius, top_radius, h_step, density,
+                    extinction, sun_angular_radius, n_sun_samples, column):
+    """T_sun V at the point p [-]: transmittance to the top of the atmosphere towards the sun
+    times the visible part of its disk (`sun_columns`)."""
+    visible = sun_columns(px, py, pz, sun, bottom_radius, top_radius, h_step, density,
+                          sun_angular_radius, n_sun_samples, column)
+    if visible <= 0.0:
+        return 0.0
+    return math.exp(-optical_depth(extinction, w, column)) * visible
 
 
 @njit(cache=True)
@@ -140,59 +167,100 @@ def roulette(weight):
     return weight / survive
 
 
+
+
 @njit(cache=True)
-def trace_path(ox, oy, oz, dx, dy, dz, w, sun, max_orders, rr_start, bottom_radius,
-               top_radius, h_step, density, extinction, scattering, scatterers, phase, cdf,
-               cos_grid, majorant, albedo, sun_angular_radius, n_sun_samples, dens, column):
-    """Radiance estimate of one path at wavelength index w, per unit sun irradiance
-    [sr^-1]: the sum over its scattering events of the next-event estimates towards the sun."""
-    n_c = density.shape[0]
+def scatter_direction(dx, dy, dz, w, bs, dens, scattering, scatterers, phase, cdf, cos_grid):
+    """(new direction, weight factor p / proposal) after a scattering in the air: a constituent
+    in proportion to its scattering coefficient (sum `bs` [m^-1]), then its phase function."""
     n_s = scatterers.shape[0]
+    pick = np.random.random() * bs
+    chosen = n_s - 1
+    for s in range(n_s):
+        pick -= scattering[scatterers[s], w] * dens[scatterers[s]]
+        if pick < 0.0:
+            chosen = s
+            break
+    mu_new, pdf = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
+    factor = phase_value(phase[chosen, w], mu_new) / pdf
+    nx, ny, nz = rotate(dx, dy, dz, mu_new, TWO_PI * np.random.random())
+    return nx, ny, nz, factor
+
+
+@njit(cache=True)
+def mixed_phase(w, nu, dens, scattering, scatterers, phase):
+    """sum_c beta_s,c p_c(nu) [m^-1 sr^-1] at the densities `dens`."""
+    total = 0.0
+    for s in range(scatterers.shape[0]):
+        total += scattering[scatterers[s], w] * dens[scatterers[s]] * phase_value(phase[s, w], nu)
+    return total
+
+
+@njit(cache=True)
+def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_start,
+                bottom_radius, top_radius, h_step, density, extinction, scattering, scatterers,
+                phase, cdf, cos_grid, majorant, albedo, sun_angular_radius, n_sun_samples, dens,
+                column):
+    """Sum of the next-event estimates towards the sun [sr^-1, per unit sun irradiance] of a
+    path that starts at o in `state`:
+    SCATTER  a collision in the air at o, coming along d; `weight` is the path weight before
+             the single-scattering albedo (for a collision drawn with density beta_e T: 1);
+    GROUND   at the ground point o, reached along d, with `weight`;
+    FLIGHT   flying from o along d, with `weight`."""
+    n_c = density.shape[0]
     result = 0.0
-    weight = 1.0
     order = 0
     while True:
-        r = math.sqrt(ox * ox + oy * oy + oz * oz)
-        mu = (ox * dx + oy * dy + oz * dz) / r
-        t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
-        if t_end <= t_start and not hits_ground:
-            return result  # misses the atmosphere
-        # Delta tracking from the entry point (t_start > 0 only for observers in space).
-        t = t_start
-        collided = False
-        be = 0.0
-        px, py, pz = ox, oy, oz
-        while majorant[w] > 0.0:
-            t -= math.log(1.0 - np.random.random()) / majorant[w]
-            if t >= t_end:
-                break
-            px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
-            radius = math.sqrt(px * px + py * py + pz * pz)
-            density_at(radius - bottom_radius, h_step, density, dens)
+        if state == FLIGHT:
+            r = math.sqrt(ox * ox + oy * oy + oz * oz)
+            mu = (ox * dx + oy * dy + oz * dz) / r
+            t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+            if t_end <= t_start and not hits_ground:
+                return result  # misses the atmosphere
+            t = t_start  # delta tracking (module doc)
+            px, py, pz = ox, oy, oz
+            state = GROUND if hits_ground else LEAVE
+            while majorant[w] > 0.0:
+                t -= math.log(1.0 - np.random.random()) / majorant[w]
+                if t >= t_end:
+                    break
+                px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+                density_at(math.sqrt(px * px + py * py + pz * pz) - bottom_radius, h_step,
+                           density, dens)
+                be = 0.0
+                for c in range(n_c):
+                    be += extinction[c, w] * dens[c]
+                if np.random.random() * majorant[w] < be:
+                    state = SCATTER
+                    break
+            if state == LEAVE:
+                return result
+            if state == SCATTER:
+                ox, oy, oz = px, py, pz
+            else:
+                gx, gy, gz = ox + t_end * dx, oy + t_end * dy, oz + t_end * dz
+                scale = bottom_radius / math.sqrt(gx * gx + gy * gy + gz * gz)
+                ox, oy, oz = gx * scale, gy * scale, gz * scale
+            continue
+        if state == SCATTER:
+            density_at(math.sqrt(ox * ox + oy * oy + oz * oz) - bottom_radius, h_step, density,
+                       dens)
             be = 0.0
+            bs = 0.0
             for c in range(n_c):
                 be += extinction[c, w] * dens[c]
-            if np.random.random() * majorant[w] < be:
-                collided = True
-                break
-        if collided:
-            ox, oy, oz = px, py, pz
-            bs = 0.0
-            for s in range(n_s):
+            for s in range(scatterers.shape[0]):
                 bs += scattering[scatterers[s], w] * dens[scatterers[s]]
-            weight *= bs / be
-            if weight <= 0.0:
+            if be <= 0.0 or bs <= 0.0:
                 return result
-            nu_sun = dx * sun[0] + dy * sun[1] + dz * sun[2]
+            weight *= bs / be
             attenuation = sun_attenuation(ox, oy, oz, sun, w, bottom_radius, top_radius,
                                           h_step, density, extinction, sun_angular_radius,
                                           n_sun_samples, column)
             if attenuation > 0.0:
-                p_mix = 0.0
-                for s in range(n_s):
-                    p_mix += (scattering[scatterers[s], w] * dens[scatterers[s]]
-                              * phase_value(phase[s, w], nu_sun))
-                result += weight * p_mix / bs * attenuation
+                nu_sun = dx * sun[0] + dy * sun[1] + dz * sun[2]
+                result += (weight * mixed_phase(w, nu_sun, dens, scattering, scatterers, phase)
+                           / bs * attenuation)
             order += 1
             if order >= max_orders:
                 return result
@@ -200,24 +268,12 @@ def trace_path(ox, oy, oz, dx, dy, dz, w, sun, max_orders, rr_start, bottom_radi
                 weight = roulette(weight)
                 if weight == 0.0:
                     return result
-            # Constituent in proportion to its scattering coefficient, then its phase function.
-            pick = np.random.random() * bs
-            chosen = n_s - 1
-            for s in range(n_s):
-                pick -= scattering[scatterers[s], w] * dens[scatterers[s]]
-                if pick < 0.0:
-                    chosen = s
-                    break
-            mu_new, pdf = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
-            weight *= phase_value(phase[chosen, w], mu_new) / pdf
-            dx, dy, dz = rotate(dx, dy, dz, mu_new, TWO_PI * np.random.random())
+            dx, dy, dz, factor = scatter_direction(dx, dy, dz, w, bs, dens, scattering,
+                                                   scatterers, phase, cdf, cos_grid)
+            weight *= factor
+            state = FLIGHT
             continue
-        if not hits_ground:
-            return result  # leaves the atmosphere
         # Lambertian ground: next-event estimate, then a cosine-distributed new direction.
-        gx, gy, gz = ox + t_end * dx, oy + t_end * dy, oz + t_end * dz
-        scale = bottom_radius / math.sqrt(gx * gx + gy * gy + gz * gz)
-        ox, oy, oz = gx * scale, gy * scale, gz * scale
         nx, ny, nz = ox / bottom_radius, oy / bottom_radius, oz / bottom_radius
         mu_s = nx * sun[0] + ny * sun[1] + nz * sun[2]
         if mu_s > 0.0:
@@ -237,17 +293,132 @@ def trace_path(ox, oy, oz, dx, dy, dz, w, sun, max_orders, rr_start, bottom_radi
                 return result
         dx, dy, dz = rotate(nx, ny, nz, math.sqrt(np.random.random()),
                             TWO_PI * np.random.random())
+        state = FLIGHT
+
+
+@njit(parallel=True, cache=True)
+def view_ray_nodes(origins, directions, sun, n_intervals, bottom_radius, top_radius, h_step,
+                   density, sun_angular_radius, n_sun_samples):
+    """What the first collision along each view ray is drawn from, for all wavelengths at once
+    (column densities do not depend on wavelength). Nodes t_j along the part of the ray inside
+    the atmosphere (`_kernels.sample_distance`: dense at the lowest point), returned as
+    (count (n_ray,), hits_ground (n_ray,), t (n_ray, n_max) [m], view column from the first
+    node (n_ray, n_max, n_c) [density x m] (trapezoid rule), density (n_ray, n_max, n_c),
+    column towards the sun (n_ray, n_max, n_c), visible part of the sun (n_ray, n_max)).
+    count = 0 when the ray has no length inside the atmosphere."""
+    n_ray = origins.shape[0]
+    n_c = density.shape[0]
+    n_max = n_intervals + 3
+    count = np.zeros(n_ray, dtype=np.int64)
+    hits = np.zeros(n_ray, dtype=np.bool_)
+    t_nodes = np.zeros((n_ray, n_max))
+    view_column = np.zeros((n_ray, n_max, n_c))
+    node_density = np.zeros((n_ray, n_max, n_c))
+    sun_column = np.zeros((n_ray, n_max, n_c))
+    visible = np.zeros((n_ray, n_max))
+    for i in prange(n_ray):
+        ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
+        dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
+        r = math.sqrt(ox * ox + oy * oy + oz * oz)
+        mu = (ox * dx + oy * dy + oz * dz) / r
+        t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+        hits[i] = hits_ground
+        t_nodes[i, 0] = t_end  # the ground hit of a ray with no length (observer on the ground)
+        if t_end <= t_start:
+            continue
+        t_split, m1, m2 = split_sample_count(r, mu, t_start, t_end, n_intervals)
+        total = sample_total(m1, m2, n_intervals)
+        count[i] = total
+        dens = np.empty(n_c)
+        col = np.empty(n_c)
+        for j in range(total):
+            t = sample_distance(j, r, mu, t_start, t_end, n_intervals, t_split, m1, m2)
+            t_nodes[i, j] = t
+            px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+            density_at(math.sqrt(px * px + py * py + pz * pz) - bottom_radius, h_step, density,
+                       dens)
+            for c in range(n_c):
+                node_density[i, j, c] = dens[c]
+                if j > 0:
+                    view_column[i, j, c] = (view_column[i, j - 1, c] + 0.5 * (
+                        node_density[i, j - 1, c] + dens[c]) * (t - t_nodes[i, j - 1]))
+            visible[i, j] = sun_columns(px, py, pz, sun, bottom_radius, top_radius, h_step,
+                                        density, sun_angular_radius, n_sun_samples, col)
+            if visible[i, j] > 0.0:
+                for c in range(n_c):
+                    sun_column[i, j, c] = col[c]
+    return count, hits, t_nodes, view_column, node_density, sun_column, visible
+
+
+@njit(cache=True)
+def first_collision_cdf(n, w, nu_sun, t_nodes, view_column, node_density, sun_column, visible,
+                        extinction, scattering, scatterers, phase, tau, cdf):
+    """Fill `tau` (n,) with the view optical depth at the n nodes of one ray and `cdf` (n,)
+    with the cumulative probability of the intervals between them: half in proportion to the
+    chance of the first collision there, exp(-tau_j) - exp(-tau_j+1), half in proportion to
+    the single-scattering integrand beta_s p(nu) T T_sun V (trapezoid rule). The second half
+    puts collisions where the sun lights the air (in twilight: high up); the first keeps every
+    weight within 2x the collision estimator's. Returns False when nothing can collide."""
+    for j in range(n):
+        tau[j] = optical_depth(extinction, w, view_column[j])
+    if n < 2 or tau[n - 1] <= 0.0:
+        return False
+    collide_total = 1.0 - math.exp(-tau[n - 1])
+    lit_total = 0.0
+    lit_previous = 0.0
+    for j in range(n):
+        lit = 0.0
+        if visible[j] > 0.0:
+            lit = (mixed_phase(w, nu_sun, node_density[j], scattering, scatterers, phase)
+                   * math.exp(-tau[j] - optical_depth(extinction, w, sun_column[j]))
+                   * visible[j])
+        if j > 0:
+            lit_total += 0.5 * (lit_previous + lit) * (t_nodes[j] - t_nodes[j - 1])
+            cdf[j] = lit_total  # for now: the cumulative lit integral
+        lit_previous = lit
+    cdf[0] = 0.0
+    lit_share = 0.5 if lit_total > 0.0 else 0.0
+    previous_lit = 0.0
+    for j in range(1, n):
+        lit_mass = (cdf[j] - previous_lit) / lit_total if lit_total > 0.0 else 0.0
+        previous_lit = cdf[j]
+        collide_mass = (math.exp(-tau[j - 1]) - math.exp(-tau[j])) / collide_total
+        cdf[j] = cdf[j - 1] + lit_share * lit_mass + (1.0 - lit_share) * collide_mass
+    for j in range(1, n):
+        cdf[j] /= cdf[n - 1]
+    return True
+
+
+@njit(cache=True)
+def first_collision(n, cdf, tau, t_nodes, u):
+    """(distance [m], T [-] to it, interval length / its probability [m]) of a first collision
+    drawn with uniform u from `first_collision_cdf`: an interval, then a uniform point in it."""
+    k = np.searchsorted(cdf[:n], u, side="right") - 1
+    k = min(max(k, 0), n - 2)
+    mass = cdf[k + 1] - cdf[k]
+    while mass <= 0.0 and k < n - 2:  # u on a flat stretch (rounding): move on
+        k += 1
+        mass = cdf[k + 1] - cdf[k]
+    f = np.random.random()
+    length = t_nodes[k + 1] - t_nodes[k]
+    t = t_nodes[k] + f * length
+    transmittance = math.exp(-(tau[k] + f * (tau[k + 1] - tau[k])))
+    return t, transmittance, length / mass
 
 
 @njit(parallel=True, cache=True)
 def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_orders, rr_start,
                bottom_radius, top_radius, h_step, density, extinction, scattering, scatterers,
                phase, cdf, majorant, sun_irradiance, albedo, sun_angular_radius,
-               n_sun_samples):
+               n_sun_samples, nodes):
     """Sums and sums of squares (n_ray, n_wl, n_batch) of the path estimates [W m^-2 sr^-1
-    nm^-1] of `n_paths` paths per ray and wavelength, in batches of `batch` paths. The work unit
-    (ray, wavelength, batch) is seeded with (seed, its index counted from ray `ray_offset`), so
-    a call on part of the rays gives the same numbers as one call on all of them."""
+    nm^-1] of `n_paths` paths per ray and wavelength, in batches of `batch` paths; `nodes` is
+    what `view_ray_nodes` returns for these rays. Each path
+    has two branches: a first collision in the air drawn from `first_collision_cdf` (weight
+    T beta_e / pdf), and, when the view ray meets the ground, the ground seen through the
+    transmittance T of the whole ray. The work unit (ray, wavelength, batch) is seeded with
+    (seed, its index counted from ray `ray_offset`), so a call on part of the rays gives the
+    same numbers as one call on all of them."""
     n_ray = origins.shape[0]
     n_c, n_wl = extinction.shape
     n_angle = phase.shape[2]
@@ -255,6 +426,8 @@ def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_o
     sums = np.zeros((n_ray, n_wl, n_batch))
     squares = np.zeros((n_ray, n_wl, n_batch))
     cos_grid = np.cos(np.linspace(0.0, math.pi, n_angle))
+    count, hits, t_nodes, view_column, node_density, sun_column, visible = nodes
+    n_max = t_nodes.shape[1]
     for unit in prange(n_ray * n_wl * n_batch):
         i = unit // (n_wl * n_batch)
         w = (unit // n_batch) % n_wl
@@ -263,15 +436,47 @@ def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_o
         np.random.seed((seed * 1_000_003 + index * 7_919 + 12_345) % 4_294_967_296)
         dens = np.empty(n_c)
         column = np.empty(n_c)
+        tau = np.zeros(n_max)
+        first_cdf = np.zeros(n_max)
+        n = count[i]
+        dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
+        nu_sun = dx * sun[0] + dy * sun[1] + dz * sun[2]
+        in_air = first_collision_cdf(n, w, nu_sun, t_nodes[i], view_column[i], node_density[i],
+                                     sun_column[i], visible[i], extinction, scattering,
+                                     scatterers, phase, tau, first_cdf)
+        ground_transmittance = math.exp(-tau[n - 1]) if n > 0 else 1.0
+        t_ground = t_nodes[i, n - 1] if n > 0 else t_nodes[i, 0]
+        gx = origins[i, 0] + t_ground * dx
+        gy = origins[i, 1] + t_ground * dy
+        gz = origins[i, 2] + t_ground * dz
+        scale = bottom_radius / math.sqrt(gx * gx + gy * gy + gz * gz)
         total = 0.0
         total_sq = 0.0
         for _ in range(b * batch, min(n_paths, (b + 1) * batch)):
-            value = sun_irradiance[w] * trace_path(
-                origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0],
-                directions[i, 1], directions[i, 2], w, sun, max_orders, rr_start,
-                bottom_radius, top_radius, h_step, density, extinction, scattering,
-                scatterers, phase, cdf, cos_grid, majorant, albedo, sun_angular_radius,
-                n_sun_samples, dens, column)
+            value = 0.0
+            if in_air:
+                t, transmittance, inverse_pdf = first_collision(n, first_cdf, tau, t_nodes[i],
+                                                                np.random.random())
+                px = origins[i, 0] + t * dx
+                py = origins[i, 1] + t * dy
+                pz = origins[i, 2] + t * dz
+                density_at(math.sqrt(px * px + py * py + pz * pz) - bottom_radius, h_step,
+                           density, dens)
+                be = 0.0
+                for c in range(n_c):
+                    be += extinction[c, w] * dens[c]
+                value += random_walk(
+                    px, py, pz, dx, dy, dz, transmittance * be * inverse_pdf, SCATTER, w, sun,
+                    max_orders, rr_start, bottom_radius, top_radius, h_step, density,
+                    extinction, scattering, scatterers, phase, cdf, cos_grid, majorant, albedo,
+                    sun_angular_radius, n_sun_samples, dens, column)
+            if hits[i]:
+                value += random_walk(
+                    gx * scale, gy * scale, gz * scale, dx, dy, dz, ground_transmittance,
+                    GROUND, w, sun, max_orders, rr_start, bottom_radius, top_radius, h_step,
+                    density, extinction, scattering, scatterers, phase, cdf, cos_grid, majorant,
+                    albedo, sun_angular_radius, n_sun_samples, dens, column)
+            value *= sun_irradiance[w]
             total += value
             total_sq += value * value
         sums[i, w, b] = total

@@ -71,6 +71,8 @@ class MonteCarloSolver:
         Scattering angles of the phase-function tables.
     n_sun_samples : int
         Ray-marching intervals of the transmittance towards the sun.
+    n_view_intervals : int
+        Intervals along each view ray from which the first collision is drawn.
     batch : int
         Paths per work unit (one random-number seed each).
     """
@@ -79,7 +81,8 @@ class MonteCarloSolver:
 
     def __init__(self, profile: OpticalProfile, n_samples: int = 1024, seed: int = 0,
                  max_orders: int = 1000, rr_start: int = 8, n_angle: int = 4097,
-                 n_sun_samples: int = 128, batch: int = 256) -> None:
+                 n_sun_samples: int = 128, n_view_intervals: int = 256,
+                 batch: int = 256) -> None:
         if n_samples < 2:
             raise InputError("the Monte Carlo solver needs at least 2 paths per ray",
                              key="n_samples", value=n_samples)
@@ -92,6 +95,7 @@ class MonteCarloSolver:
         self.max_orders = int(max_orders)
         self.rr_start = int(rr_start)
         self.n_sun_samples = int(n_sun_samples)
+        self.n_view_intervals = int(n_view_intervals)
         self.batch = int(batch)
         self._h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
         self._scatterers = np.array(scattering_constituents(profile), dtype=np.int64)
@@ -140,6 +144,10 @@ class MonteCarloSolver:
         chunk = max(1, PATHS_PER_CALL // (n * p.n_wavelengths))
         for start in range(0, n_ray, chunk):
             stop = min(start + chunk, n_ray)
+            nodes = _monte_carlo_kernels.view_ray_nodes(
+                origins[start:stop], directions[start:stop], sun, self.n_view_intervals,
+                p.bottom_radius_m, p.top_radius_m, self._h_step, self._density,
+                float(p.sun_angular_radius_rad), self.n_sun_samples)
             sums, squares = _monte_carlo_kernels.trace_rays(
                 origins[start:stop], directions[start:stop], start, sun, n, self.batch,
                 self.seed, self.max_orders, self.rr_start, p.bottom_radius_m,
@@ -147,7 +155,7 @@ class MonteCarloSolver:
                 self._scattering, self._scatterers, self._phase, self._cdf, self._majorant,
                 np.ascontiguousarray(p.toa_irradiance, dtype=np.float64),
                 np.ascontiguousarray(p.ground_albedo, dtype=np.float64),
-                float(p.sun_angular_radius_rad), self.n_sun_samples)
+                float(p.sun_angular_radius_rad), self.n_sun_samples, nodes)
             m = sums.sum(axis=2) / n
             variance = np.maximum(squares.sum(axis=2) / n - m * m, 0.0) * n / (n - 1)
             mean[start:stop] = m

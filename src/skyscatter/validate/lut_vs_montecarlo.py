@@ -1,0 +1,358 @@
+"""Precomputed tables against the Monte Carlo reference: sky radiance from the ground on a grid
+of view zenith x relative azimuth, per wavelength band, for Earth (Rayleigh only; + ozone;
++ aerosol) and Mars, the sun from the zenith to 6 deg below the horizon.
+
+The Monte Carlo solver (`transport.monte_carlo`) makes no approximation beyond the atmosphere's
+definition and a 1e-4 ray-marching error, so what separates the two is the tables' own error
+(parameterisation, interpolation, quadrature and the truncated orders) plus the Monte Carlo
+noise, which is reported beside each figure. The threshold of issue 4: for Earth with the sun
+zenith <= 80 deg and view zenith <= 85 deg, the median |tables / Monte Carlo - 1| per wavelength
+band <= 2 % and its 95th percentile <= 5 %.
+
+Public names: `SkyGrid`, `sky_grid`, `SolverComparison`, `compare_solvers`, `run`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from skyscatter.atmosphere.config import load_atmosphere
+from skyscatter.atmosphere.model import Atmosphere
+from skyscatter.atmosphere.variants import only_constituents
+from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.transport.geometry import local_frame_directions
+from skyscatter.transport.monte_carlo import MonteCarloSolver
+from skyscatter.transport.single_scattering import observer_position
+from skyscatter.validate.common import table_solver
+from skyscatter.validate.plots import new_figure, save_figure
+from skyscatter.validate.report import (
+    CaseResult,
+    Check,
+    Figure,
+    Table,
+    ValidationSettings,
+    format_percent,
+)
+
+__all__ = ["SkyGrid", "SolverComparison", "compare_solvers", "run", "sky_grid"]
+
+KEY = "lut-vs-montecarlo"
+MEDIAN_LIMIT = 0.02  # issue 4: median |relative error| per band, Earth, sun zenith <= 80 deg
+P95_LIMIT = 0.05  # issue 4: 95th percentile
+CHECKED_SUN_ZENITH_DEG = 80.0
+CHECKED_VIEW_ZENITH_DEG = 85.0
+
+
+@dataclass(frozen=True)
+class SkyGrid:
+    """View directions in the observer's frame, azimuth measured from the sun's."""
+
+    view_zenith_deg: np.ndarray  # (n,)
+    azimuth_deg: np.ndarray  # (n,)
+
+    @property
+    def directions(self) -> np.ndarray:
+        return local_frame_directions(np.radians(self.view_zenith_deg),
+                                      np.radians(self.azimuth_deg))
+
+
+def sky_grid(view_zenith_deg: ArrayLike, azimuth_deg: ArrayLike) -> SkyGrid:
+    """Every view zenith x every relative azimuth, the zenith itself once."""
+    zenith = np.asarray(view_zenith_deg, dtype=np.float64)
+    azimuth = np.asarray(azimuth_deg, dtype=np.float64)
+    z, a = np.meshgrid(zenith, azimuth, indexing="ij")
+    keep = (z > 0.0) | (a == azimuth[0])
+    return SkyGrid(z[keep], a[keep])
+
+
+@dataclass(frozen=True)
+class SolverComparison:
+    """Tables vs Monte Carlo sky radiance [W m^-2 sr^-1 nm^-1] for one atmosphere and sun."""
+
+    atmosphere: str
+    sun_zenith_deg: float
+    wavelengths_nm: np.ndarray  # (n_wl,)
+    grid: SkyGrid
+    tables: np.ndarray  # (n, n_wl)
+    monte_carlo: np.ndarray  # (n, n_wl)
+    standard_error: np.ndarray  # (n, n_wl) of the Monte Carlo mean
+    paths: int  # per ray and wavelength
+    seconds: float  # of the Monte Carlo part
+    principal_plane: dict = field(default_factory=dict)  # dense table curve for the plots
+
+    @property
+    def relative_error(self) -> np.ndarray:
+        """tables / Monte Carlo - 1 (n, n_wl); NaN where the Monte Carlo mean is 0."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(self.monte_carlo > 0.0, self.tables / self.monte_carlo - 1.0,
+                            np.nan)
+
+    def percentile(self, q: float) -> np.ndarray:
+        """q-th percentile of |relative error| per wavelength (n_wl,)."""
+        return np.nanpercentile(np.abs(self.relative_error), q, axis=0)
+
+    @property
+    def noise(self) -> np.ndarray:
+        """Median relative standard error of the Monte Carlo means per wavelength (n_wl,)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.nanmedian(np.where(self.monte_carlo > 0.0,
+                                         self.standard_error / self.monte_carlo, np.nan), axis=0)
+
+
+def compare_solvers(tables, monte_carlo: MonteCarloSolver, atmosphere: str,
+                    sun_zenith_deg: float, grid: SkyGrid) -> SolverComparison:
+    """Sky radiance of both solvers (same `OpticalProfile`) from the ground on `grid`, with
+    the sun at `sun_zenith_deg` and azimuth 0; plus a dense principal-plane curve of the
+    tables (view zenith -89..89 deg, negative: away from the sun)."""
+    profile = tables.profile
+    origin = observer_position(0.0, profile.bottom_radius_m)
+    sun = local_frame_directions(np.radians(sun_zenith_deg), 0.0)
+    views = grid.directions
+    start = time.perf_counter()
+    mean, error = monte_carlo.sky_radiance_with_error(origin, views, sun)
+    seconds = time.perf_counter() - start
+    signed = np.linspace(-89.0, 89.0, 179)
+    plane = local_frame_directions(np.radians(np.abs(signed)),
+                                   np.where(signed < 0.0, np.pi, 0.0))
+    return SolverComparison(
+        atmosphere, float(sun_zenith_deg), profile.wavelengths_nm, grid,
+        tables.sky_radiance(origin, views, sun), mean, error, monte_carlo.n_samples, seconds,
+        {"view_zenith_deg": signed, "tables": tables.sky_radiance(origin, plane, sun)})
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What a run covers: atmospheres, suns, view grid, wavelengths and path counts."""
+
+    atmospheres: tuple[Atmosphere, ...]
+    day_sun_zeniths_deg: tuple[float, ...]
+    twilight_sun_zeniths_deg: tuple[float, ...]
+    grid: SkyGrid
+    wavelengths_nm: np.ndarray
+    day_paths: int
+    twilight_paths: int
+
+
+def _earth_variants() -> tuple[Atmosphere, ...]:
+    earth = load_atmosphere("earth")
+    return (only_constituents(earth, ["air"], "earth, Rayleigh only"),
+            only_constituents(earth, ["air", "ozone"], "earth, Rayleigh + ozone"),
+            only_constituents(earth, ["air", "ozone", "aerosol"],
+                              "earth, Rayleigh + ozone + aerosol"))
+
+
+def _plan(quick: bool) -> _Plan:
+    azimuths = (0.0, 45.0, 90.0, 135.0, 180.0)
+    if quick:
+        earth = _earth_variants()
+        return _Plan((earth[0], earth[2], load_atmosphere("mars-costa")), (30.0, 75.0), (94.0,),
+                     sky_grid((0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0), (0.0, 90.0, 180.0)),
+                     wavelength_grid(8), 1500, 3000)
+    return _Plan(_earth_variants() + (load_atmosphere("mars-costa"),),
+                 (0.0, 30.0, 60.0, 75.0, 85.0), (92.0, 94.0, 96.0),
+                 sky_grid((0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 75.0, 80.0, 85.0),
+                          azimuths),
+                 wavelength_grid(8), 2500, 5000)
+
+
+def _is_checked(comparison: SolverComparison) -> bool:
+    return (comparison.atmosphere.startswith("earth")
+            and comparison.sun_zenith_deg <= CHECKED_SUN_ZENITH_DEG)
+
+
+def _checks(comparison: SolverComparison) -> list[Check]:
+    if not _is_checked(comparison):
+        return []
+    inside = comparison.grid.view_zenith_deg <= CHECKED_VIEW_ZENITH_DEG
+    error = np.abs(comparison.relative_error[inside])
+    checks = []
+    for w, wavelength in enumerate(comparison.wavelengths_nm):
+        where = (f"{comparison.atmosphere}, sun zenith {comparison.sun_zenith_deg:g} deg, "
+                 f"{wavelength:.0f} nm")
+        checks.append(Check(f"{where}: median |tables / Monte Carlo - 1|",
+                            100.0 * float(np.nanmedian(error[:, w])), 100.0 * MEDIAN_LIMIT, "%"))
+        checks.append(Check(f"{where}: 95th percentile",
+                            100.0 * float(np.nanpercentile(error[:, w], 95.0)),
+                            100.0 * P95_LIMIT, "%"))
+    return checks
+
+
+def run(settings: ValidationSettings) -> CaseResult:
+    """The tables-vs-Monte-Carlo case of `skyscatter validate`."""
+    start = time.perf_counter()
+    plan = _plan(settings.quick)
+    comparisons: list[SolverComparison] = []
+    for atmosphere in plan.atmospheres:
+        profile = atmosphere.optical_profile(plan.wavelengths_nm)
+        settings.log(f"{atmosphere.name}: tables ({atmosphere.scattering_orders} orders)")
+        tables = table_solver(atmosphere, profile, settings)
+        suns = plan.day_sun_zeniths_deg + plan.twilight_sun_zeniths_deg
+        for sun_zenith in suns:
+            paths = plan.day_paths if sun_zenith <= 90.0 else plan.twilight_paths
+            mc = MonteCarloSolver(profile, n_samples=paths, seed=settings.seed)
+            comparison = compare_solvers(tables, mc, atmosphere.name, sun_zenith, plan.grid)
+            comparisons.append(comparison)
+            settings.log(f"{atmosphere.name}, sun zenith {sun_zenith:g} deg: median "
+                         f"{format_percent(float(np.max(comparison.percentile(50))))}, p95 "
+                         f"{format_percent(float(np.max(comparison.percentile(95))))} (worst "
+                         f"band), Monte Carlo {comparison.seconds:.1f} s")
+    result = CaseResult(KEY, "Precomputed tables vs Monte Carlo", _summary(plan, comparisons))
+    result.tables = [_table(plan, comparisons, atmosphere.name)
+                     for atmosphere in plan.atmospheres]
+    result.checks = [check for c in comparisons for check in _checks(c)]
+    result.metrics = _metrics(plan, comparisons)
+    result.figures = [_error_figure(plan, comparisons, settings)]
+    result.figures += [_principal_plane_figure(plan, comparisons, atmosphere.name, settings, i)
+                       for i, atmosphere in enumerate(plan.atmospheres)]
+    result.notes = _notes(comparisons)
+    result.seconds = time.perf_counter() - start
+    return result
+
+
+def _throughput(comparisons: list[SolverComparison]) -> tuple[int, float]:
+    """(paths traced, paths per second) of the Monte Carlo runs."""
+    paths = sum(c.paths * c.monte_carlo.size for c in comparisons)
+    seconds = sum(c.seconds for c in comparisons)
+    return paths, paths / max(seconds, 1e-9)
+
+
+def _summary(plan: _Plan, comparisons: list[SolverComparison]) -> str:
+    paths, rate = _throughput(comparisons)
+    checked = [c for c in comparisons if _is_checked(c)]
+    worst_median = max(float(np.max(c.percentile(50))) for c in checked) if checked else 0.0
+    worst_p95 = max(float(np.max(c.percentile(95))) for c in checked) if checked else 0.0
+    return (
+        f"Sky radiance seen from the ground on {plan.grid.view_zenith_deg.size} directions "
+        f"(view zenith {plan.grid.view_zenith_deg.min():g}-{plan.grid.view_zenith_deg.max():g}"
+        f" deg x relative azimuth {', '.join(f'{a:g}' for a in np.unique(plan.grid.azimuth_deg))}"
+        f" deg) at {plan.wavelengths_nm.size} wavelength bands "
+        f"({plan.wavelengths_nm[0]:.0f}-{plan.wavelengths_nm[-1]:.0f} nm), from the "
+        "precomputed tables (Bruneton's resolution, each atmosphere's own orders) and from the "
+        f"Monte Carlo reference ({plan.day_paths} paths per ray and band by day, "
+        f"{plan.twilight_paths} in twilight; {paths / 1e6:.1f} M paths at "
+        f"{rate / 1e6:.2f} M paths/s). Errors are |tables / Monte Carlo - 1| over the grid; the "
+        "Monte Carlo noise (median relative standard error) is listed beside them. Threshold "
+        f"(Earth, sun zenith <= {CHECKED_SUN_ZENITH_DEG:g} deg): median <= "
+        f"{100 * MEDIAN_LIMIT:g} %, 95th percentile <= {100 * P95_LIMIT:g} % in every band; "
+        f"worst measured: median {format_percent(worst_median)}, 95th percentile "
+        f"{format_percent(worst_p95)}.")
+
+
+def _table(plan: _Plan, comparisons: list[SolverComparison], atmosphere: str) -> Table:
+    rows = []
+    for c in comparisons:
+        if c.atmosphere != atmosphere:
+            continue
+        median, p95, noise = c.percentile(50), c.percentile(95), c.noise
+        cells = [f"{format_percent(m, 1)} / {format_percent(p, 1)}"
+                 for m, p in zip(median, p95, strict=True)]
+        rows.append([f"{c.sun_zenith_deg:g}"] + cells
+                    + [f"{format_percent(float(np.median(noise)), 1)}"])
+    header = (["sun zenith [deg]"] + [f"{w:.0f} nm" for w in plan.wavelengths_nm]
+              + ["MC noise"])
+    return Table(f"{atmosphere}: median / 95th percentile of |tables / Monte Carlo - 1| per "
+                 "band", header, rows)
+
+
+def _metrics(plan: _Plan, comparisons: list[SolverComparison]) -> dict:
+    paths, rate = _throughput(comparisons)
+    return {
+        "wavelengths_nm": plan.wavelengths_nm,
+        "monte_carlo_paths": paths,
+        "monte_carlo_paths_per_second": rate,
+        "cases": [{
+            "atmosphere": c.atmosphere, "sun_zenith_deg": c.sun_zenith_deg,
+            "paths_per_ray": c.paths,
+            "median_abs_relative_error": c.percentile(50),
+            "p95_abs_relative_error": c.percentile(95),
+            "monte_carlo_relative_standard_error": c.noise,
+        } for c in comparisons],
+    }
+
+
+def _error_figure(plan: _Plan, comparisons: list[SolverComparison],
+                  settings: ValidationSettings) -> Figure:
+    figure, axes = new_figure(1, 2, width_in=5.6, height_in=4.0)
+    for atmosphere in plan.atmospheres:
+        rows = [c for c in comparisons if c.atmosphere == atmosphere.name]
+        zenith = [c.sun_zenith_deg for c in rows]
+        for axis, q in zip(axes[0], (50, 95), strict=True):
+            axis.plot(zenith, [100 * np.max(c.percentile(q)) for c in rows], "o-",
+                      label=atmosphere.name)
+    for axis, q, limit in zip(axes[0], (50, 95), (MEDIAN_LIMIT, P95_LIMIT), strict=True):
+        axis.axhline(100 * limit, color="k", ls="--", lw=1,
+                     label=f"limit (Earth, sun zenith <= {CHECKED_SUN_ZENITH_DEG:g} deg)")
+        axis.axvline(90.0, color="0.6", lw=0.8)
+        axis.set_yscale("log")
+        axis.set_xlabel("sun zenith angle [deg]")
+        axis.set_ylabel(f"{'median' if q == 50 else '95th percentile'} |tables / MC - 1| [%]")
+        axis.set_title(f"{'Median' if q == 50 else '95th percentile'} over the sky, worst band")
+        axis.grid(alpha=0.3, which="both")
+    axes[0][1].legend(fontsize=7)
+    name = save_figure(figure, settings.output_dir, "lut_vs_montecarlo_errors.png")
+    return Figure(name, "Tables vs Monte Carlo: error over the sky grid against sun zenith "
+                        "(worst wavelength band); the sun is below the horizon right of the "
+                        "grey line.")
+
+
+def _principal_plane_figure(plan: _Plan, comparisons: list[SolverComparison], atmosphere: str,
+                            settings: ValidationSettings, index: int) -> Figure:
+    rows = [c for c in comparisons if c.atmosphere == atmosphere]
+    n_cols = 4
+    n_rows = (len(rows) + n_cols - 1) // n_cols
+    figure, axes = new_figure(n_rows, n_cols, width_in=3.6, height_in=3.0)
+    bands = sorted({0, plan.wavelengths_nm.size // 3, plan.wavelengths_nm.size - 3})
+    colours = ("tab:blue", "tab:green", "tab:red")
+    for k, c in enumerate(rows):
+        axis = axes[k // n_cols][k % n_cols]
+        in_plane = (c.grid.azimuth_deg == 0.0) | (c.grid.azimuth_deg == 180.0)
+        signed = np.where(c.grid.azimuth_deg == 180.0, -1.0, 1.0) * c.grid.view_zenith_deg
+        order = np.argsort(signed[in_plane])
+        for band, colour in zip(bands, colours, strict=True):
+            label = f"{c.wavelengths_nm[band]:.0f} nm"
+            axis.plot(c.principal_plane["view_zenith_deg"],
+                      c.principal_plane["tables"][:, band], color=colour, lw=1.2,
+                      label=f"tables, {label}")
+            axis.errorbar(signed[in_plane][order], c.monte_carlo[in_plane, band][order],
+                          yerr=2.0 * c.standard_error[in_plane, band][order], fmt="o",
+                          ms=3, color=colour, mfc="none", label=f"Monte Carlo ±2σ, {label}")
+        axis.set_yscale("log")
+        axis.set_title(f"sun zenith {c.sun_zenith_deg:g} deg", fontsize=9)
+        axis.set_xlabel("view zenith [deg] (< 0: away from the sun)", fontsize=8)
+        axis.set_ylabel("radiance [W m⁻² sr⁻¹ nm⁻¹]", fontsize=8)
+        axis.grid(alpha=0.3, which="both")
+    for k in range(len(rows), n_rows * n_cols):
+        axes[k // n_cols][k % n_cols].set_visible(False)
+    axes[0][0].legend(fontsize=6)
+    figure.suptitle(f"{atmosphere}: sky radiance in the solar principal plane")
+    name = save_figure(figure, settings.output_dir, f"lut_vs_montecarlo_plane_{index}.png")
+    return Figure(name, f"{atmosphere}: the tables (lines) follow the Monte Carlo reference "
+                        "(circles, 2 standard errors) across the principal plane, by day and "
+                        "in twilight.")
+
+
+def _notes(comparisons: list[SolverComparison]) -> list[str]:
+    notes = []
+    twilight = [c for c in comparisons if c.sun_zenith_deg > 90.0]
+    if twilight:
+        worst = max(float(np.max(c.percentile(50))) for c in twilight)
+        notes.append(
+            f"Twilight (sun below the horizon): median errors up to {format_percent(worst)}. "
+            "The tables store single scattering against the sun's zenith cosine on 32 cells "
+            "down to mu_s = -0.2 and interpolate across the terminator, where the lit part of "
+            "each view ray changes fastest (docs/physics/tables.md); the Monte Carlo noise is "
+            "also several times the daytime's, because most scattered light comes from high, "
+            "thin, still sunlit air that few paths reach.")
+    mars = [c for c in comparisons if c.atmosphere.startswith("mars")]
+    if mars:
+        worst = max(float(np.max(c.percentile(50))) for c in mars if c.sun_zenith_deg < 90.0)
+        notes.append(
+            f"Mars by day: median errors up to {format_percent(worst)}. The dust's strongly "
+            "forward phase function (double Henyey-Greenstein, g up to 0.67) is folded into "
+            "the tables' higher orders through their angular grids, and the aureole near the "
+            "sun is where the tables' 4-D interpolation is coarsest.")
+    return notes

@@ -1,0 +1,94 @@
+"""The validation suite of `skyscatter validate`: every case in order, the report, the verdict.
+
+Cases (key: module):
+- optical-depth      Rayleigh optical depth vs Bodhaine et al. 1999; ozone vs its cross-sections
+- lut-vs-montecarlo  precomputed tables vs the Monte Carlo reference (Earth variants, Mars)
+- disort             tables vs plane-parallel DISORT at small zenith angles
+- cie-sky            luminance pattern vs CIE standard general skies 12 and 13
+- spectrl2           ground irradiance and colour temperature vs SPECTRL2
+
+Public names: `CASES`, `ValidationRun`, `run_suite`, `check_dependencies`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from skyscatter.errors import InputError
+from skyscatter.validate.report import CaseResult, ValidationSettings, write_report
+
+__all__ = ["CASES", "ValidationRun", "check_dependencies", "run_suite"]
+
+# key -> (module in skyscatter.validate, one line on what it checks)
+CASES = {
+    "optical-depth": ("optical_depth", "Rayleigh and ozone optical depth vs published values"),
+    "lut-vs-montecarlo": ("lut_vs_montecarlo", "precomputed tables vs the Monte Carlo reference"),
+    "disort": ("disort", "precomputed tables vs plane-parallel DISORT"),
+    "cie-sky": ("cie_sky", "clear-sky luminance pattern vs CIE sky types 12 and 13"),
+    "spectrl2": ("spectrl2", "ground irradiance and colour temperature vs SPECTRL2"),
+}
+# Third-party packages the cases need beyond skyscatter's own (the [validate] extra).
+OPTIONAL_PACKAGES = {"matplotlib": "matplotlib", "pvlib": "pvlib",
+                     "PythonicDISORT": "PythonicDISORT"}
+
+
+@dataclass(frozen=True)
+class ValidationRun:
+    """The results of a run and where its report went."""
+
+    results: list[CaseResult]
+    report_path: Path
+    summary_path: Path
+    seconds: float
+
+    @property
+    def passed(self) -> bool:
+        return all(r.passed for r in self.results)
+
+
+def check_dependencies() -> None:
+    """Raise a one-line InputError naming the missing packages of the [validate] extra."""
+    missing = [name for module, name in OPTIONAL_PACKAGES.items()
+               if importlib.util.find_spec(module) is None]
+    if missing:
+        raise InputError(f"skyscatter validate needs {', '.join(missing)}: "
+                         "pip install 'skyscatter[validate]'", key="dependencies",
+                         value=missing)
+
+
+def selected_cases(keys: Sequence[str] | None) -> list[str]:
+    """The case keys to run, in suite order; an unknown key is an InputError."""
+    if not keys:
+        return list(CASES)
+    for key in keys:
+        if key not in CASES:
+            raise InputError(f"unknown validation case {key!r}; choose from "
+                             f"{', '.join(CASES)}", key="cases", value=key,
+                             allowed=", ".join(CASES))
+    return [key for key in CASES if key in keys]
+
+
+def run_suite(settings: ValidationSettings, keys: Sequence[str] | None = None,
+              on_case: Callable[[CaseResult], None] | None = None) -> ValidationRun:
+    """Run the cases `keys` (default: all), write the report and the JSON summary into
+    `settings.output_dir`, and return the results; `on_case` sees each result as it ends."""
+    check_dependencies()
+    chosen = selected_cases(keys)
+    Path(settings.output_dir).mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    results = []
+    for key in chosen:
+        module = importlib.import_module(f"skyscatter.validate.{CASES[key][0]}")
+        settings.log(f"[{key}] {CASES[key][1]}")
+        result = module.run(settings)
+        results.append(result)
+        if on_case is not None:
+            on_case(result)
+    seconds = time.perf_counter() - start
+    report, summary = write_report(results, settings, seconds)
+    return ValidationRun(results, report, summary, seconds)
