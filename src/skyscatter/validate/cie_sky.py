@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.config import load_atmosphere
-from skyscatter.atmosphere.variants import scaled_constituent
+from skyscatter.atmosphere.variants import only_constituents, scaled_constituent
 from skyscatter.errors import InputError
 from skyscatter.spectrum.colour import luminance
 from skyscatter.spectrum.grid import wavelength_grid
@@ -134,7 +134,9 @@ def run(settings: ValidationSettings) -> CaseResult:
     fits: dict[float, list[CieFit]] = {}
     solvers = {}
     for factor in factors:
-        atmosphere = scaled_constituent(earth, "aerosol", factor, label=_label(factor))
+        atmosphere = (scaled_constituent(earth, "aerosol", factor, label=_label(factor))
+                      if factor > 0.0 else only_constituents(earth, ["air", "ozone"],
+                                                             _label(factor)))
         settings.log(f"{atmosphere.name}: tables")
         solver = table_solver(atmosphere, atmosphere.optical_profile(wavelengths), settings)
         solvers[factor] = solver

@@ -434,6 +434,7 @@ def _figure(comparison: DisortComparison, settings: ValidationSettings) -> Figur
         axis.grid(alpha=0.3)
     axes[0][0].set_ylabel("ours / DISORT - 1 [%]")
     axes[0][0].legend(fontsize=6)
+    figure.suptitle("earth preset, ground: precomputed tables vs PythonicDISORT", fontsize=10)
     name = save_figure(figure, settings.output_dir, "disort.png")
     return Figure(name, "Tables vs plane-parallel DISORT towards (circles) and away from "
                         "(squares) the sun: within about 1 % at small sun zenith angles, "

@@ -1,0 +1,85 @@
+"""The tables-vs-Monte-Carlo case: its grid, its thresholds, and a reduced run of the issue's
+threshold (Earth, sun zenith <= 80 deg: median <= 2 %, 95th percentile <= 5 % per band)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skyscatter import api
+from skyscatter.atmosphere.variants import only_constituents
+from skyscatter.transport.monte_carlo import MonteCarloSolver
+from skyscatter.validate.common import table_solver
+from skyscatter.validate.lut_vs_montecarlo import (
+    MEDIAN_LIMIT,
+    P95_LIMIT,
+    SolverComparison,
+    _checks,
+    compare_solvers,
+    sky_grid,
+)
+from skyscatter.validate.report import ValidationSettings
+
+
+def test_the_grid_has_the_zenith_once_and_every_other_direction_per_azimuth():
+    grid = sky_grid((0.0, 30.0, 60.0), (0.0, 90.0, 180.0))
+    assert grid.view_zenith_deg.tolist() == [0.0, 30.0, 30.0, 30.0, 60.0, 60.0, 60.0]
+    directions = grid.directions
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(np.degrees(np.arccos(directions[:, 2])), grid.view_zenith_deg,
+                               atol=1e-9)
+
+
+def _comparison(atmosphere: str, sun_zenith: float, error: float) -> SolverComparison:
+    grid = sky_grid((0.0, 40.0, 85.0), (0.0, 180.0))
+    mc = np.ones((grid.view_zenith_deg.size, 2))
+    return SolverComparison(atmosphere, sun_zenith, np.array([440.0, 550.0]), grid,
+                            mc * (1.0 + error), mc, mc * 0.01, 100, 1.0)
+
+
+def test_only_earth_by_day_is_held_to_the_limits():
+    assert _checks(_comparison("mars-costa", 30.0, 0.5)) == []
+    assert _checks(_comparison("earth, Rayleigh only", 92.0, 0.5)) == []
+    passing = _checks(_comparison("earth, Rayleigh only", 80.0, 0.9 * MEDIAN_LIMIT))
+    failing = _checks(_comparison("earth, Rayleigh only", 80.0, 1.1 * P95_LIMIT))
+    assert len(passing) == 4 and all(c.passed for c in passing)  # median and p95 per band
+    assert len(failing) == 4 and not any(c.passed for c in failing)
+
+
+def test_tables_meet_the_threshold_against_monte_carlo(tmp_path):
+    # Earth with aerosol and ozone at two bands, sun zenith 60 deg, 13 directions up to view
+    # zenith 85 deg, 6000 paths (about 0.6 % noise per value). The issue's limits apply as
+    # they are: the Monte Carlo noise adds to the tables' own 0.5-2.5 % (measured).
+    earth = api.load_atmosphere("earth")
+    atmosphere = only_constituents(earth, ["air", "ozone", "aerosol"])
+    profile = atmosphere.optical_profile([450.0, 600.0], monochromatic=True)
+    tables = table_solver(atmosphere, profile, ValidationSettings(tmp_path, log=lambda m: None))
+    grid = sky_grid((0.0, 20.0, 45.0, 70.0, 85.0), (0.0, 90.0, 180.0))
+    mc = MonteCarloSolver(profile, n_samples=6000, seed=11)
+    comparison = compare_solvers(tables, mc, "earth", 60.0, grid)
+    assert np.all(comparison.noise < 0.01)  # the test has teeth: noise well below the limits
+    assert np.all(comparison.percentile(50) <= MEDIAN_LIMIT)
+    assert np.all(comparison.percentile(95) <= P95_LIMIT)
+    assert comparison.principal_plane["tables"].shape == (179, 2)
+
+
+def test_variants_keep_or_scale_constituents():
+    earth = api.load_atmosphere("earth")
+    rayleigh = only_constituents(earth, ["air"])
+    assert [c.name for c in rayleigh.constituents] == ["air"]
+    from skyscatter.atmosphere.variants import load_variant, scaled_constituent
+    from skyscatter.errors import InputError
+
+    doubled = scaled_constituent(earth, "aerosol", 2.0)
+    wl = np.array([500.0])
+    tau = [np.trapezoid(a.optical_profile(wl, monochromatic=True).extinction_at(
+        np.linspace(0.0, 100e3, 20001))[:, 0], np.linspace(0.0, 100e3, 20001))
+        for a in (only_constituents(earth, ["aerosol"]),
+                  only_constituents(doubled, ["aerosol"]))]
+    # The preset's aerosol has tau(500 nm) = 0.1 by its column; doubled is 0.2.
+    assert tau[0] == pytest.approx(0.1, rel=1e-3) and tau[1] == pytest.approx(0.2, rel=1e-3)
+    assert load_variant("mars-costa:dust*5").name == "mars-costa:dust*5"
+    with pytest.raises(InputError, match="no constituent 'soot'"):
+        only_constituents(earth, ["soot"])
+    with pytest.raises(InputError, match="NAME:CONSTITUENT"):
+        load_variant("earth:aerosol*lots")
