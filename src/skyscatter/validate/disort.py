@@ -402,8 +402,8 @@ def run(settings: ValidationSettings) -> CaseResult:
         "difference is the curvature of the sun's path (our spherical single scattering is "
         "about 2 % above the plane-parallel closed form; docs/physics/disort_comparison.md)."))
     result.tables = [Table("ours / DISORT - 1 over view zenith x azimuth x band",
-                           ["sun zenith [deg]", "median", "median |.|", "95th pct |.|",
-                            "max |.|"], rows)]
+                           ["sun zenith [deg]", "median", "median of abs.",
+                            "95th percentile of abs.", "max of abs."], rows)]
     result.checks = checks
     result.metrics = {"sun_zenith_deg": sun_zeniths, "wavelengths_nm": profile.wavelengths_nm,
                       "median_relative_difference": np.median(
