@@ -210,9 +210,9 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                       ) -> list[dict[str, float]]:
     """Diffuse sky radiance for every combination of the inputs, one dict per row with the keys
     sun_zenith_deg, view_zenith_deg, relative_azimuth_deg, wavelength_nm, radiance
-    [W m^-2 sr^-1 nm^-1] and toa_irradiance [W m^-2 nm^-1]. Relative azimuth 0 looks towards
-    the sun. Each wavelength is monochromatic (a 1 nm cell). `options`:
-    `solver_options(atmosphere)` by default."""
+    [W m^-2 sr^-1 nm^-1] and toa_irradiance [W m^-2 nm^-1], plus standard_error of the radiance
+    for the Monte Carlo solver. Relative azimuth 0 looks towards the sun. Each wavelength is
+    monochromatic (a 1 nm cell). `options`: `solver_options(atmosphere)` by default."""
     for value in sun_zeniths_deg:
         _check_range("sun zenith", value, 0.0, 180.0)
     for value in view_zeniths_deg:
@@ -226,15 +226,22 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     directions = local_frame_directions(view_zenith, azimuth)
     rows = []
     for sun_zenith in sun_zeniths_deg:
-        radiance = engine.sky_radiance(position, directions, sun_direction(sun_zenith, 0.0))
+        sun = sun_direction(sun_zenith, 0.0)
+        error = None
+        if hasattr(engine, "sky_radiance_with_error"):
+            radiance, error = engine.sky_radiance_with_error(position, directions, sun)
+        else:
+            radiance = engine.sky_radiance(position, directions, sun)
         for (i, vz), (j, az) in itertools.product(enumerate(view_zeniths_deg),
                                                    enumerate(relative_azimuths_deg)):
             for k, wavelength in enumerate(profile.wavelengths_nm):
-                rows.append({"sun_zenith_deg": float(sun_zenith), "view_zenith_deg": float(vz),
-                             "relative_azimuth_deg": float(az),
-                             "wavelength_nm": float(wavelength),
-                             "radiance": float(radiance[i, j, k]),
-                             "toa_irradiance": float(profile.toa_irradiance[k])})
+                row = {"sun_zenith_deg": float(sun_zenith), "view_zenith_deg": float(vz),
+                       "relative_azimuth_deg": float(az), "wavelength_nm": float(wavelength),
+                       "radiance": float(radiance[i, j, k]),
+                       "toa_irradiance": float(profile.toa_irradiance[k])}
+                if error is not None:
+                    row["standard_error"] = float(error[i, j, k])
+                rows.append(row)
     return rows
 
 
