@@ -18,13 +18,11 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from skyscatter import __version__
+from skyscatter.validate.suite import CASES as VALIDATION_CASES  # light: no solver imported
 
 __all__ = ["main"]
 
 CAMERAS = ("fisheye", "panorama", "perspective", "orbit")
-# the keys of skyscatter.validate.suite.CASES (kept here so that --help needs no heavy import;
-# tests/test_cli.py checks that they agree)
-VALIDATION_CASES = ("optical-depth", "lut-vs-montecarlo", "disort", "cie-sky", "spectrl2")
 
 
 def _float_list(text: str) -> list[float]:

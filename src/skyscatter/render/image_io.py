@@ -30,7 +30,7 @@ from PIL import Image, PngImagePlugin
 
 from skyscatter.errors import InputError
 
-__all__ = ["read_exr", "read_exr_attributes", "write_exr", "write_png"]
+__all__ = ["atomic_write", "read_exr", "read_exr_attributes", "write_exr", "write_png"]
 
 _DEFAULT_CHANNELS = {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}
 # Channels read back in this order; any others follow in the file's (alphabetical) order.
@@ -50,8 +50,9 @@ def _umask() -> int:
     return mask
 
 
-def _atomic_write(path: str | os.PathLike[str], write: Callable[[str], None]) -> Path:
-    """Call `write(temporary_path)`, then rename the result onto `path`; clean up on failure."""
+def atomic_write(path: str | os.PathLike[str], write: Callable[[str], None]) -> Path:
+    """Call `write(temporary_path)`, then rename the result onto `path`; clean up on failure.
+    An OSError becomes an InputError naming the file."""
     target = Path(path)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
@@ -125,7 +126,7 @@ def write_exr(path: str | os.PathLike[str], image: ArrayLike,
                              f"standard header name to a string", key="attributes", value=key)
         header[key] = value
     channels = {name: np.ascontiguousarray(arr[..., k]) for k, name in enumerate(names)}
-    return _atomic_write(path, lambda tmp: OpenEXR.File(header, channels).write(tmp))
+    return atomic_write(path, lambda tmp: OpenEXR.File(header, channels).write(tmp))
 
 
 def _open_exr(path: str | os.PathLike[str]) -> OpenEXR.File:
@@ -193,4 +194,4 @@ def write_png(path: str | os.PathLike[str], rgb8: ArrayLike,
     for key, value in (text or {}).items():
         info.add_text(str(key), str(value))
     picture = Image.fromarray(np.ascontiguousarray(arr))  # uint8 (h, w, 3|4) -> RGB|RGBA
-    return _atomic_write(path, lambda tmp: picture.save(tmp, format="PNG", pnginfo=info))
+    return atomic_write(path, lambda tmp: picture.save(tmp, format="PNG", pnginfo=info))

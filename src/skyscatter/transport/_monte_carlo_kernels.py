@@ -80,16 +80,23 @@ def phase_value(table, nu):
 
 
 @njit(cache=True)
+def pick_interval(cdf, n, u):
+    """(k, mass): the interval [k, k+1] of the cumulative probabilities cdf[:n] that holds the
+    uniform number u, and its probability (> 0 unless every interval is empty)."""
+    k = np.searchsorted(cdf[:n], u, side="right") - 1
+    k = min(max(k, 0), n - 2)
+    mass = cdf[k + 1] - cdf[k]
+    while mass <= 0.0 and k < n - 2:  # u on a flat stretch (rounding): move on
+        k += 1
+        mass = cdf[k + 1] - cdf[k]
+    return k, mass
+
+
+@njit(cache=True)
 def sample_phase(cdf, cos_grid, u):
     """(mu, proposal pdf [sr^-1]) drawn with uniform u from the cumulative masses `cdf`
     (n_angle,) over the nodes cos_grid = cos(theta_i)."""
-    n_angle = cdf.shape[0]
-    k = np.searchsorted(cdf, u, side="right") - 1
-    k = min(max(k, 0), n_angle - 2)
-    mass = cdf[k + 1] - cdf[k]
-    while mass <= 0.0 and k < n_angle - 2:  # u on a flat stretch (rounding): move on
-        k += 1
-        mass = cdf[k + 1] - cdf[k]
+    k, mass = pick_interval(cdf, cdf.shape[0], u)
     f = min(1.0, max(0.0, (u - cdf[k]) / mass)) if mass > 0.0 else 0.5
     mu = cos_grid[k] + f * (cos_grid[k + 1] - cos_grid[k])
     pdf = mass / (TWO_PI * (cos_grid[k] - cos_grid[k + 1]))
@@ -363,25 +370,24 @@ def first_collision_cdf(n, w, nu_sun, t_nodes, view_column, node_density, sun_co
         tau[j] = optical_depth(extinction, w, view_column[j])
     if n < 2 or tau[n - 1] <= 0.0:
         return False
-    collide_total = 1.0 - math.exp(-tau[n - 1])
-    lit_total = 0.0
-    lit_previous = 0.0
+    # cdf first holds the integrand at the nodes, then the cumulative probabilities.
     for j in range(n):
-        lit = 0.0
+        cdf[j] = 0.0
         if visible[j] > 0.0:
-            lit = (mixed_phase(w, nu_sun, node_density[j], scattering, scatterers, phase)
-                   * math.exp(-tau[j] - optical_depth(extinction, w, sun_column[j]))
-                   * visible[j])
-        if j > 0:
-            lit_total += 0.5 * (lit_previous + lit) * (t_nodes[j] - t_nodes[j - 1])
-            cdf[j] = lit_total  # for now: the cumulative lit integral
-        lit_previous = lit
-    cdf[0] = 0.0
-    lit_share = 0.5 if lit_total > 0.0 else 0.0
-    previous_lit = 0.0
+            cdf[j] = (mixed_phase(w, nu_sun, node_density[j], scattering, scatterers, phase)
+                      * math.exp(-tau[j] - optical_depth(extinction, w, sun_column[j]))
+                      * visible[j])
+    lit_total = 0.0
     for j in range(1, n):
-        lit_mass = (cdf[j] - previous_lit) / lit_total if lit_total > 0.0 else 0.0
-        previous_lit = cdf[j]
+        lit_total += 0.5 * (cdf[j - 1] + cdf[j]) * (t_nodes[j] - t_nodes[j - 1])
+    lit_share = 0.5 if lit_total > 0.0 else 0.0
+    collide_total = 1.0 - math.exp(-tau[n - 1])
+    lit_previous = cdf[0]
+    cdf[0] = 0.0
+    for j in range(1, n):
+        lit_mass = (0.5 * (lit_previous + cdf[j]) * (t_nodes[j] - t_nodes[j - 1]) / lit_total
+                    if lit_total > 0.0 else 0.0)
+        lit_previous = cdf[j]
         collide_mass = (math.exp(-tau[j - 1]) - math.exp(-tau[j])) / collide_total
         cdf[j] = cdf[j - 1] + lit_share * lit_mass + (1.0 - lit_share) * collide_mass
     for j in range(1, n):
@@ -389,16 +395,32 @@ def first_collision_cdf(n, w, nu_sun, t_nodes, view_column, node_density, sun_co
     return True
 
 
+@njit(parallel=True, cache=True)
+def first_collision_tables(nodes, sun, extinction, scattering, scatterers, phase, directions):
+    """`first_collision_cdf` of every ray and wavelength, once for all their paths: (in_air
+    (n_ray, n_wl), tau (n_ray, n_wl, n_max), cdf (n_ray, n_wl, n_max))."""
+    count, _, t_nodes, view_column, node_density, sun_column, visible = nodes
+    n_ray, n_max = t_nodes.shape
+    n_wl = extinction.shape[1]
+    in_air = np.zeros((n_ray, n_wl), dtype=np.bool_)
+    tau = np.zeros((n_ray, n_wl, n_max))
+    cdf = np.zeros((n_ray, n_wl, n_max))
+    for index in prange(n_ray * n_wl):
+        i = index // n_wl
+        w = index % n_wl
+        nu_sun = (directions[i, 0] * sun[0] + directions[i, 1] * sun[1]
+                  + directions[i, 2] * sun[2])
+        in_air[i, w] = first_collision_cdf(
+            count[i], w, nu_sun, t_nodes[i], view_column[i], node_density[i], sun_column[i],
+            visible[i], extinction, scattering, scatterers, phase, tau[i, w], cdf[i, w])
+    return in_air, tau, cdf
+
+
 @njit(cache=True)
 def first_collision(n, cdf, tau, t_nodes, u):
     """(distance [m], T [-] to it, interval length / its probability [m]) of a first collision
     drawn with uniform u from `first_collision_cdf`: an interval, then a uniform point in it."""
-    k = np.searchsorted(cdf[:n], u, side="right") - 1
-    k = min(max(k, 0), n - 2)
-    mass = cdf[k + 1] - cdf[k]
-    while mass <= 0.0 and k < n - 2:  # u on a flat stretch (rounding): move on
-        k += 1
-        mass = cdf[k + 1] - cdf[k]
+    k, mass = pick_interval(cdf, n, u)
     f = np.random.random()
     length = t_nodes[k + 1] - t_nodes[k]
     t = t_nodes[k] + f * length
@@ -410,10 +432,10 @@ def first_collision(n, cdf, tau, t_nodes, u):
 def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_orders, rr_start,
                bottom_radius, top_radius, h_step, density, extinction, scattering, scatterers,
                phase, cdf, majorant, sun_irradiance, albedo, sun_angular_radius,
-               n_sun_samples, nodes):
+               n_sun_samples, nodes, first):
     """Sums and sums of squares (n_ray, n_wl, n_batch) of the path estimates [W m^-2 sr^-1
-    nm^-1] of `n_paths` paths per ray and wavelength, in batches of `batch` paths; `nodes` is
-    what `view_ray_nodes` returns for these rays. Each path
+    nm^-1] of `n_paths` paths per ray and wavelength, in batches of `batch` paths; `nodes` and
+    `first` are what `view_ray_nodes` and `first_collision_tables` return for these rays. Each path
     has two branches: a first collision in the air drawn from `first_collision_cdf` (weight
     T beta_e / pdf), and, when the view ray meets the ground, the ground seen through the
     transmittance T of the whole ray. The work unit (ray, wavelength, batch) is seeded with
@@ -426,8 +448,8 @@ def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_o
     sums = np.zeros((n_ray, n_wl, n_batch))
     squares = np.zeros((n_ray, n_wl, n_batch))
     cos_grid = np.cos(np.linspace(0.0, math.pi, n_angle))
-    count, hits, t_nodes, view_column, node_density, sun_column, visible = nodes
-    n_max = t_nodes.shape[1]
+    count, hits, t_nodes = nodes[0], nodes[1], nodes[2]
+    in_air_all, tau_all, cdf_all = first
     for unit in prange(n_ray * n_wl * n_batch):
         i = unit // (n_wl * n_batch)
         w = (unit // n_batch) % n_wl
@@ -436,14 +458,11 @@ def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_o
         np.random.seed((seed * 1_000_003 + index * 7_919 + 12_345) % 4_294_967_296)
         dens = np.empty(n_c)
         column = np.empty(n_c)
-        tau = np.zeros(n_max)
-        first_cdf = np.zeros(n_max)
         n = count[i]
+        in_air = in_air_all[i, w]
+        tau = tau_all[i, w]
+        first_cdf = cdf_all[i, w]
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        nu_sun = dx * sun[0] + dy * sun[1] + dz * sun[2]
-        in_air = first_collision_cdf(n, w, nu_sun, t_nodes[i], view_column[i], node_density[i],
-                                     sun_column[i], visible[i], extinction, scattering,
-                                     scatterers, phase, tau, first_cdf)
         ground_transmittance = math.exp(-tau[n - 1]) if n > 0 else 1.0
         t_ground = t_nodes[i, n - 1] if n > 0 else t_nodes[i, 0]
         gx = origins[i, 0] + t_ground * dx

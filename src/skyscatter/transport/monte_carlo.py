@@ -157,6 +157,9 @@ class MonteCarloSolver:
                 origins[start:stop], directions[start:stop], sun, self.n_view_intervals,
                 p.bottom_radius_m, p.top_radius_m, self._h_step, self._density,
                 float(p.sun_angular_radius_rad), self.n_sun_samples)
+            first = _monte_carlo_kernels.first_collision_tables(
+                nodes, sun, self._extinction, self._scattering, self._scatterers, self._phase,
+                directions[start:stop])
             sums, squares = _monte_carlo_kernels.trace_rays(
                 origins[start:stop], directions[start:stop], start, sun, n, self.batch,
                 self.seed, self.max_orders, self.rr_start, p.bottom_radius_m,
@@ -164,7 +167,7 @@ class MonteCarloSolver:
                 self._scattering, self._scatterers, self._phase, self._cdf, self._majorant,
                 np.ascontiguousarray(p.toa_irradiance, dtype=np.float64),
                 np.ascontiguousarray(p.ground_albedo, dtype=np.float64),
-                float(p.sun_angular_radius_rad), self.n_sun_samples, nodes)
+                float(p.sun_angular_radius_rad), self.n_sun_samples, nodes, first)
             m = sums.sum(axis=2) / n
             variance = np.maximum(squares.sum(axis=2) / n - m * m, 0.0) * n / (n - 1)
             mean[start:stop] = m

@@ -5,8 +5,6 @@ Public names: `new_figure`, `save_figure`.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import matplotlib
@@ -14,6 +12,8 @@ import matplotlib
 matplotlib.use("Agg")  # files only; never a window
 
 import matplotlib.pyplot as plt  # noqa: E402 (after choosing the backend)
+
+from skyscatter.render.image_io import atomic_write  # noqa: E402
 
 __all__ = ["new_figure", "save_figure"]
 
@@ -32,17 +32,10 @@ def new_figure(n_rows: int = 1, n_cols: int = 1, width_in: float = 6.4,
 def save_figure(figure, output_dir: Path, name: str) -> str:
     """Save `figure` as `output_dir/name` (PNG) through a temporary file and close it; return
     `name` (the path relative to the report)."""
-    output_dir = Path(output_dir)
-    output_dir.mkdir(parents=True, exist_ok=True)
     figure.tight_layout()
-    handle, temporary = tempfile.mkstemp(dir=output_dir, prefix=f".{name}.", suffix=".png")
-    os.close(handle)
     try:
-        figure.savefig(temporary, dpi=DPI, format="png")
-        os.replace(temporary, output_dir / name)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+        atomic_write(Path(output_dir) / name,
+                     lambda temporary: figure.savefig(temporary, dpi=DPI, format="png"))
     finally:
         plt.close(figure)
     return name

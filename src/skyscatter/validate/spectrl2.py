@@ -69,6 +69,7 @@ from skyscatter.spectrum.solar import solar_irradiance_1au
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.validate.common import table_solver
+from skyscatter.validate.optical_depth import vertical_columns, vertical_optical_depth
 from skyscatter.validate.plots import new_figure, save_figure
 from skyscatter.validate.report import (
     CaseResult,
@@ -315,10 +316,9 @@ def slant_air_mass(profile, sun_zenith_deg: float, n_steps: int = 4000) -> dict[
     h = np.sqrt(r * r + s * s + 2.0 * r * s * mu) - r
     z = profile.altitudes_m
     masses = {}
-    for name, density in zip(profile.names, profile.density, strict=True):
-        slant = np.trapezoid(np.interp(h, z, density, right=0.0), s)
-        vertical = np.trapezoid(density, z)
-        masses[name] = float(slant / vertical)
+    for name, density, vertical in zip(profile.names, profile.density,
+                                       vertical_columns(profile), strict=True):
+        masses[name] = float(np.trapezoid(np.interp(h, z, density, right=0.0), s) / vertical)
     return masses
 
 
@@ -339,8 +339,7 @@ def _air_mass_direct_ratio(profile, ours: dict[str, float], theirs: dict[str, fl
     """exp(-sum_c tau_c (m_c - m_c^SPECTRL2)): the direct-beam ratio ours/SPECTRL2 that the
     different air masses alone make, with our vertical optical depths tau_c (trapezoid on the
     profile's levels); constituents SPECTRL2 does not name get its air mass m."""
-    column = np.trapezoid(profile.density, profile.altitudes_m, axis=1)
-    tau = column[:, None] * profile.extinction_per_density  # (n_c, n_wl)
+    tau = vertical_optical_depth(profile)  # (n_c, n_wl)
     difference = np.array([ours[name] - theirs.get(name, theirs["aerosol"])
                            for name in profile.names])
     return np.exp(-(difference @ tau))
