@@ -7,7 +7,10 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "skyscatter"
 
-# Subpackage -> the skyscatter subpackages it may import (besides itself and `errors`).
+# Base modules every layer may import; they import no layer themselves.
+BASE = {"errors", "disk_cache"}
+
+# Subpackage -> the skyscatter subpackages it may import (besides itself and BASE).
 ALLOWED = {
     "spectrum": set(),
     "optics": {"spectrum"},
@@ -38,10 +41,16 @@ def test_no_module_imports_a_later_layer():
     wrong = []
     for layer, allowed in ALLOWED.items():
         for path in sorted((PACKAGE / layer).rglob("*.py")):
-            bad = imported_subpackages(path) - allowed - {layer, "errors"}
+            bad = imported_subpackages(path) - allowed - {layer} - BASE
             if bad:
                 wrong.append(f"{path.relative_to(PACKAGE)} imports {sorted(bad)}")
     assert not wrong, "imports pointing backwards in the data flow:\n" + "\n".join(wrong)
+
+
+def test_base_modules_import_no_layer():
+    for name in sorted(BASE):
+        bad = imported_subpackages(PACKAGE / f"{name}.py") - BASE
+        assert not bad, f"{name}.py imports {sorted(bad)}"
 
 
 def test_layering_check_sees_imports():

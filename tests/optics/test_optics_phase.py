@@ -14,6 +14,7 @@ from skyscatter.optics.phase import (
     PhaseFunction,
     RayleighPhase,
     TabulatedPhase,
+    angle_blended_phase,
     cornette_shanks,
     cornette_shanks_asymmetry,
     double_henyey_greenstein,
@@ -237,3 +238,35 @@ def test_tabulated_phase_grey_column_and_out_of_range_wavelengths():
 def test_bad_phase_parameters_are_input_errors(make, message):
     with pytest.raises(InputError, match=message):
         make()
+
+
+def test_angle_blended_phase_ends_and_normalisation():
+    # Forward lobe at 0 deg, backward lobe at 180 deg, each up to the renormalisation, which
+    # the blend's own 4 pi integral fixes.
+    angles = np.concatenate([np.linspace(0.0, 5.0, 101), np.linspace(5.5, 180.0, 350)])
+    wl = np.array([440.0, 680.0])
+    forward = HenyeyGreensteinPhase(0.8)
+    backward = HenyeyGreensteinPhase(-0.3)
+    blend = angle_blended_phase(forward, backward, angles, wl)
+    nu = np.cos(np.deg2rad(angles))
+    raw = ((1 - angles / 180)[:, None] * forward.evaluate(nu, wl)
+           + (angles / 180)[:, None] * backward.evaluate(nu, wl))
+    norm = 2 * np.pi * np.trapezoid(raw * np.sin(np.deg2rad(angles))[:, None],
+                                    np.deg2rad(angles), axis=0)
+    np.testing.assert_allclose(blend.evaluate(1.0, wl), forward.evaluate(1.0, wl) / norm,
+                               rtol=1e-3)
+    np.testing.assert_allclose(blend.evaluate(-1.0, wl), backward.evaluate(-1.0, wl) / norm,
+                               rtol=1e-3)
+    theta = np.linspace(0.0, np.pi, 200_001)  # fine trapezoid of the tabulated interpolant
+    total = 2 * np.pi * np.trapezoid(blend.evaluate(np.cos(theta), wl)
+                                     * np.sin(theta)[:, None], theta, axis=0)
+    np.testing.assert_allclose(total, 1.0, atol=1e-4)
+
+
+def test_angle_blend_of_one_function_with_itself_is_that_function():
+    angles = np.linspace(0.0, 180.0, 721)
+    phase = DoubleHenyeyGreensteinPhase(0.67, 0.094, 0.743)
+    blend = angle_blended_phase(phase, phase, angles, [550.0])
+    nu = np.cos(np.deg2rad([0.0, 30.0, 90.0, 150.0]))
+    np.testing.assert_allclose(blend.evaluate(nu, [550.0]), phase.evaluate(nu, [550.0]),
+                               rtol=2e-3)

@@ -110,7 +110,9 @@ def test_depolarization_overrides_king_model():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    ({"gas": "neon"}, r"unknown gas 'neon'; allowed: air, co2"),
+    ({"gas": "neon"}, r"unknown gas 'neon'; allowed: air, ar, ch4, co2, h2, he, n2, o2"),
+    ({"gas": "he"}, r"'bodhaine-1999' has no value for gas 'he'; it covers: air, ar, co2, n2, "
+                    r"o2 \(or give depolarization=...\)"),
     ({"king": "bates"}, r"unknown king 'bates'; allowed: bodhaine-1999, none"),
     ({"phase": "mie"}, r"unknown phase 'mie'; allowed: penndorf, rayleigh"),
     ({"king": "none", "depolarization": 0.03}, "either king or depolarization"),

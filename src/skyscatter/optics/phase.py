@@ -37,6 +37,7 @@ __all__ = [
     "PhaseFunction",
     "RayleighPhase",
     "TabulatedPhase",
+    "angle_blended_phase",
     "cornette_shanks",
     "cornette_shanks_asymmetry",
     "double_henyey_greenstein",
@@ -341,6 +342,37 @@ class TabulatedPhase:
 
     def asymmetry(self, wavelengths_nm: np.ndarray) -> np.ndarray:
         return self._g @ self._wavelength_weights(_wavelengths(wavelengths_nm))
+
+
+def angle_blended_phase(forward: PhaseFunction, backward: PhaseFunction, angles_deg: ArrayLike,
+                        wavelengths_nm: ArrayLike) -> TabulatedPhase:
+    """Blend of two phase functions whose weight moves linearly with the scattering angle.
+
+    p(theta) ∝ (1 - theta/pi) p_forward(theta) + (theta/pi) p_backward(theta), renormalised
+    at every wavelength (by `TabulatedPhase`): pure `forward` at 0 deg, pure `backward` at 180 deg.
+    This is the "hybrid" Mars dust of Meyran (2022, M.Sc. thesis, Hochschule Hannover, §4.1):
+    the forward peak of a Mie phase function with Costa et al.'s double Henyey-Greenstein in side
+    and back scattering. The thesis does not print its weight; the linear-in-angle weight is the
+    reading of shared/research/seed-004.md §2.13 (the hybrid "converges to" Costa's function in
+    back scattering and keeps the Mie forward peak).
+
+    Parameters
+    ----------
+    forward, backward : PhaseFunction
+        The phase functions that dominate at 0 and at 180 deg.
+    angles_deg : array_like, shape (n_angle,)
+        Angles of the table, strictly increasing from 0 to 180; fine near 0 to keep the
+        forward peak. [deg]
+    wavelengths_nm : array_like, shape (n_wl,)
+        Wavelengths of the table, strictly increasing. [nm]
+    """
+    theta_deg = np.asarray(angles_deg, dtype=np.float64)
+    wl = _wavelengths(wavelengths_nm)
+    nu = np.cos(np.deg2rad(theta_deg))
+    weight = (theta_deg / 180.0)[:, None]
+    values = ((1.0 - weight) * forward.evaluate(nu, wl)
+              + weight * backward.evaluate(nu, wl))
+    return TabulatedPhase(theta_deg, values, wl)
 
 
 def _refine(theta: np.ndarray) -> np.ndarray:

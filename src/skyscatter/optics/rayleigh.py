@@ -29,6 +29,7 @@ from skyscatter.optics.refractive_index import GASES, gas_refractivity
 from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = [
+    "KING_FACTOR_AR_BODHAINE_1999",
     "KING_FACTOR_CO2_BODHAINE_1999",
     "KING_FACTOR_MODELS",
     "RAYLEIGH_PHASES",
@@ -36,11 +37,15 @@ __all__ = [
     "TabulatedScatteringOptics",
     "king_factor_air_bodhaine_1999",
     "king_factor_from_depolarization",
+    "king_factor_n2_bates_1984",
+    "king_factor_o2_bates_1984",
     "rayleigh_cross_section",
+    "rayleigh_cross_section_from_polarizability",
     "rayleigh_optical_depth_bodhaine1999",
 ]
 
 KING_FACTOR_CO2_BODHAINE_1999 = 1.15  # -, Bodhaine et al. (1999), F(CO2) in eq. 23
+KING_FACTOR_AR_BODHAINE_1999 = 1.00  # -, Bodhaine et al. (1999), F(Ar) in eqs. 23-27
 
 
 def king_factor_from_depolarization(depolarization: ArrayLike) -> np.ndarray:
@@ -67,12 +72,55 @@ def king_factor_from_depolarization(depolarization: ArrayLike) -> np.ndarray:
     return (6.0 + 3.0 * delta) / (6.0 - 7.0 * delta)
 
 
+def king_factor_n2_bates_1984(wavelengths_nm: ArrayLike) -> np.ndarray:
+    r"""King factor of N2, F_N2 = 1.034 + 3.17e-4 lam^-2, lam in µm.
+
+    Bates (1984), Planet. Space Sci. 32, 785, doi:10.1016/0032-0633(84)90102-8, as quoted by
+    Bodhaine et al. (1999), J. Atmos. Oceanic Technol. 16, 1854, eqs. 23-27,
+    doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2. F_N2(550 nm) = 1.0350.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+
+    Returns
+    -------
+    ndarray, shape S
+        King factor F. [-]
+    """
+    inv2 = 1.0 / (np.asarray(wavelengths_nm, dtype=np.float64) * 1.0e-3) ** 2
+    return 1.034 + 3.17e-4 * inv2
+
+
+def king_factor_o2_bates_1984(wavelengths_nm: ArrayLike) -> np.ndarray:
+    r"""King factor of O2, F_O2 = 1.096 + 1.385e-3 lam^-2 + 1.448e-4 lam^-4, lam in µm.
+
+    Bates (1984), Planet. Space Sci. 32, 785, doi:10.1016/0032-0633(84)90102-8, as quoted by
+    Bodhaine et al. (1999), J. Atmos. Oceanic Technol. 16, 1854, eqs. 23-27,
+    doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2. F_O2(550 nm) = 1.1021.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+
+    Returns
+    -------
+    ndarray, shape S
+        King factor F. [-]
+    """
+    inv2 = 1.0 / (np.asarray(wavelengths_nm, dtype=np.float64) * 1.0e-3) ** 2
+    return 1.096 + 1.385e-3 * inv2 + 1.448e-4 * inv2 * inv2
+
+
 def king_factor_air_bodhaine_1999(wavelengths_nm: ArrayLike, co2_ppm: float = 360.0) -> np.ndarray:
     r"""King factor of dry air, a mixing-ratio-weighted mean over its gases.
 
     F_air = (78.084 F_N2 + 20.946 F_O2 + 0.934 F_Ar + C F_CO2) / (78.084 + 20.946 + 0.934 + C),
     F_N2 = 1.034 + 3.17e-4 lam^-2, F_O2 = 1.096 + 1.385e-3 lam^-2 + 1.448e-4 lam^-4,
-    F_Ar = 1.00, F_CO2 = 1.15; lam in µm, C the CO2 mixing ratio in percent by volume.
+    F_Ar = 1.00, F_CO2 = 1.15; lam in µm, C the CO2 mixing ratio in percent by volume
+    (`king_factor_n2_bates_1984`, `king_factor_o2_bates_1984`).
     Bodhaine et al. (1999), J. Atmos. Oceanic Technol. 16, 1854, eqs. 23-27,
     doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2 (F_N2 and F_O2 from Bates 1984).
     F_air(550 nm, 360 ppm) = 1.0488.
@@ -89,12 +137,10 @@ def king_factor_air_bodhaine_1999(wavelengths_nm: ArrayLike, co2_ppm: float = 36
     ndarray, shape S
         King factor F. [-]
     """
-    lam_um = np.asarray(wavelengths_nm, dtype=np.float64) * 1.0e-3
-    inv2 = 1.0 / lam_um**2
-    f_n2 = 1.034 + 3.17e-4 * inv2
-    f_o2 = 1.096 + 1.385e-3 * inv2 + 1.448e-4 * inv2 * inv2
+    f_n2 = king_factor_n2_bates_1984(wavelengths_nm)
+    f_o2 = king_factor_o2_bates_1984(wavelengths_nm)
     c_percent = co2_ppm * 1.0e-4
-    f_ar = 1.00
+    f_ar = KING_FACTOR_AR_BODHAINE_1999
     f_co2 = KING_FACTOR_CO2_BODHAINE_1999
     return ((78.084 * f_n2 + 20.946 * f_o2 + 0.934 * f_ar + c_percent * f_co2)
             / (78.084 + 20.946 + 0.934 + c_percent))
@@ -135,6 +181,37 @@ def rayleigh_cross_section(wavelengths_nm: ArrayLike, n_minus_1: ArrayLike,
             * np.asarray(king_factor, dtype=np.float64))
 
 
+def rayleigh_cross_section_from_polarizability(wavelengths_nm: ArrayLike,
+                                               polarizability_m3: ArrayLike,
+                                               king_factor: ArrayLike) -> np.ndarray:
+    r"""Rayleigh scattering cross-section per molecule from its polarisability volume.
+
+    sigma = 128 pi^5 alpha'^2 F / (3 lambda^4),
+    alpha' = alpha / (4 pi eps0) the polarisability volume [m^3]; lambda in metres inside.
+    This is `rayleigh_cross_section` (Bodhaine et al. 1999, eq. 2) with the Lorentz-Lorenz
+    relation (n^2 - 1) / (n^2 + 2) = 4 pi N alpha' / 3 substituted, so both give the same sigma
+    for the same molecule; in a dilute gas n - 1 = 2 pi N alpha' to first order.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+    polarizability_m3 : array_like, broadcastable to S
+        Polarisability volume alpha'. [m^3]
+    king_factor : array_like, broadcastable to S
+        King correction factor F. [-]
+
+    Returns
+    -------
+    ndarray, shape S
+        Scattering cross-section. [m^2]
+    """
+    lam_m = np.asarray(wavelengths_nm, dtype=np.float64) * 1.0e-9
+    alpha = np.asarray(polarizability_m3, dtype=np.float64)
+    return (128.0 * np.pi**5 * alpha**2 / (3.0 * lam_m**4)
+            * np.asarray(king_factor, dtype=np.float64))
+
+
 def rayleigh_optical_depth_bodhaine1999(wavelength_nm: ArrayLike) -> np.ndarray:
     r"""Sea-level Rayleigh optical depth of the standard Earth atmosphere.
 
@@ -160,11 +237,15 @@ def rayleigh_optical_depth_bodhaine1999(wavelength_nm: ArrayLike) -> np.ndarray:
             / (1.0 + 0.0027059889 / lam2 - 85.968563 * lam2))
 
 
-# King-factor models by name: gas -> F(wavelengths_nm, co2_ppm).
+# King-factor models by name: gas -> F(wavelengths_nm, co2_ppm). Bodhaine 1999 (eqs. 23-27)
+# gives F for air and its four main gases; for the other gases give a depolarisation ratio.
 KING_FACTOR_MODELS = {
     "bodhaine-1999": {
         "air": king_factor_air_bodhaine_1999,
+        "ar": lambda wl, co2_ppm: np.full(np.shape(wl), KING_FACTOR_AR_BODHAINE_1999),
         "co2": lambda wl, co2_ppm: np.full(np.shape(wl), KING_FACTOR_CO2_BODHAINE_1999),
+        "n2": lambda wl, co2_ppm: king_factor_n2_bates_1984(wl),
+        "o2": lambda wl, co2_ppm: king_factor_o2_bates_1984(wl),
     },
     "none": {
         gas: (lambda wl, co2_ppm: np.ones(np.shape(wl))) for gas in GASES
@@ -195,9 +276,10 @@ class RayleighOptics:
     Parameters
     ----------
     gas : str
-        "air" or "co2" (`refractive_index.GASES`).
+        A name in `refractive_index.GASES`: "air", "ar", "ch4", "co2", "h2", "he", "n2", "o2".
     king : str
-        "bodhaine-1999" (air: Bodhaine eqs. 23-27; CO2: 1.15) or "none" (F = 1).
+        "bodhaine-1999" (air: Bodhaine eqs. 23-27; N2, O2: Bates 1984; Ar: 1.00; CO2: 1.15; no
+        value for ch4, h2, he: give `depolarization`) or "none" (F = 1).
     depolarization : float or None
         Depolarisation ratio delta; overrides `king` when given (then `king` must be left at
         its default). [-]
@@ -216,7 +298,7 @@ class RayleighOptics:
     def __post_init__(self) -> None:
         gas = _choice(GASES, self.gas, "gas")
         king = _choice(KING_FACTOR_MODELS, self.king, "king")
-        if gas not in KING_FACTOR_MODELS[king]:
+        if gas not in KING_FACTOR_MODELS[king] and self.depolarization is None:
             allowed = ", ".join(sorted(KING_FACTOR_MODELS[king]))
             raise InputError(f"King-factor model {king!r} has no value for gas {gas!r}; it "
                              f"covers: {allowed} (or give depolarization=...)", key="king",

@@ -8,6 +8,22 @@ gas it was measured at, because (n^2 - 1)/N_s is (to first order) independent of
   Oceanic Technol. 16, 1854, eq. 19, doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2.
 - co2: Bideau-Mehu, Guern, Abjean & Johannin-Gilles (1973), Opt. Commun. 9, 432,
   doi:10.1016/0030-4018(73)90289-7, at 0 °C and 101325 Pa.
+- n2: Peck & Khanna (1966), J. Opt. Soc. Am. 56, 1059, doi:10.1364/JOSA.56.001059, and Bates
+  (1984) below 468 nm, as quoted by Sneep & Ubachs (2005), JQSRT 92, 293,
+  doi:10.1016/j.jqsrt.2004.07.025, at 15 °C and 1013.25 hPa.
+- o2: Zhang, Lu & Wang (2008), Appl. Opt. 47, 3143, doi:10.1364/AO.47.003143, at 20 °C and
+  101325 Pa.
+- ar: Peck & Fisher (1964), J. Opt. Soc. Am. 54, 1362, doi:10.1364/JOSA.54.001362, at 15 °C.
+- h2: Peck & Huang (1977), J. Opt. Soc. Am. 67, 1550, doi:10.1364/JOSA.67.001550, at 0 °C.
+- he: Mansfield & Peck (1969), J. Opt. Soc. Am. 59, 199, doi:10.1364/JOSA.59.000199, at 0 °C.
+- ch4: one value, n - 1 = 4.44e-4 at 589.3 nm and 0 °C (Kaye & Laby), without dispersion.
+
+The coefficients of the Ar, H2, He and O2 formulas are those of the refractiveindex.info
+database (Polyanskiy 2024, Sci. Data 11, 94, doi:10.1038/s41597-023-02898-2), files
+`data/main/{Ar,H2,He,O2}/*.yml`; those of N2 are Sneep & Ubachs's (the database's own fit of
+Peck & Khanna's data at 15 °C agrees within 0.02 %). Reference number densities are ideal-gas values
+P / (k T); the gases' non-ideality at 1 atm (compressibility Z = 0.993 for CO2 at 0 °C, closer to
+1 for the others) is left out, so CO2's cross-section is about 1.4 % high.
 
 `gas_refractivity(gas, wavelengths_nm)` picks one of these by name.
 """
@@ -20,21 +36,35 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skyscatter.errors import InputError
+from skyscatter.spectrum.star import BOLTZMANN
 
 __all__ = [
     "AIR_NUMBER_DENSITY_288K_M3",
     "GASES",
     "LOSCHMIDT_M3",
+    "NUMBER_DENSITY_293K_M3",
+    "REFRACTIVITY_CH4_KAYE_LABY",
     "gas_refractivity",
     "refractivity_air_bodhaine_1999",
     "refractivity_air_peck_reeder_1972",
+    "refractivity_ar_peck_fisher_1964",
+    "refractivity_ch4_kaye_laby",
     "refractivity_co2_bideau_mehu_1973",
+    "refractivity_h2_peck_huang_1977",
+    "refractivity_he_mansfield_peck_1969",
+    "refractivity_n2_peck_khanna_1966",
+    "refractivity_o2_zhang_2008",
 ]
 
 # m^-3, dry air at 288.15 K and 1013.25 hPa; Bodhaine et al. (1999), N_s below their eq. 2.
 AIR_NUMBER_DENSITY_288K_M3 = 2.546899e25
 # m^-3, ideal gas at 273.15 K and 101325 Pa; CODATA 2018 Loschmidt constant.
 LOSCHMIDT_M3 = 2.6867811e25
+# m^-3, ideal gas at 293.15 K and 101325 Pa: P / (k T), k exact (SI 2019).
+NUMBER_DENSITY_293K_M3 = 101325.0 / (BOLTZMANN * 293.15)
+# -, n - 1 of methane at 589.3 nm, 0 °C and 101325 Pa: (n - 1) 10^6 = 444. Kaye & Laby, Tables
+# of Physical and Chemical Constants (NPL), section 2.5.7 "Refractive index of gases".
+REFRACTIVITY_CH4_KAYE_LABY = 4.44e-4
 
 
 def _inverse_square_micrometres(wavelengths_nm: ArrayLike) -> np.ndarray:
@@ -124,18 +154,170 @@ def refractivity_co2_bideau_mehu_1973(wavelengths_nm: ArrayLike) -> np.ndarray:
             + 1.46847e-6 / (0.0584738 - s2))
 
 
+def refractivity_n2_peck_khanna_1966(wavelengths_nm: ArrayLike) -> np.ndarray:
+    r"""Refractivity of pure N2 at 15 °C and 1013.25 hPa.
+
+    (n - 1) 10^8 = 6498.2   + 307.43305e12 / (14.4e9 - nu^2)   for nu <= 21360 cm^-1,
+                 = 5677.465 + 318.81874e12 / (14.4e9 - nu^2)   for nu >  21360 cm^-1,
+    nu = 1 / lambda [cm^-1]. The first branch (lambda >= 468.2 nm) is Peck & Khanna (1966),
+    J. Opt. Soc. Am. 56, 1059, doi:10.1364/JOSA.56.001059 (measured 468-2058 nm); the second is
+    Bates (1984), Planet. Space Sci. 32, 785, doi:10.1016/0032-0633(84)90102-8; both as quoted by
+    Sneep & Ubachs (2005), JQSRT 92, 293, doi:10.1016/j.jqsrt.2004.07.025. The branches differ by
+    1.5e-4 of n - 1 at 468.2 nm. Holds at the number density `AIR_NUMBER_DENSITY_288K_M3`.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+
+    Returns
+    -------
+    ndarray, shape S
+        n - 1. [-]
+    """
+    nu2 = _inverse_square_micrometres(wavelengths_nm) * 1.0e8  # cm^-2
+    visible = 1.0e-8 * (6498.2 + 307.43305e12 / (14.4e9 - nu2))
+    ultraviolet = 1.0e-8 * (5677.465 + 318.81874e12 / (14.4e9 - nu2))
+    return np.where(nu2 <= 21360.0**2, visible, ultraviolet)
+
+
+def refractivity_o2_zhang_2008(wavelengths_nm: ArrayLike) -> np.ndarray:
+    r"""Refractivity of pure O2 at 20 °C and 101325 Pa.
+
+    n - 1 = 1.181494e-4 + 9.708931e-3 / (75.4 - sigma^2),   sigma = 1 / lambda[µm].
+    Zhang, Lu & Wang (2008), Appl. Opt. 47, 3143, doi:10.1364/AO.47.003143, with Křen (2011),
+    Appl. Opt. 50, 6484, doi:10.1364/AO.50.006484; fitted from 400 nm to 1800 nm. Holds at the
+    number density `NUMBER_DENSITY_293K_M3`.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+
+    Returns
+    -------
+    ndarray, shape S
+        n - 1. [-]
+    """
+    s2 = _inverse_square_micrometres(wavelengths_nm)
+    return 1.181494e-4 + 9.708931e-3 / (75.4 - s2)
+
+
+def refractivity_ar_peck_fisher_1964(wavelengths_nm: ArrayLike) -> np.ndarray:
+    r"""Refractivity of argon at 15 °C and 101325 Pa.
+
+    n - 1 = 6.432135e-5 + 2.8606021e-2 / (144 - sigma^2),   sigma = 1 / lambda[µm].
+    Peck & Fisher (1964), J. Opt. Soc. Am. 54, 1362, doi:10.1364/JOSA.54.001362; measured from
+    468 nm to 2059 nm. Holds at the number density `AIR_NUMBER_DENSITY_288K_M3`.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+
+    Returns
+    -------
+    ndarray, shape S
+        n - 1. [-]
+    """
+    s2 = _inverse_square_micrometres(wavelengths_nm)
+    return 6.432135e-5 + 2.8606021e-2 / (144.0 - s2)
+
+
+def refractivity_h2_peck_huang_1977(wavelengths_nm: ArrayLike) -> np.ndarray:
+    r"""Refractivity of H2 at 0 °C and 101325 Pa.
+
+    n - 1 = 0.0148956 / (180.7 - sigma^2) + 0.0049037 / (92 - sigma^2),  sigma = 1 / lambda[µm].
+    Peck & Huang (1977), J. Opt. Soc. Am. 67, 1550, doi:10.1364/JOSA.67.001550; measured from
+    168 nm to 1695 nm. Holds at the number density `LOSCHMIDT_M3`.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+
+    Returns
+    -------
+    ndarray, shape S
+        n - 1. [-]
+    """
+    s2 = _inverse_square_micrometres(wavelengths_nm)
+    return 0.0148956 / (180.7 - s2) + 0.0049037 / (92.0 - s2)
+
+
+def refractivity_he_mansfield_peck_1969(wavelengths_nm: ArrayLike) -> np.ndarray:
+    r"""Refractivity of helium at 0 °C and 101325 Pa.
+
+    n - 1 = 0.01470091 / (423.98 - sigma^2),   sigma = 1 / lambda[µm].
+    Mansfield & Peck (1969), J. Opt. Soc. Am. 59, 199, doi:10.1364/JOSA.59.000199; measured from
+    480 nm to 2059 nm. Holds at the number density `LOSCHMIDT_M3`.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+
+    Returns
+    -------
+    ndarray, shape S
+        n - 1. [-]
+    """
+    s2 = _inverse_square_micrometres(wavelengths_nm)
+    return 0.01470091 / (423.98 - s2)
+
+
+def refractivity_ch4_kaye_laby(wavelengths_nm: ArrayLike) -> np.ndarray:
+    r"""Refractivity of methane at 0 °C and 101325 Pa, one value for every wavelength.
+
+    n - 1 = 4.44e-4 (`REFRACTIVITY_CH4_KAYE_LABY`), measured at 589.3 nm: Kaye & Laby, Tables of
+    Physical and Chemical Constants (NPL), section 2.5.7. A deliberate simplification: the
+    dispersion is left out, for want of a formula whose coefficients we could check; that of
+    comparable gases (N2: n - 1 is 1.3 % larger at 440 nm than at 589 nm) makes the cross-section
+    a few percent low in the blue. Holds at the number density `LOSCHMIDT_M3`.
+
+    Parameters
+    ----------
+    wavelengths_nm : array_like, shape S
+        Wavelength. [nm]
+
+    Returns
+    -------
+    ndarray, shape S
+        n - 1. [-]
+    """
+    s2 = _inverse_square_micrometres(wavelengths_nm)
+    return np.full(s2.shape, REFRACTIVITY_CH4_KAYE_LABY)
+
+
 def _air(wavelengths_nm: ArrayLike, co2_ppm: float) -> tuple[np.ndarray, float]:
     return refractivity_air_bodhaine_1999(wavelengths_nm, co2_ppm), AIR_NUMBER_DENSITY_288K_M3
 
 
-def _co2(wavelengths_nm: ArrayLike, co2_ppm: float) -> tuple[np.ndarray, float]:
-    return refractivity_co2_bideau_mehu_1973(wavelengths_nm), LOSCHMIDT_M3
+def _pure(function: Callable[[ArrayLike], np.ndarray], number_density_m3: float
+          ) -> Callable[[ArrayLike, float], tuple[np.ndarray, float]]:
+    """A pure gas's formula as a `GASES` entry (co2_ppm does not apply)."""
+    def refractivity(wavelengths_nm: ArrayLike, co2_ppm: float) -> tuple[np.ndarray, float]:
+        return function(wavelengths_nm), number_density_m3
+    return refractivity
 
 
 # name -> (refractivity function, description); co2_ppm only affects "air".
 GASES: dict[str, tuple[Callable[[ArrayLike, float], tuple[np.ndarray, float]], str]] = {
     "air": (_air, "dry air, Peck & Reeder 1972 + Bodhaine 1999 CO2 correction, 288.15 K"),
-    "co2": (_co2, "carbon dioxide, Bideau-Mehu et al. 1973, 273.15 K"),
+    "ar": (_pure(refractivity_ar_peck_fisher_1964, AIR_NUMBER_DENSITY_288K_M3),
+           "argon, Peck & Fisher 1964, 288.15 K"),
+    "ch4": (_pure(refractivity_ch4_kaye_laby, LOSCHMIDT_M3),
+            "methane, Kaye & Laby (589.3 nm, no dispersion), 273.15 K"),
+    "co2": (_pure(refractivity_co2_bideau_mehu_1973, LOSCHMIDT_M3),
+            "carbon dioxide, Bideau-Mehu et al. 1973, 273.15 K"),
+    "h2": (_pure(refractivity_h2_peck_huang_1977, LOSCHMIDT_M3),
+           "hydrogen, Peck & Huang 1977, 273.15 K"),
+    "he": (_pure(refractivity_he_mansfield_peck_1969, LOSCHMIDT_M3),
+           "helium, Mansfield & Peck 1969, 273.15 K"),
+    "n2": (_pure(refractivity_n2_peck_khanna_1966, AIR_NUMBER_DENSITY_288K_M3),
+           "nitrogen, Peck & Khanna 1966 / Bates 1984 (Sneep & Ubachs 2005), 288.15 K"),
+    "o2": (_pure(refractivity_o2_zhang_2008, NUMBER_DENSITY_293K_M3),
+           "oxygen, Zhang et al. 2008, 293.15 K"),
 }
 
 
@@ -146,7 +328,7 @@ def gas_refractivity(gas: str, wavelengths_nm: ArrayLike,
     Parameters
     ----------
     gas : str
-        One of `GASES`: "air" or "co2".
+        One of `GASES`: "air", "ar", "ch4", "co2", "h2", "he", "n2" or "o2" (any case).
     wavelengths_nm : array_like, shape S
         Wavelength. [nm]
     co2_ppm : float
