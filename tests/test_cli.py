@@ -61,6 +61,21 @@ def test_presets_lists_each_shipped_preset_with_its_description(capsys):
         assert line.endswith(description) and description
 
 
+def test_presets_verbose_prints_the_derived_numbers_of_each_gas_table(capsys):
+    # earth-physical's [gas]: H = R T / (M g) = 8434 m, N0 = P / (k T) = 2.547e25 m^-3,
+    # tau_R(550 nm) = 0.0969 (tests/atmosphere/test_atmosphere_gas.py checks the numbers).
+    code, out, err = _run(capsys, ["presets", "--verbose"])
+    assert code == 0 and err == ""
+    lines = out.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("earth-physical "))
+    block = "\n".join(lines[start + 1:start + 4])
+    assert "[gas] 'gas': n2 0.7808, o2 0.2095" in block
+    assert "N0 = 2.547e+25 m^-3" in block and "H = 8434 m" in block
+    assert "0.0969 (550 nm)" in block
+    names = [line.split()[0] for line in lines if not line.startswith(" ")]
+    assert names == [p.stem for p in sorted(PRESETS_DIR.glob("*.toml"))]
+
+
 # --- radiance ---------------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")

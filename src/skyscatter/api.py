@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
+from skyscatter.atmosphere.gas import describe_gas
 from skyscatter.atmosphere.model import Atmosphere
 from skyscatter.errors import InputError
 from skyscatter.render.albedo_map import AlbedoMap
@@ -54,6 +55,7 @@ __all__ = [
     "SkyImage",
     "SolverOptions",
     "demo_mountains",
+    "describe_gas",
     "list_presets",
     "load_atmosphere",
     "load_solver",

@@ -125,6 +125,10 @@ def build_parser() -> argparse.ArgumentParser:
     presets = commands.add_parser("presets", help="list the shipped atmosphere presets",
                                   description="List the shipped presets with a one-line "
                                   "description each.")
+    presets.add_argument("--verbose", action="store_true",
+                         help="also print the numbers derived for each preset's [gas] table: "
+                         "molar mass, scale height, surface density, column and Rayleigh "
+                         "optical depth at 440/550/680 nm")
     presets.set_defaults(run=_presets)
 
     render = commands.add_parser(
@@ -275,11 +279,30 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _presets(args: argparse.Namespace) -> None:
-    from skyscatter.api import list_presets
+    from skyscatter.api import describe_gas, list_presets, load_atmosphere
     presets = list_presets()
     width = max(len(name) for name in presets)
     for name, description in presets.items():
         print(f"{name:<{width}}  {description}")
+        if args.verbose:
+            for gas in describe_gas(load_atmosphere(name)):
+                print(_gas_summary(gas, " " * (width + 2)))
+
+
+def _gas_summary(gas: dict, indent: str) -> str:
+    """Lines describing one `api.describe_gas` entry."""
+    composition = ", ".join(f"{name} {fraction:.4g}" for name, fraction in
+                            sorted(gas["composition"].items(), key=lambda item: -item[1]))
+    tau = ", ".join(f"{value:.3g} ({wavelength:g} nm)"
+                    for wavelength, value in gas["rayleigh_optical_depth"].items())
+    return "\n".join(indent + line for line in (
+        f"[gas] '{gas['name']}': {composition}; M = {gas['molar_mass_g_mol']:.4g} g/mol",
+        f"T = {gas['surface_temperature_k']:g} K, P = {gas['surface_pressure_pa']:.6g} Pa, "
+        f"g = {gas['gravity_m_s2']:.4g} m/s^2 -> N0 = {gas['surface_number_density_m3']:.4g} "
+        f"m^-3, rho = {gas['surface_mass_density_kg_m3']:.4g} kg/m^3, "
+        f"H = {gas['scale_height_m']:.0f} m",
+        f"column {gas['column_m2']:.4g} m^-2 ({gas['mass_column_kg_m2']:.4g} kg/m^2); "
+        f"Rayleigh optical depth {tau}"))
 
 
 def _render(args: argparse.Namespace) -> None:

@@ -16,6 +16,12 @@ from typing import Any
 
 import numpy as np
 
+from skyscatter.atmosphere.gas import (
+    GasLayer,
+    number_density_from_mass_density,
+    number_density_from_pressure,
+    surface_gravity,
+)
 from skyscatter.atmosphere.model import (
     DEFAULT_SCATTERING_ORDERS,
     Atmosphere,
@@ -33,6 +39,7 @@ from skyscatter.atmosphere.profiles import (
 from skyscatter.errors import ConfigError, InputError
 from skyscatter.optics.absorption import DOBSON_UNIT_M2, AbsorberOptics
 from skyscatter.optics.aerosol import AngstromOptics
+from skyscatter.optics.gases import GasMixture, GasSpecies, custom_species
 from skyscatter.optics.phase import (
     CornetteShanksPhase,
     DoubleHenyeyGreensteinPhase,
@@ -185,13 +192,23 @@ class _Table:
 
     def spectral(self, key: str, default: float | None = None, *, low: float = -math.inf,
                  high: float = math.inf) -> SpectralParameter:
-        """A number, or {wavelength_nm = [...], value = [...]}."""
+        """A number, {wavelength_nm = [...], value = [...]} or {polynomial_nm = [c0, c1, ...]}."""
         self.asked.add(key)
         if key not in self.data:
             if default is None:
                 raise ConfigError(f"{self._key(key)} is missing", path=self.path,
                                   key=self._key(key))
             return SpectralParameter.constant(default)
+        if isinstance(self.data[key], dict) and "polynomial_nm" in self.data[key]:
+            sub = self.table(key)
+            coefficients = sub.numbers("polynomial_nm")
+            sub.finish()
+            values = np.polynomial.polynomial.polyval(POLYNOMIAL_GRID_NM, coefficients)
+            if np.any(values < low) or np.any(values > high):
+                raise self.error(key, {"polynomial_nm": coefficients.tolist()},
+                                 f"a polynomial with values in [{low}, {high}] over "
+                                 f"{POLYNOMIAL_GRID_NM[0]:g}-{POLYNOMIAL_GRID_NM[-1]:g} nm")
+            return SpectralParameter.table(POLYNOMIAL_GRID_NM, values)
         if isinstance(self.data[key], dict):
             sub = self.table(key)
             wavelengths = sub.numbers("wavelength_nm", low=1e-9)
@@ -215,8 +232,12 @@ class _Table:
                               key=self._key(key), value=self.data[key])
 
 
+# A spectral polynomial is tabulated on this grid [nm] and held constant beyond it: a quadratic
+# with |c2| < 1e-5 nm^-2 is then interpolated to within |c2| (10 nm)^2 / 8 < 1.3e-4.
+POLYNOMIAL_GRID_NM = np.arange(300.0, 1101.0, 10.0)
+
 KNOWN_TOP_LEVEL = ("name", "description", "sources", "planet", "star", "atmosphere",
-                   "constituent", "tables")
+                   "constituent", "tables", "gas")
 # Bounds of [tables] orders: 1 is single scattering only; past 1000 a typo is likelier than a
 # need (each order costs about as much as the single-scattering table; docs/physics/orders.md).
 MAX_SCATTERING_ORDERS = 1000
@@ -232,6 +253,8 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
     planet_table = root.table("planet")
     radius = planet_table.number("radius_m", low=1.0, low_open=True)
     albedo = planet_table.spectral("ground_albedo", 0.1, low=0.0, high=1.0)
+    planet_mass = (planet_table.number("mass_kg", low=0.0, low_open=True)
+                   if planet_table.has("mass_kg") else None)  # for [gas]: g = G M / R^2
     planet_table.finish()
     star = _parse_star(root.table("star"))
     atmosphere_table = root.table("atmosphere")
@@ -244,10 +267,10 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
                                       high=MAX_SCATTERING_ORDERS)
         tables_table.finish()
     constituents_raw = root.data.pop("constituent", None)
-    if not isinstance(constituents_raw, list) or not constituents_raw:
-        raise ConfigError("[[constituent]] is missing: an atmosphere needs at least one",
-                          path=path, key="constituent")
-    constituents = []
+    constituents, constituents_raw = _parse_gas(root, radius, planet_mass, constituents_raw)
+    if not isinstance(constituents_raw, list) or not (constituents_raw or constituents):
+        raise ConfigError("[[constituent]] is missing: an atmosphere needs at least one (or a "
+                          "[gas] table)", path=path, key="constituent")
     for index, item in enumerate(constituents_raw):
         if not isinstance(item, dict):
             raise ConfigError(f"constituent[{index}] must be a table", path=path,
@@ -267,6 +290,116 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
     return Atmosphere(planet=planet, top_altitude_m=top, constituents=tuple(constituents),
                       name=name, description=description, source=str(path),
                       scattering_orders=orders)
+
+
+# [gas]: exactly one of these gives the surface density.
+GAS_SURFACE_KEYS = ("surface_pressure_pa", "surface_density_kg_m3", "surface_number_density_m3")
+
+
+def _parse_gas(root: _Table, radius_m: float, planet_mass_kg: float | None,
+               constituents_raw: Any) -> tuple[list[Constituent], Any]:
+    """The [gas] table -> ([the "gas" constituent] or [], the [[constituent]] list with each
+    `density = { type = "gas", mole_fraction = x }` replaced by x times the gas's exponential
+    profile). atmosphere/gas.py has the physics, docs/config.md the schema."""
+    table = root.table("gas", required=False)
+    layer = None if table is None else _parse_gas_layer(table, radius_m, planet_mass_kg)
+    if not isinstance(constituents_raw, list):
+        return ([] if layer is None else [layer.constituent("gas")],
+                [] if constituents_raw is None and layer is not None else constituents_raw)
+    rewritten = []
+    for index, item in enumerate(constituents_raw):
+        density = item.get("density") if isinstance(item, dict) else None
+        if isinstance(density, dict) and density.get("type") == "gas":
+            sub = _Table(dict(density), root.path, f"constituent[{index}].density")
+            if layer is None:
+                raise sub.error("type", "gas", "a [gas] table, whose number density a 'gas' "
+                                "density follows")
+            sub.text("type")
+            fraction = sub.number("mole_fraction", low=0.0, high=1.0)
+            sub.finish()
+            item = dict(item, density={"type": "exponential",
+                                       "scale_height_m": layer.scale_height_m,
+                                       "surface_density": fraction
+                                       * layer.surface_number_density_m3})
+        rewritten.append(item)
+    return ([] if layer is None else [layer.constituent("gas")]), rewritten
+
+
+def _parse_gas_layer(table: _Table, radius_m: float, planet_mass_kg: float | None) -> GasLayer:
+    temperature = table.number("surface_temperature_k", low=0.0, low_open=True)
+    given = [key for key in GAS_SURFACE_KEYS if table.has(key)]
+    if len(given) != 1:
+        raise ConfigError(f"[gas] needs exactly one of {', '.join(GAS_SURFACE_KEYS)}"
+                          + (f"; got {', '.join(given)}" if given else ""), path=table.path,
+                          key=f"gas.{given[-1] if given else GAS_SURFACE_KEYS[0]}",
+                          allowed=" or ".join(GAS_SURFACE_KEYS))
+    surface = table.number(given[0], low=0.0, low_open=True)
+    if table.has("gravity_m_s2") and planet_mass_kg is not None:
+        raise table.error("gravity_m_s2", table.data["gravity_m_s2"],
+                          "give gas.gravity_m_s2 or planet.mass_kg, not both")
+    if table.has("gravity_m_s2"):
+        gravity = table.number("gravity_m_s2", low=0.0, low_open=True)
+    elif planet_mass_kg is not None:
+        gravity = surface_gravity(planet_mass_kg, radius_m)
+    else:
+        raise ConfigError("gas.gravity_m_s2 is missing: give it, or planet.mass_kg (then "
+                          "g = G M / R^2)", path=table.path, key="gas.gravity_m_s2")
+    normalize = table.flag("normalize", False)
+    phase = table.text("phase", "rayleigh", ("rayleigh", "penndorf"))
+    custom = _parse_gas_species(table)
+    composition_table = table.table("composition")
+    fractions = {key: composition_table.number(key, low=0.0, high=1.0)
+                 for key in list(composition_table.data)}
+    if not fractions:
+        raise table.error("composition", {}, "at least one gas: { n2 = 0.78, o2 = 0.21, ... }")
+    try:
+        mixture = GasMixture.from_composition(fractions, custom, normalize=normalize,
+                                              phase=phase)
+    except InputError as error:
+        key = "gas.composition" + ("" if error.key == "composition" else f".{error.key}")
+        raise ConfigError(f"{key}: {error}", path=table.path, key=key, value=error.value,
+                          allowed=error.allowed) from None
+    table.finish()
+    if given[0] == "surface_pressure_pa":
+        density = number_density_from_pressure(surface, temperature)
+    elif given[0] == "surface_density_kg_m3":
+        density = number_density_from_mass_density(surface, mixture.molar_mass_kg_mol)
+    else:
+        density = surface
+    return GasLayer(mixture, temperature, density, gravity)
+
+
+def _parse_gas_species(table: _Table) -> list[GasSpecies]:
+    """[[gas.species]]: gases beyond the built-in ones, from their molar mass and refractivity
+    or polarisability."""
+    table.asked.add("species")
+    items = table.data.pop("species", [])
+    if not isinstance(items, list) or not all(isinstance(item, dict) for item in items):
+        raise table.error("species", items, "an array of tables [[gas.species]]")
+    result = []
+    for index, item in enumerate(items):
+        sub = _Table(dict(item), table.path, f"gas.species[{index}]")
+        name = sub.text("name")
+        molar_mass = sub.number("molar_mass_g_mol", low=0.0, low_open=True)
+        refractivity = sub.spectral("refractivity", low=0.0) if sub.has("refractivity") else None
+        number_density = (sub.number("refractivity_number_density_m3", low=0.0, low_open=True)
+                          if sub.has("refractivity_number_density_m3") else None)
+        polarizability = (sub.number("polarizability_m3", low=0.0, low_open=True)
+                          if sub.has("polarizability_m3") else None)
+        depolarization = sub.number("depolarization", 0.0, low=0.0, high=0.5)
+        sub.finish()
+        if any(gas.name == name.strip().lower() for gas in result):
+            raise sub.error("name", name, "a name not used by another [[gas.species]]")
+        try:
+            result.append(custom_species(
+                name, molar_mass, refractivity=refractivity,
+                refractivity_number_density_m3=number_density,
+                polarizability_m3=polarizability, depolarization=depolarization))
+        except InputError as error:
+            raise ConfigError(f"{sub.prefix}: {error}", path=table.path,
+                              key=f"{sub.prefix}.{error.key}", value=error.value,
+                              allowed=error.allowed) from None
+    return result
 
 
 def _parse_star(table: _Table) -> Star:
