@@ -270,3 +270,14 @@ def test_angle_blend_of_one_function_with_itself_is_that_function():
     nu = np.cos(np.deg2rad([0.0, 30.0, 90.0, 150.0]))
     np.testing.assert_allclose(blend.evaluate(nu, [550.0]), phase.evaluate(nu, [550.0]),
                                rtol=2e-3)
+
+
+def test_tabulated_phase_repr_tells_apart_tables_that_differ_in_the_middle():
+    # Cache fingerprints hash repr(phase); numpy elides the middle of long arrays in reprs.
+    angles = np.linspace(0.0, 180.0, 2001)
+    wl = np.linspace(360.0, 830.0, 48)
+    values = henyey_greenstein(np.cos(np.deg2rad(angles)), 0.7)[:, None] * np.ones(48)
+    changed = values.copy()
+    changed[1000, 24] *= 1.01
+    assert repr(TabulatedPhase(angles, values, wl)) != repr(TabulatedPhase(angles, changed, wl))
+    assert repr(TabulatedPhase(angles, values, wl)) == repr(TabulatedPhase(angles, values, wl))

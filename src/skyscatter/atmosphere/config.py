@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from skyscatter.atmosphere.config_table import ConfigTable
 from skyscatter.atmosphere.gas import (
     GasLayer,
     number_density_from_mass_density,
@@ -28,6 +29,7 @@ from skyscatter.atmosphere.model import (
     Constituent,
     Planet,
 )
+from skyscatter.atmosphere.particle_config import parse_mie_optics
 from skyscatter.atmosphere.profiles import (
     ExponentialProfile,
     LayeredProfile,
@@ -49,7 +51,6 @@ from skyscatter.optics.phase import (
 )
 from skyscatter.optics.rayleigh import RayleighOptics, TabulatedScatteringOptics
 from skyscatter.spectrum.star import AU_M, Star
-from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = ["PRESETS_DIR", "list_presets", "load_atmosphere", "parse_atmosphere"]
 
@@ -90,152 +91,6 @@ def load_atmosphere(name_or_path: str | Path) -> Atmosphere:
     return parse_atmosphere(raw, path)
 
 
-@dataclasses.dataclass
-class _Table:
-    """One TOML table being read: hands out checked values, then rejects the keys left over."""
-
-    data: dict[str, Any]
-    path: Path
-    prefix: str
-    asked: set[str] = dataclasses.field(default_factory=set)  # keys looked up, for suggestions
-
-    def _key(self, key: str) -> str:
-        return f"{self.prefix}.{key}" if self.prefix else key
-
-    def error(self, key: str, value: Any, allowed: str) -> ConfigError:
-        return ConfigError(f"{self._key(key)} = {value!r} is not allowed: {allowed}",
-                           path=self.path, key=self._key(key), value=value, allowed=allowed)
-
-    def has(self, key: str) -> bool:
-        self.asked.add(key)
-        return key in self.data
-
-    def number(self, key: str, default: float | None = None, *, low: float | None = None,
-               high: float | None = None, low_open: bool = False) -> float:
-        self.asked.add(key)
-        if key not in self.data:
-            if default is None:
-                raise ConfigError(f"{self._key(key)} is missing (a number is required)",
-                                  path=self.path, key=self._key(key))
-            return default
-        value = self.data.pop(key)
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(
-                value):
-            raise self.error(key, value, "a finite number")
-        if (low is not None and (value < low or (low_open and value == low))) or (
-                high is not None and value > high):
-            relation = ">" if low_open else ">="
-            parts = ([f"{relation} {low}"] if low is not None else []) + (
-                [f"<= {high}"] if high is not None else [])
-            raise self.error(key, value, "must be " + " and ".join(parts))
-        return float(value)
-
-    def integer(self, key: str, default: int, *, low: int, high: int) -> int:
-        """An integer in [low, high]; floats (even 4.0), booleans and strings are rejected."""
-        self.asked.add(key)
-        if key not in self.data:
-            return default
-        value = self.data.pop(key)
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise self.error(key, value, f"an integer from {low} to {high}")
-        if not low <= value <= high:
-            raise self.error(key, value, f"must be >= {low} and <= {high}")
-        return value
-
-    def text(self, key: str, default: str | None = None, choices: tuple[str, ...] = ()) -> str:
-        self.asked.add(key)
-        if key not in self.data:
-            if default is None:
-                allowed = f" (one of: {', '.join(choices)})" if choices else ""
-                raise ConfigError(f"{self._key(key)} is missing{allowed}", path=self.path,
-                                  key=self._key(key))
-            return default
-        value = self.data.pop(key)
-        if not isinstance(value, str):
-            raise self.error(key, value, "a string")
-        if choices and value not in choices:
-            raise self.error(key, value, "one of: " + ", ".join(choices))
-        return value
-
-    def flag(self, key: str, default: bool) -> bool:
-        self.asked.add(key)
-        if key not in self.data:
-            return default
-        value = self.data.pop(key)
-        if not isinstance(value, bool):
-            raise self.error(key, value, "true or false")
-        return value
-
-    def table(self, key: str, required: bool = True) -> _Table | None:
-        self.asked.add(key)
-        if key not in self.data:
-            if required:
-                raise ConfigError(f"[{self._key(key)}] is missing", path=self.path,
-                                  key=self._key(key))
-            return None
-        value = self.data.pop(key)
-        if not isinstance(value, dict):
-            raise self.error(key, value, "a table")
-        return _Table(dict(value), self.path, self._key(key))
-
-    def numbers(self, key: str, *, low: float | None = None) -> np.ndarray:
-        self.asked.add(key)
-        value = self.data.pop(key, None)
-        if (not isinstance(value, list) or not value or not all(
-                isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-                for v in value)):
-            raise self.error(key, value, "a non-empty list of finite numbers")
-        array = np.asarray(value, dtype=np.float64)
-        if low is not None and np.any(array < low):
-            raise self.error(key, value, f"every value must be >= {low}")
-        return array
-
-    def spectral(self, key: str, default: float | None = None, *, low: float = -math.inf,
-                 high: float = math.inf) -> SpectralParameter:
-        """A number, {wavelength_nm = [...], value = [...]} or {polynomial_nm = [c0, c1, ...]}."""
-        self.asked.add(key)
-        if key not in self.data:
-            if default is None:
-                raise ConfigError(f"{self._key(key)} is missing", path=self.path,
-                                  key=self._key(key))
-            return SpectralParameter.constant(default)
-        if isinstance(self.data[key], dict) and "polynomial_nm" in self.data[key]:
-            sub = self.table(key)
-            coefficients = sub.numbers("polynomial_nm")
-            sub.finish()
-            values = np.polynomial.polynomial.polyval(POLYNOMIAL_GRID_NM, coefficients)
-            if np.any(values < low) or np.any(values > high):
-                raise self.error(key, {"polynomial_nm": coefficients.tolist()},
-                                 f"a polynomial with values in [{low}, {high}] over "
-                                 f"{POLYNOMIAL_GRID_NM[0]:g}-{POLYNOMIAL_GRID_NM[-1]:g} nm")
-            return SpectralParameter.table(POLYNOMIAL_GRID_NM, values)
-        if isinstance(self.data[key], dict):
-            sub = self.table(key)
-            wavelengths = sub.numbers("wavelength_nm", low=1e-9)
-            values = sub.numbers("value")
-            sub.finish()
-            if wavelengths.size != values.size:
-                raise self.error(key, {"wavelength_nm": wavelengths.tolist(),
-                                       "value": values.tolist()},
-                                 "wavelength_nm and value of the same length")
-            if np.any(values < low) or np.any(values > high):
-                raise self.error(key, values.tolist(), f"values in [{low}, {high}]")
-            return SpectralParameter.table(wavelengths, values)
-        return SpectralParameter.constant(self.number(key, low=low, high=high))
-
-    def finish(self) -> None:
-        """Reject keys nobody asked for, suggesting the closest known one."""
-        for key in self.data:
-            close = difflib.get_close_matches(key, sorted(self.asked), n=1)
-            hint = f"; did you mean '{self._key(close[0])}'?" if close else ""
-            raise ConfigError(f"unknown key {self._key(key)!r}{hint}", path=self.path,
-                              key=self._key(key), value=self.data[key])
-
-
-# A spectral polynomial is tabulated on this grid [nm] and held constant beyond it: a quadratic
-# with |c2| < 1e-5 nm^-2 is then interpolated to within |c2| (10 nm)^2 / 8 < 1.3e-4.
-POLYNOMIAL_GRID_NM = np.arange(300.0, 1101.0, 10.0)
-
 KNOWN_TOP_LEVEL = ("name", "description", "sources", "planet", "star", "atmosphere",
                    "constituent", "tables", "gas")
 # Bounds of [tables] orders: 1 is single scattering only; past 1000 a typo is likelier than a
@@ -246,7 +101,7 @@ MAX_SCATTERING_ORDERS = 1000
 def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
     """Build an Atmosphere from a parsed TOML document (`path` is named in messages and is the
     base of relative data file paths)."""
-    root = _Table(dict(raw), path, "")
+    root = ConfigTable(dict(raw), path, "")
     name = root.text("name", path.stem)
     description = root.text("description", "")
     root.data.pop("sources", None)  # free-form citations, for people
@@ -275,7 +130,7 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
         if not isinstance(item, dict):
             raise ConfigError(f"constituent[{index}] must be a table", path=path,
                               key=f"constituent[{index}]")
-        constituents.append(_parse_constituent(_Table(dict(item), path,
+        constituents.append(_parse_constituent(ConfigTable(dict(item), path,
                                                       f"constituent[{index}]"), top))
     names = [c.name for c in constituents]
     if len(set(names)) != len(names):
@@ -296,7 +151,7 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
 GAS_SURFACE_KEYS = ("surface_pressure_pa", "surface_density_kg_m3", "surface_number_density_m3")
 
 
-def _parse_gas(root: _Table, radius_m: float, planet_mass_kg: float | None,
+def _parse_gas(root: ConfigTable, radius_m: float, planet_mass_kg: float | None,
                constituents_raw: Any) -> tuple[list[Constituent], Any]:
     """The [gas] table -> ([the "gas" constituent] or [], the [[constituent]] list with each
     `density = { type = "gas", mole_fraction = x }` replaced by x times the gas's exponential
@@ -310,7 +165,7 @@ def _parse_gas(root: _Table, radius_m: float, planet_mass_kg: float | None,
     for index, item in enumerate(constituents_raw):
         density = item.get("density") if isinstance(item, dict) else None
         if isinstance(density, dict) and density.get("type") == "gas":
-            sub = _Table(dict(density), root.path, f"constituent[{index}].density")
+            sub = ConfigTable(dict(density), root.path, f"constituent[{index}].density")
             if layer is None:
                 raise sub.error("type", "gas", "a [gas] table, whose number density a 'gas' "
                                 "density follows")
@@ -325,7 +180,7 @@ def _parse_gas(root: _Table, radius_m: float, planet_mass_kg: float | None,
     return ([] if layer is None else [layer.constituent("gas")]), rewritten
 
 
-def _parse_gas_layer(table: _Table, radius_m: float, planet_mass_kg: float | None) -> GasLayer:
+def _parse_gas_layer(table: ConfigTable, radius_m: float, planet_mass_kg: float | None) -> GasLayer:
     temperature = table.number("surface_temperature_k", low=0.0, low_open=True)
     given = [key for key in GAS_SURFACE_KEYS if table.has(key)]
     if len(given) != 1:
@@ -369,7 +224,7 @@ def _parse_gas_layer(table: _Table, radius_m: float, planet_mass_kg: float | Non
     return GasLayer(mixture, temperature, density, gravity)
 
 
-def _parse_gas_species(table: _Table) -> list[GasSpecies]:
+def _parse_gas_species(table: ConfigTable) -> list[GasSpecies]:
     """[[gas.species]]: gases beyond the built-in ones, from their molar mass and refractivity
     or polarisability."""
     table.asked.add("species")
@@ -378,7 +233,7 @@ def _parse_gas_species(table: _Table) -> list[GasSpecies]:
         raise table.error("species", items, "an array of tables [[gas.species]]")
     result = []
     for index, item in enumerate(items):
-        sub = _Table(dict(item), table.path, f"gas.species[{index}]")
+        sub = ConfigTable(dict(item), table.path, f"gas.species[{index}]")
         name = sub.text("name")
         molar_mass = sub.number("molar_mass_g_mol", low=0.0, low_open=True)
         refractivity = sub.spectral("refractivity", low=0.0) if sub.has("refractivity") else None
@@ -402,7 +257,7 @@ def _parse_gas_species(table: _Table) -> list[GasSpecies]:
     return result
 
 
-def _parse_star(table: _Table) -> Star:
+def _parse_star(table: ConfigTable) -> Star:
     kind = table.text("type", "sun", ("sun", "blackbody"))
     if table.has("distance_au") and table.has("distance_m"):
         raise table.error("distance_m", table.data["distance_m"],
@@ -427,11 +282,12 @@ def _parse_star(table: _Table) -> Star:
     return dataclasses.replace(star, limb_darkening=limb)
 
 
-def _parse_constituent(table: _Table, top_m: float) -> Constituent:
+def _parse_constituent(table: ConfigTable, top_m: float) -> Constituent:
     name = table.text("name")
     profile = _parse_profile(table.table("density"), top_m)
     optics_table = table.table("optics")
-    kind = optics_table.text("type", choices=("rayleigh", "absorber", "angstrom", "coefficients"))
+    kind = optics_table.text("type", choices=("rayleigh", "absorber", "angstrom", "coefficients",
+                                              "mie"))
     target_column = None
     if kind == "absorber" and table.has("column_dobson"):
         if vertical_column(profile, top_m) <= 0.0:
@@ -443,12 +299,30 @@ def _parse_constituent(table: _Table, top_m: float) -> Constituent:
             raise optics_table.error("optical_depth", optics_table.data["optical_depth"],
                                      "the density profile is zero everywhere")
         target_column = 1.0  # unit column: extinction per density = optical depth
-    optics = _parse_optics(kind, optics_table)
+    if kind == "mie":
+        if optics_table.has("optical_depth") and vertical_column(profile, top_m) <= 0.0:
+            raise optics_table.error("optical_depth", optics_table.data["optical_depth"],
+                                     "the density profile is zero everywhere")
+        optics, target_column = _parse_particles(optics_table)
+    else:
+        optics = _parse_optics(kind, optics_table)
     table.finish()
     return Constituent(name=name, profile=profile, optics=optics, vertical_column=target_column)
 
 
-def _parse_profile(table: _Table, top_m: float) -> object:
+def _parse_particles(table: ConfigTable) -> tuple[object, float | None]:
+    """`type = "mie"` optics (atmosphere/particle_config.py) and their vertical column."""
+    try:
+        result = parse_mie_optics(table, _parse_phase(table.table("blend", required=False)))
+    except InputError as error:
+        raise ConfigError(f"{table.prefix}: {error}", path=table.path,
+                          key=f"{table.prefix}.{error.key}", value=error.value,
+                          allowed=error.allowed) from None
+    table.finish()
+    return result
+
+
+def _parse_profile(table: ConfigTable, top_m: float) -> object:
     kind = table.text("type", choices=("exponential", "layers", "table"))
     if kind == "exponential":
         profile = ExponentialProfile(table.number("scale_height_m", low=0.0, low_open=True),
@@ -461,7 +335,7 @@ def _parse_profile(table: _Table, top_m: float) -> object:
         for index, item in enumerate(layers_raw):
             if not isinstance(item, dict):
                 raise table.error(f"layers[{index}]", item, "a table")
-            layer = _Table(dict(item), table.path, f"{table.prefix}.layers[{index}]")
+            layer = ConfigTable(dict(item), table.path, f"{table.prefix}.layers[{index}]")
             layers.append(ProfileLayer(
                 top_altitude_m=layer.number("top_altitude_m", math.inf),
                 exp_term=layer.number("exp_term", 0.0),
@@ -479,7 +353,7 @@ def _parse_profile(table: _Table, top_m: float) -> object:
     return profile
 
 
-def _profile_table(table: _Table) -> tuple[np.ndarray, np.ndarray]:
+def _profile_table(table: ConfigTable) -> tuple[np.ndarray, np.ndarray]:
     """Altitude [m] and density columns, inline or from a CSV next to the config."""
     if table.has("file"):
         name = table.text("file")
@@ -518,7 +392,7 @@ def _profile_table(table: _Table) -> tuple[np.ndarray, np.ndarray]:
     return altitudes, values
 
 
-def _parse_phase(table: _Table | None, default: str | None = None) -> object:
+def _parse_phase(table: ConfigTable | None, default: str | None = None) -> object:
     if table is None:
         if default is None:
             return None
@@ -542,7 +416,7 @@ def _parse_phase(table: _Table | None, default: str | None = None) -> object:
     return phase
 
 
-def _parse_optics(kind: str, table: _Table) -> object:
+def _parse_optics(kind: str, table: ConfigTable) -> object:
     try:
         if kind == "rayleigh":
             depolarization = (table.number("depolarization", low=0.0, high=0.5)

@@ -64,7 +64,7 @@ from numpy.typing import ArrayLike
 from skyscatter.disk_cache import TableCache, default_cache_directory
 from skyscatter.errors import InputError
 from skyscatter.optics.particle_index import ComplexIndex
-from skyscatter.optics.phase import TabulatedPhase
+from skyscatter.optics.phase import PhaseFunction, TabulatedPhase, angle_blended_phase
 from skyscatter.optics.size_distribution import SizeDistribution
 
 __all__ = [
@@ -433,15 +433,22 @@ class MieOptics:
     The density profile of the constituent is a number density [m^-3]: per-density values are
     the per-particle cross-sections [m^2], interpolated linearly in wavelength and held constant
     outside the table. `phase` is a `TabulatedPhase` of the table (log-linear in angle, linear
-    in wavelength). `repr` names the inputs and the SHA-256 of the table, never the arrays.
+    in wavelength), or, when `blend` is given, the table's phase function blended into `blend`
+    linearly in angle (`optics.phase.angle_blended_phase`: Meyran 2022's hybrid Mars dust keeps
+    the Mie forward peak and takes Costa's double Henyey-Greenstein in back scattering). `repr`
+    names the inputs and the SHA-256 of the table, never the arrays.
     """
 
     table: ParticleOpticsTable
+    blend: PhaseFunction | None = None
     phase: TabulatedPhase = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "phase", TabulatedPhase(self.table.angles_deg, self.table.phase,
-                                                         self.table.wavelengths_nm))
+        phase = TabulatedPhase(self.table.angles_deg, self.table.phase, self.table.wavelengths_nm)
+        if self.blend is not None:
+            phase = angle_blended_phase(phase, self.blend, self.table.angles_deg,
+                                        self.table.wavelengths_nm)
+        object.__setattr__(self, "phase", phase)
 
     def extinction_per_density(self, wavelengths_nm: np.ndarray) -> np.ndarray:
         """Extinction cross-section per particle on `wavelengths_nm` [nm]. [m^2]"""
@@ -456,4 +463,4 @@ class MieOptics:
     def __repr__(self) -> str:
         wl = self.table.wavelengths_nm
         return (f"MieOptics({self.table.description!r}, wavelengths_nm={wl[0]:g}-{wl[-1]:g} "
-                f"({wl.size}), table_sha256={self.table.sha256()!r})")
+                f"({wl.size}), table_sha256={self.table.sha256()!r}, blend={self.blend!r})")

@@ -18,6 +18,7 @@ its equation and DOI.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
@@ -327,6 +328,15 @@ class TabulatedPhase:
             value = np.array(value)
             value.flags.writeable = False
             object.__setattr__(self, name, value)
+
+    def __repr__(self) -> str:
+        """Names the table by a SHA-256 of its arrays: cache fingerprints hash this repr, and
+        numpy's own repr elides the middle of large arrays."""
+        digest = hashlib.sha256()
+        for array in (self.angles_deg, self.values, self.wavelengths_nm):
+            digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+        return (f"TabulatedPhase({self.angles_deg.size} angles x {self.wavelengths_nm.size} "
+                f"wavelengths, sha256={digest.hexdigest()})")
 
     def _wavelength_weights(self, wl: np.ndarray) -> np.ndarray:
         """Linear-interpolation weights, shape (n_wl_tab, n_wl), held constant outside."""

@@ -1,0 +1,110 @@
+"""The `type = "mie"` optics of a config constituent: particles from physical parameters.
+
+A size distribution, a refractive index (a shipped material, a constant or a table, optionally
+with an inclusion mixed in by Maxwell Garnett) and the Mie options become a `MieOptics`
+(`optics.mie`), computed once and cached on disk. docs/config.md documents the keys.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from skyscatter.atmosphere.config_table import ConfigTable
+from skyscatter.optics.mie import METHODS, PHASE_AVERAGES, MieOptics, particle_optics
+from skyscatter.optics.particle_index import (
+    MATERIALS,
+    ComplexIndex,
+    load_material,
+    maxwell_garnett,
+)
+from skyscatter.optics.phase import PhaseFunction
+from skyscatter.optics.size_distribution import (
+    Gamma,
+    JungePowerLaw,
+    LogNormal,
+    ModifiedGamma,
+    SizeDistribution,
+)
+
+__all__ = ["MIE_WAVELENGTHS_NM", "parse_mie_optics"]
+
+# Wavelengths [nm] of the Mie table of a config: seed-004's 10 nm grid from 360 nm, extended to
+# 900 nm so that the 880 nm filter of the Mars rovers is inside it.
+MIE_WAVELENGTHS_NM = np.arange(360.0, 901.0, 10.0)
+MICROMETRE_M = 1e-6
+DISTRIBUTIONS = ("log-normal", "gamma", "modified-gamma", "junge")
+
+
+def parse_mie_optics(table: ConfigTable, blend: PhaseFunction | None
+                     ) -> tuple[MieOptics, float | None]:
+    """(optics, vertical column [m^-2] or None) from an optics table of `type = "mie"`; the
+    column is optical_depth / C_ext(reference wavelength) when `optical_depth` is given.
+    `blend` is the already parsed `blend` phase table (or None)."""
+    distribution = _parse_distribution(table.table("size_distribution"))
+    index_table = table.table("refractive_index")
+    index = _parse_index(index_table)
+    index_table.finish()
+    inclusion_table = table.table("inclusion", required=False)
+    if inclusion_table is not None:
+        fraction = inclusion_table.number("volume_fraction", low=0.0, high=1.0)
+        index = maxwell_garnett(index, _parse_index(inclusion_table), fraction)
+        inclusion_table.finish()
+    n_radii = table.integer("radii", 5000, low=16, high=100_000)
+    phase_average = table.text("phase_average", "scattering", PHASE_AVERAGES)
+    method = table.text("method", "mie", METHODS)
+    optical_depth = None
+    if table.has("optical_depth"):
+        optical_depth = table.number("optical_depth", low=0.0)
+        reference_nm = table.number("reference_wavelength_nm", 550.0, low=MIE_WAVELENGTHS_NM[0],
+                                    high=MIE_WAVELENGTHS_NM[-1])
+    particles = particle_optics(distribution, index, MIE_WAVELENGTHS_NM, n_radii=n_radii,
+                                phase_average=phase_average, method=method)
+    optics = MieOptics(particles, blend=blend)
+    column = None
+    if optical_depth is not None:
+        column = optical_depth / float(optics.extinction_per_density(np.array([reference_nm]))[0])
+    return optics, column
+
+
+def _parse_distribution(table: ConfigTable) -> SizeDistribution:
+    kind = table.text("type", choices=DISTRIBUTIONS)
+    positive = {"low": 0.0, "low_open": True}
+    if kind == "log-normal":
+        if table.has("effective_radius_um"):
+            distribution = LogNormal.from_effective(
+                table.number("effective_radius_um", **positive) * MICROMETRE_M,
+                table.number("effective_variance", **positive))
+        else:
+            distribution = LogNormal(table.number("median_radius_um", **positive) * MICROMETRE_M,
+                                     table.number("geometric_std", low=1.0, low_open=True))
+    elif kind == "gamma":
+        distribution = Gamma(table.number("shape", **positive),
+                             table.number("scale_um", **positive) * MICROMETRE_M)
+    elif kind == "modified-gamma":
+        distribution = ModifiedGamma(table.number("effective_radius_um", **positive)
+                                     * MICROMETRE_M,
+                                     table.number("effective_variance", low=0.0, low_open=True,
+                                                  high=0.4999))
+    else:
+        distribution = JungePowerLaw(table.number("exponent"),
+                                     table.number("min_radius_um", **positive) * MICROMETRE_M,
+                                     table.number("max_radius_um", **positive) * MICROMETRE_M)
+    table.finish()
+    return distribution
+
+
+def _parse_index(table: ConfigTable) -> ComplexIndex:
+    """`material = "name"`, or `real`/`imaginary` numbers, or lists with `wavelength_nm`
+    (the caller finishes the table)."""
+    if table.has("material"):
+        return load_material(table.text("material", choices=MATERIALS))
+    if table.has("wavelength_nm"):
+        wavelengths = table.numbers("wavelength_nm", low=1e-9)
+        real = table.numbers("real", low=0.0)
+        imaginary = table.numbers("imaginary", low=0.0)
+        if not wavelengths.size == real.size == imaginary.size:
+            raise table.error("real", real.tolist(),
+                              "wavelength_nm, real and imaginary of the same length")
+        return ComplexIndex.table(wavelengths, real, imaginary)
+    return ComplexIndex.constant(table.number("real", low=0.0, low_open=True),
+                                 table.number("imaginary", 0.0, low=0.0))
