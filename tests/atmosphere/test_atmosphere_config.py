@@ -290,8 +290,8 @@ HAZE_DENSITY = 'density = { type = "exponential", scale_height_m = 2000.0 }'
      "a finite number"),
     ("ground_albedo = 0.2", "ground_albedo = true", "planet.ground_albedo", "True",
      "a finite number"),
-    ('type = "angstrom"', 'type = "mie"', "constituent[0].optics.type", "'mie'",
-     "one of: rayleigh, absorber, angstrom, coefficients"),
+    ('type = "angstrom"', 'type = "t-matrix"', "constituent[0].optics.type", "'t-matrix'",
+     "one of: rayleigh, absorber, angstrom, coefficients, mie"),
     ('type = "henyey-greenstein"', 'type = "henyey"', "constituent[0].optics.phase.type",
      "'henyey'", "henyey-greenstein"),
     # contradictory
