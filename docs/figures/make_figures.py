@@ -20,6 +20,13 @@ IMAGES = Path(__file__).resolve().parents[1] / "images"
 ALBEDO_MAP = IMAGES / "demo_albedo.png"
 TABLES_SCENE = ["earth", "--sun-elevation", "4", "--sun-azimuth", "270", "--camera",
                 "panorama", "--heading", "270", "--size", "160", "--exposure", "12"]
+# Looking west at the setting sun like the InSight and Spirit cameras; a fixed exposure and the
+# Reinhard curve keep the bright aureole from clipping to white, so its blue shows.
+MARS_SUNSET = ["--sun-elevation", "2", "--sun-azimuth", "270", "--camera", "perspective",
+               "--heading", "270", "--pitch", "20", "--fov", "70", "--size", "320",
+               "--exposure", "16", "--tonemap", "reinhard"]
+EXO_SUNSET = ["--sun-elevation", "3", "--sun-azimuth", "270", "--camera", "perspective",
+              "--heading", "270", "--pitch", "20", "--fov", "80", "--size", "320"]
 FIGURES = {
     "earth_noon.png": ["earth", "--sun-elevation", "60", "--size", "256"],
     "earth_sunset.png": ["earth", "--sun-elevation", "2", "--sun-azimuth", "270", "--size",
@@ -43,10 +50,63 @@ FIGURES = {
                              "0", "--sun-elevation", "-4", "--sun-azimuth", "90", "--size",
                              "270", "--look-at", "0,25", "--fov", "70",
                              "--albedo-map", str(ALBEDO_MAP)],
+    "mars_noon.png": ["mars-physical", "--sun-elevation", "60", "--sun-azimuth", "180",
+                      "--size", "256"],
+    "mars_sunset_glow.png": ["mars-physical", *MARS_SUNSET],
+    "mars_from_orbit.png": ["mars-physical", "--camera", "orbit", "--distance-km", "7000",
+                            "--lat", "10", "--sun-elevation", "10", "--sun-azimuth", "90",
+                            "--size", "320"],
+    **{f"mars_sunset_{model}.png": [f"mars-{model}", *MARS_SUNSET, "--size", "200"]
+       for model in ("collienne", "costa", "bluemoon", "hybrid")},
+    "exo_hazy_noon.png": ["exo-hazy", "--sun-elevation", "45", "--sun-azimuth", "180",
+                          "--size", "256"],
+    "exo_hazy_sunset.png": ["exo-hazy", *EXO_SUNSET],
+    "exo_dense_n2_noon.png": ["exo-dense-n2", "--sun-elevation", "45", "--sun-azimuth", "180",
+                              "--size", "256"],
+    "exo_dense_n2_sunset.png": ["exo-dense-n2", *EXO_SUNSET],
     "tables_sunset_single.png": [*TABLES_SCENE, "--solver", "single"],
     "tables_sunset_lut.png": [*TABLES_SCENE, "--solver", "lut"],
 }
 
+
+
+def make_mars_phase_figure(path: Path) -> None:
+    """The dust phase functions of the four seed-004 Mars models at 440 and 680 nm (as the
+    thesis's Fig. 4.2/4.4), plus the scattering-weighted Mie average for comparison."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from skyscatter.atmosphere.config import load_atmosphere
+    from skyscatter.optics.mie import MieOptics, particle_optics
+    from skyscatter.optics.particle_index import ComplexIndex, load_material, maxwell_garnett
+    from skyscatter.optics.size_distribution import ModifiedGamma
+
+    theta = np.linspace(0.0, 180.0, 1801)
+    nu = np.cos(np.radians(theta))
+    wavelengths = np.array([440.0, 680.0])
+    curves = {}
+    for name in ("mars-collienne", "mars-costa", "mars-bluemoon", "mars-hybrid"):
+        dust = next(c for c in load_atmosphere(name).constituents if c.name == "dust")
+        curves[name] = dust.optics.phase.evaluate(nu, wavelengths)
+    index = maxwell_garnett(ComplexIndex.constant(1.5), load_material("hematite"), 0.03)
+    weighted = MieOptics(particle_optics(ModifiedGamma(1.6e-6, 0.2), index, wavelengths))
+    curves["Mie, C_sca-weighted"] = weighted.phase.evaluate(nu, wavelengths)
+    figure, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), sharey=True)
+    for k, (axis, wavelength) in enumerate(zip(axes, wavelengths, strict=True)):
+        for label, values in curves.items():
+            axis.plot(theta, values[:, k], label=label,
+                      ls=":" if label.startswith("Mie") else "-")
+        axis.set_yscale("log")
+        axis.set_xlabel("scattering angle [deg]")
+        axis.set_title(f"{wavelength:g} nm", fontsize=10)
+        axis.grid(alpha=0.3, which="both")
+    axes[0].set_ylabel("phase function [sr^-1]")
+    axes[0].legend(fontsize=8)
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
 
 
 def make_albedo_map(path: Path, width: int = 1024, seed: int = 4) -> None:
@@ -72,6 +132,7 @@ def make_albedo_map(path: Path, width: int = 1024, seed: int = 4) -> None:
 
 if __name__ == "__main__":
     make_albedo_map(ALBEDO_MAP)
+    make_mars_phase_figure(IMAGES / "mars_dust_phase.png")
     for name, arguments in FIGURES.items():
         argv = ["render", *arguments, "-o", str(IMAGES / name)]
         print("skyscatter " + " ".join(argv))
