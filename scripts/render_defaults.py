@@ -1,7 +1,8 @@
 """Render the shipped default scenes into a folder (what `make run` does).
 
 Earth at noon, Earth at sunset (fisheye + equirectangular panorama), mountains fading into
-the haze, Earth from space, Mars in the afternoon, all with multiple scattering from the
+the haze, Earth from space, Mars (gas and hematite-bearing Mie dust from physical parameters)
+in the afternoon and at sunset with its blue glow, all with multiple scattering from the
 precomputed tables (computed once per atmosphere, then reused from the cache): tone-mapped PNGs
 and linear EXRs (linear sRGB, 1.0 = 1 cd m^-2). Each line printed names the command-line
 equivalent, so every picture can be made again by hand.
@@ -26,7 +27,10 @@ SCENES = [
                          "--terrain", "demo"]),
     ("earth_from_space", ["earth", "--camera", "orbit", "--distance-km", "20000", "--lat",
                           "30", "--sun-elevation", "15", "--sun-azimuth", "90"]),
-    ("mars_afternoon", ["mars-costa", "--sun-elevation", "35", "--sun-azimuth", "240"]),
+    ("mars_afternoon", ["mars-physical", "--sun-elevation", "35", "--sun-azimuth", "240"]),
+    ("mars_sunset_glow", ["mars-physical", "--sun-elevation", "2", "--sun-azimuth", "270",
+                          "--camera", "perspective", "--heading", "270", "--pitch", "20",
+                          "--fov", "70", "--exposure", "16", "--tonemap", "reinhard"]),
 ]
 
 
