@@ -301,15 +301,18 @@ def test_second_order_matches_a_brute_force_double_integral(profile, tables_two_
 def test_orders_decrease_geometrically_in_a_thin_atmosphere(profile):
     # Densities x 0.1 and a black ground: each order is the previous one times about the
     # probability of one more scattering, a constant ~ 2 tau (Neumann series of a thin medium).
-    # Measured ratios: 0.049 (440 nm), 0.021 (550 nm), 0.009-0.010 (680 nm), within 1.5 % of
-    # each other from order to order (15 % at 680 nm between orders 1-2 and 2-3).
+    # Measured ratios from order 2 on: 0.048-0.049 (440 nm), 0.021-0.022 (550 nm), 0.009-0.010
+    # (680 nm), within 6 % of each other. Order 1 keeps the Mie forward peak, which the mean
+    # over table cells (slices crowded towards the sun) weighs more: its ratio is 0.042 /
+    # 0.016 / 0.0065, so it is only bounded.
     thin = dataclasses.replace(profile, density=0.1 * profile.density,
                                ground_albedo=np.zeros(3))
     tables = precompute_tables(thin, SMALL, orders=5)
     contribution = tables.order_mean_radiance  # (orders, n_wl)
     ratios = contribution[1:] / contribution[:-1]
     assert np.all(ratios < 0.1)
-    assert np.all(ratios.max(axis=0) / ratios.min(axis=0) < 1.2)
+    later = ratios[1:]
+    assert np.all(later.max(axis=0) / later.min(axis=0) < 1.1)
 
 
 def test_higher_orders_add_light_without_absorption(profile):
@@ -425,31 +428,3 @@ def test_lut_solver_is_registered(profile):
     solver = make_solver("lut", profile, SolverOptions(resolution=SMALL, orders=1))
     assert isinstance(solver, LutSolver) and solver.tables.orders == 1
 
-
-# --------------------------------------------------------------------------------------------
-# Forward-peak truncation of the orders >= 2 (delta-M)
-# --------------------------------------------------------------------------------------------
-
-@pytest.mark.parametrize("g", [0.8, 0.9, 0.95])
-def test_truncated_fraction_of_henyey_greenstein_is_the_closed_form(g):
-    # Closed form: 2 pi int_{mu_c}^1 p_HG dmu = (1 - g^2)/(2 g) [1/(1 - g) - 1/sqrt(1 + g^2 -
-    # 2 g mu_c)], less the flat part p(theta_c) 2 pi (1 - mu_c), theta_c on the sample nearest
-    # 10 deg. Tolerance: trapezoid rule of the 4097 samples across the peak (width ~ 1 - g).
-    from skyscatter.optics.phase import henyey_greenstein
-    from skyscatter.transport.tables import truncate_forward_peak
-
-    theta = np.linspace(0.0, np.pi, 4097)
-    phase = henyey_greenstein(np.cos(theta), g)[None, :, None]
-    cone = theta[round(np.radians(10.0) / np.pi * 4096)]
-    mu_c = np.cos(cone)
-    in_cone = (1 - g * g) / (2 * g) * (1 / (1 - g) - 1 / np.sqrt(1 + g * g - 2 * g * mu_c))
-    expected = in_cone - henyey_greenstein(mu_c, g) * 2 * np.pi * (1 - mu_c)
-    smooth, forward = truncate_forward_peak(phase, 10.0)
-    assert forward[0, 0] == pytest.approx(expected, abs=2e-4)
-    weight = 2 * np.pi * np.sin(theta)
-    assert np.trapezoid(smooth[0, :, 0] * weight, theta) == pytest.approx(1.0, abs=1e-9)
-    outside = theta > cone
-    np.testing.assert_allclose(smooth[0, outside, 0] * (1 - forward[0, 0]),
-                               phase[0, outside, 0], rtol=1e-4)
-    _, untouched = truncate_forward_peak(phase, 0.0)
-    assert untouched[0, 0] == pytest.approx(0.0, abs=1e-12)

@@ -19,8 +19,9 @@ def test_quick_suite_writes_report_summary_and_plots_and_passes(tmp_path, capsys
     assert main(["validate", "--quick", "--output", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["passed"] is True and summary["mode"] == "quick"
-    assert [c["key"] for c in summary["cases"]] == ["optical-depth", "lut-vs-montecarlo",
-                                                    "disort", "cie-sky", "spectrl2"]
+    assert [c["key"] for c in summary["cases"]] == [
+        "optical-depth", "lut-vs-montecarlo", "disort", "cie-sky", "spectrl2", "mars-pathfinder",
+        "mars-mer-colour", "mars-mer-transmittance", "mars-blue-aureole"]
     figures = [f for case in summary["cases"] for f in case["figures"]]
     assert len(figures) >= 8
     for name in figures:

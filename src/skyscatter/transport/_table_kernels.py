@@ -421,31 +421,6 @@ def direct_ground_irradiance(n_points, bottom_radius, top_radius, columns, extin
 
 
 @njit(parallel=True, cache=True)
-def direct_irradiance_table(n_r_e, n_mu_s_e, bottom_radius, top_radius, columns, extinction,
-                            sun_irradiance, sun_angular_radius):
-    """Direct sun irradiance on a horizontal surface, E_sun T_sun max(mu_s, 0) V, on the
-    irradiance nodes of `indirect_irradiance`: (n_r_e, n_mu_s_e, n_wl) [W m^-2 nm^-1]."""
-    n_c, n_wl = extinction.shape
-    out = np.zeros((n_r_e, n_mu_s_e, n_wl))
-    for node in prange(n_r_e * n_mu_s_e):
-        i = node // n_mu_s_e
-        j = node % n_mu_s_e
-        r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1), bottom_radius,
-                                           top_radius)
-        visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
-        if visible <= 0.0 or mu_s <= 0.0:
-            continue
-        col = np.empty(n_c)
-        columns_to_top(r, mu_s, bottom_radius, top_radius, columns, col)
-        for w in range(n_wl):
-            tau = 0.0
-            for c in range(n_c):
-                tau += extinction[c, w] * col[c]
-            out[i, j, w] = sun_irradiance[w] * math.exp(-tau) * mu_s * visible
-    return out
-
-
-@njit(parallel=True, cache=True)
 def phase_matrices(phase_table, cos_direct, cos_mirror, solid_angle):
     """Phase matrices of the sphere integral, (n_s, n_wl, n_out, n_in) float32:
     P[o, i] = (p(cos_direct[o, i]) + p(cos_mirror[o, i])) solid_angle[i], each row normalised

@@ -37,7 +37,11 @@ Scattering table (r, mu, mu_s, nu), 4-D with axes (u_r, u_mu, u_mu_s, u_nu):
     d_s the distance to the top from the ground along mu_s, d_min = R_t - R_b, d_max = H, and A
     the same for mu_s = mu_s_min (the smallest sun cosine tabulated; below it the first texel
     is used). Samples crowd near the horizon;
-  u_nu = (nu + 1) / 2, with the n_nu slices at the exact ends (index f = u_nu (n_nu - 1)).
+  u_nu = 1 - sqrt(theta / pi), theta = acos(nu) the view-sun angle, with the n_nu slices at
+    the exact ends (index f = u_nu (n_nu - 1)); Bruneton's u_nu = (nu + 1) / 2 spaces the
+    slices 44 deg apart next to the sun, too coarse for a Mie dust forward peak
+    (docs/physics/tables.md); this one puts 8 slices at 0, 3.7, 15, 33, 59, 92, 132 and
+    180 deg.
 Irradiance table (r, mu_s), affine: x_r = (r - R_b) / (R_t - R_b), x_mu_s = (mu_s + 1) / 2.
 """
 
@@ -286,14 +290,16 @@ def scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s):
 
 @njit(cache=True)
 def scattering_u_nu(nu):
-    """u_nu = (nu + 1) / 2 [-]; the nu slices lie at the exact ends (no texel-centre map)."""
-    return 0.5 * (nu + 1.0)
+    """u_nu = 1 - sqrt(theta / pi), theta = acos(nu) [-]: the slices crowd towards the sun
+    (module docstring); nu is clamped to [-1, 1]."""
+    return 1.0 - math.sqrt(math.acos(min(max(nu, -1.0), 1.0)) / math.pi)
 
 
 @njit(cache=True)
 def scattering_nu_from_u(u_nu):
-    """Inverse of `scattering_u_nu`: nu = 2 u_nu - 1, clamped to [-1, 1]."""
-    return min(max(2.0 * u_nu - 1.0, -1.0), 1.0)
+    """Inverse of `scattering_u_nu`: nu = cos(pi (1 - u_nu)^2), u_nu clamped to [0, 1]."""
+    v = 1.0 - min(max(u_nu, 0.0), 1.0)
+    return math.cos(math.pi * v * v)
 
 
 @njit(cache=True)

@@ -67,13 +67,6 @@ __all__ = [
 
 # Direct sun on the ground for the ground term of the second order: mu_s samples over [-1, 1].
 DIRECT_GROUND_SAMPLES = 1025
-# Forward peaks are truncated for the orders >= 2 (`truncate_forward_peak`) at this angle
-# [deg], for the constituents that put at least FORWARD_FRACTION_MIN of their scattered light
-# inside it at some wavelength. Measured (docs/physics/tables.md): Earth's aerosols (f <= 0.08)
-# agree with the Monte Carlo within 2 % untruncated; seed 004's Mie dust (f = 0.2-0.5) was
-# 100-170 % too bright 30-45 deg from the sun untruncated and 6-14 % too dark truncated.
-FORWARD_CONE_DEG = 10.0
-FORWARD_FRACTION_MIN = 0.1
 
 
 @dataclass(frozen=True)
@@ -216,53 +209,6 @@ def sample_phase_functions(profile: OpticalProfile, constituents: tuple[int, ...
     return table
 
 
-def truncate_forward_peak(phase: np.ndarray, cone_deg: float) -> tuple[np.ndarray, np.ndarray]:
-    """Delta-M-style truncation of the forward peak of sampled phase functions.
-
-    p* = p(theta_c) inside the cone theta < theta_c, p elsewhere; f = 1 - int p* / int p is the
-    truncated fraction and p' = p* / (1 - f) the smooth phase function of the scaled medium,
-    whose scattering is (1 - f) beta_s and extinction beta_e - f beta_s: the truncated light is
-    treated as not scattered (Wiscombe 1977, J. Atmos. Sci. 34, 1408,
-    doi:10.1175/1520-0469(1977)034<1408:TDMRYA>2.0.CO;2, with Potter's 1970 flat truncation,
-    J. Atmos. Sci. 27, 991, doi:10.1175/1520-0469(1970)027<0991:TDFATA>2.0.CO;2). Integrals by
-    the trapezoid rule in theta on the uniform samples.
-
-    Parameters
-    ----------
-    phase : ndarray, shape (n_s, n_angle, n_wl)
-        p at theta_i = pi i / (n_angle - 1) (`sample_phase_functions`). [sr^-1]
-    cone_deg : float
-        Truncation angle theta_c; 0 keeps the phase functions as they are. [deg]
-
-    Returns
-    -------
-    (ndarray (n_s, n_angle, n_wl), ndarray (n_s, n_wl))
-        p' [sr^-1], normalised to 1 on the samples, and f [-].
-    """
-    n_angle = phase.shape[1]
-    theta = np.linspace(0.0, np.pi, n_angle)
-    weight = np.sin(theta)[None, :, None]
-    edge = int(round(np.radians(cone_deg) / np.pi * (n_angle - 1)))
-    truncated = phase.copy()
-    if edge > 0:
-        truncated[:, :edge, :] = np.minimum(phase[:, :edge, :], phase[:, edge:edge + 1, :])
-    full = np.trapezoid(phase * weight, theta, axis=1)
-    kept = np.trapezoid(truncated * weight, theta, axis=1)
-    forward = np.clip(1.0 - kept / full, 0.0, 1.0)
-    return truncated / (2.0 * np.pi * kept[:, None, :]), forward
-
-
-def _scaled_phase(phase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(p', f) of the scaled medium: `truncate_forward_peak` at FORWARD_CONE_DEG for the
-    constituents whose truncated fraction reaches FORWARD_FRACTION_MIN at some wavelength,
-    the phase functions as they are (f = 0) for the others."""
-    smooth, forward = truncate_forward_peak(phase, FORWARD_CONE_DEG)
-    keep = forward.max(axis=1) < FORWARD_FRACTION_MIN  # (n_s,)
-    smooth[keep] = phase[keep]
-    forward[keep] = 0.0
-    return smooth, forward
-
-
 def _sphere_grids(resolution: TableResolution) -> tuple[np.ndarray, ...]:
     """(theta_in, phi_in, solid_angle_in (n_in,), out directions (n_out, 3), in directions and
     their mirror images (n_in, 3) each) in a frame whose x-z plane holds the sun."""
@@ -377,15 +323,6 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     # scattering per density of every constituent (absorbers: 0), for beta_s along rays
     scattering_all = np.where(np.isin(np.arange(len(profile.names)), scatterers)[:, None],
                               profile.scattering_per_density, 0.0)
-    # Orders >= 2 are computed in the delta-M scaled medium (`truncate_forward_peak`; the
-    # exact single scattering is kept): a forward peak narrower than the tables' angular
-    # resolution would otherwise be smeared over tens of degrees.
-    smooth_phase, forward = _scaled_phase(phase)
-    forward_all = np.zeros_like(scattering_all)
-    forward_all[scatterer_index] = forward
-    scaled_extinction_all = profile.extinction_per_density - forward_all * scattering_all
-    scaled_scattering_all = (1.0 - forward_all) * scattering_all
-    scaled_transmittance = np.exp(-np.einsum("cw,crm->rmw", scaled_extinction_all, columns))
     scattering = np.zeros((res.scattering_r, res.scattering_mu, res.scattering_mu_s,
                            res.scattering_nu, n_s + 1, n_wl), dtype=np.float32)
     irradiance = np.zeros((res.irradiance_r, res.irradiance_mu_s, n_wl))
@@ -416,28 +353,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                      _read_only(irradiance))
         if orders == 1 or n_s == 0:  # nothing scatters: no higher orders
             continue
-        # the scaled medium (delta-M) of the orders >= 2
-        extinction = np.ascontiguousarray(scaled_extinction_all[:, batch])
-        phase_b = np.ascontiguousarray(smooth_phase[:, :, batch])
-        beta_s = scaled_scattering_all[scatterer_index][:, batch]  # (n_s, n_b)
-        previous, use_phase = single, True
-        if np.any(forward[:, batch] > 0.0):
-            previous = _table_kernels.single_scattering_table(
-                *shape, res.ray_samples, *geometry, h_step, density, columns, extinction,
-                np.ascontiguousarray(scaled_transmittance[..., batch]), scatterer_index,
-                np.ascontiguousarray(sun[None, :] * beta_s),
-                float(profile.sun_angular_radius_rad))
-            # light the scaled medium counts as direct sun is diffuse light on the ground
-            sun_radius = float(profile.sun_angular_radius_rad)
-            irradiance[..., batch] += (
-                _table_kernels.direct_irradiance_table(res.irradiance_r, res.irradiance_mu_s,
-                                                       bottom, top, columns, extinction, sun,
-                                                       sun_radius)
-                - _table_kernels.direct_irradiance_table(
-                    res.irradiance_r, res.irradiance_mu_s, bottom, top, columns,
-                    np.ascontiguousarray(profile.extinction_per_density[:, batch]), sun,
-                    sun_radius))
         matrices = _phase_matrices(phase_b, res)
+        beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
+        previous, use_phase = single, True
         ground = _table_kernels.direct_ground_irradiance(
             DIRECT_GROUND_SAMPLES, bottom, top, columns, extinction, sun,
             float(profile.sun_angular_radius_rad))
@@ -457,7 +375,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             ground = np.ascontiguousarray(delta_irradiance[0])
             delta = _table_kernels.multiple_scattering_table(
                 *shape, res.multiple_ray_samples, *geometry, h_step, density, columns, extinction,
-                np.ascontiguousarray(scaled_scattering_all[:, batch]), source, res.density_phi)
+                np.ascontiguousarray(scattering_all[:, batch]), source, res.density_phi)
             del source, previous_flat
             scattering[..., n_s, batch] += delta
             previous, use_phase = delta[..., None, :], False

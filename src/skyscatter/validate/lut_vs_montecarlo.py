@@ -374,11 +374,9 @@ def _notes(comparisons: list[SolverComparison]) -> list[str]:
         notes.append(
             f"mars-physical (Mie dust, optical depth 0.5) by day: median errors up to "
             f"{format_percent(worst)}, 95th percentile up to {format_percent(worst95)}. The "
-            "Mie forward peak (20-40 sr^-1) is far narrower than the tables resolve (8 "
-            "nu-slices, 44 deg apart near the sun), so the tables compute the orders >= 2 in "
-            "a delta-M scaled medium whose phase functions are cut flat inside 10 deg "
-            "(transport.tables.truncate_forward_peak; the single scattering stays exact). "
-            "Without it the tables were 100-170 % too bright 30-45 deg from the sun; with it "
-            "the double-forward light near the sun is left out and the sky is a few to 15 % "
-            "too dark. The Monte Carlo solver has no such limit (--solver montecarlo).")
+            "Mie forward peak (20-40 sr^-1, a few degrees wide) is narrower than the "
+            "tables resolve: the orders >= 2 are stored on 8 slices of the view-sun angle at "
+            "0, 3.7, 15, 33, 59, 92, 132 and 180 deg (docs/physics/tables.md), so the "
+            "multiple-scattering aureole is interpolated between them. The Monte Carlo "
+            "solver has no such limit (--solver montecarlo).")
     return notes

@@ -6,6 +6,10 @@ Cases (key: module):
 - disort             tables vs plane-parallel DISORT at small zenith angles
 - cie-sky            luminance pattern vs CIE standard general skies 12 and 13
 - spectrl2           ground irradiance and colour temperature vs SPECTRL2
+- mars-pathfinder    Mars sky radiance along the almucantar, shapes of seed 004's dust models
+- mars-mer-colour    Mars daytime sky chromaticity vs MER Pancam (Bell et al. 2006)
+- mars-mer-transmittance  Mars direct-sun transmittance at 880 nm vs MER (Lemmon et al. 2015)
+- mars-blue-aureole  the blue glow around the setting sun on Mars (Ehlers et al. 2014)
 
 Public names: `CASES`, `ValidationRun`, `run_suite`, `check_dependencies`.
 """
@@ -31,6 +35,11 @@ CASES = {
     "disort": ("disort", "precomputed tables vs plane-parallel DISORT"),
     "cie-sky": ("cie_sky", "clear-sky luminance pattern vs CIE sky types 12 and 13"),
     "spectrl2": ("spectrl2", "ground irradiance and colour temperature vs SPECTRL2"),
+    "mars-pathfinder": ("mars_pathfinder", "Mars sky radiance along the almucantar (Pathfinder)"),
+    "mars-mer-colour": ("mars_mer_colour", "Mars daytime sky colour vs MER Pancam"),
+    "mars-mer-transmittance": ("mars_mer_transmittance",
+                               "Mars direct-sun transmittance at 880 nm vs MER"),
+    "mars-blue-aureole": ("mars_blue_aureole", "Mars blue glow around the setting sun"),
 }
 # Third-party packages the cases need beyond skyscatter's own (the [validate] extra).
 OPTIONAL_PACKAGES = {"matplotlib": "matplotlib", "pvlib": "pvlib",
