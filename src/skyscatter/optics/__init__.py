@@ -6,6 +6,9 @@ gases             molar masses, custom gases, `GasMixture` (Rayleigh optics of a
 absorption        ozone cross-section (Malicet/Brion 295 K), `AbsorberOptics`
 aerosol           Ångström law, `AngstromOptics`
 phase             phase-function kernels (numba) and `PhaseFunction` objects
+size_distribution particle size distributions and their radius quadratures
+particle_index    complex refractive indices of particle materials, Maxwell Garnett mixing
+mie               Mie theory (and ADA) for a particle population, `MieOptics`
 
 Import from the submodules (`from skyscatter.optics.rayleigh import RayleighOptics`).
 """
