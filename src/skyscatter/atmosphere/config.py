@@ -251,9 +251,7 @@ def _parse_gas_species(table: ConfigTable) -> list[GasSpecies]:
                 refractivity_number_density_m3=number_density,
                 polarizability_m3=polarizability, depolarization=depolarization))
         except InputError as error:
-            raise ConfigError(f"{sub.prefix}: {error}", path=table.path,
-                              key=f"{sub.prefix}.{error.key}", value=error.value,
-                              allowed=error.allowed) from None
+            raise sub.wrap(error) from None
     return result
 
 
@@ -315,9 +313,7 @@ def _parse_particles(table: ConfigTable) -> tuple[object, float | None]:
     try:
         result = parse_mie_optics(table, _parse_phase(table.table("blend", required=False)))
     except InputError as error:
-        raise ConfigError(f"{table.prefix}: {error}", path=table.path,
-                          key=f"{table.prefix}.{error.key}", value=error.value,
-                          allowed=error.allowed) from None
+        raise table.wrap(error) from None
     table.finish()
     return result
 
@@ -456,8 +452,6 @@ def _parse_optics(kind: str, table: ConfigTable) -> object:
             optics = TabulatedScatteringOptics(
                 scattering, extinction, _parse_phase(table.table("phase")))
     except InputError as error:
-        raise ConfigError(f"{table.prefix}: {error}", path=table.path,
-                          key=f"{table.prefix}.{error.key}", value=error.value,
-                          allowed=error.allowed) from None
+        raise table.wrap(error) from None
     table.finish()
     return optics

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from skyscatter.errors import ConfigError
+from skyscatter.errors import ConfigError, InputError
 from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = ["POLYNOMIAL_STEP_NM", "ConfigTable"]
@@ -37,6 +37,13 @@ class ConfigTable:
 
     def _key(self, key: str) -> str:
         return f"{self.prefix}.{key}" if self.prefix else key
+
+    def wrap(self, error: InputError) -> ConfigError:
+        """An InputError raised while building an object from this table, as a ConfigError
+        that names the file and the key under this table's prefix."""
+        return ConfigError(f"{self.prefix}: {error}", path=self.path,
+                           key=f"{self.prefix}.{error.key}", value=error.value,
+                           allowed=error.allowed)
 
     def error(self, key: str, value: Any, allowed: str) -> ConfigError:
         return ConfigError(f"{self._key(key)} = {value!r} is not allowed: {allowed}",
