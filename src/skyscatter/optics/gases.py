@@ -33,10 +33,10 @@ from skyscatter.errors import InputError
 from skyscatter.optics.phase import PhaseFunction
 from skyscatter.optics.rayleigh import (
     KING_FACTOR_MODELS,
-    RAYLEIGH_PHASES,
     king_factor_from_depolarization,
     rayleigh_cross_section,
     rayleigh_cross_section_from_polarizability,
+    rayleigh_phase,
 )
 from skyscatter.optics.refractive_index import gas_refractivity
 from skyscatter.spectrum.tabulated import SpectralParameter
@@ -268,14 +268,7 @@ class GasMixture:
                              "explicitly (normalize = true in a [gas] table)",
                              key="composition", value=composition,
                              allowed=f"a sum within {MOLE_FRACTION_TOLERANCE:g} of 1")
-        phase = self.phase
-        if isinstance(phase, str):
-            key = phase.strip().lower()
-            if key not in RAYLEIGH_PHASES:
-                allowed = ", ".join(sorted(RAYLEIGH_PHASES))
-                raise InputError(f"unknown phase {phase!r}; allowed: {allowed}", key="phase",
-                                 value=phase, allowed=allowed)
-            phase = RAYLEIGH_PHASES[key]()
+        phase = rayleigh_phase(self.phase)
         object.__setattr__(self, "species", species)
         object.__setattr__(self, "mole_fractions", tuple(x / total for x in fractions))
         object.__setattr__(self, "phase", phase)

@@ -42,6 +42,7 @@ __all__ = [
     "rayleigh_cross_section",
     "rayleigh_cross_section_from_polarizability",
     "rayleigh_optical_depth_bodhaine1999",
+    "rayleigh_phase",
 ]
 
 KING_FACTOR_CO2_BODHAINE_1999 = 1.15  # -, Bodhaine et al. (1999), F(CO2) in eq. 23
@@ -264,6 +265,14 @@ def _choice(registry: dict, name: str, what: str) -> str:
     return key
 
 
+def rayleigh_phase(phase: PhaseFunction | str) -> PhaseFunction:
+    """`phase` itself, or the phase function `RAYLEIGH_PHASES` names ("rayleigh",
+    "penndorf"; any case and surrounding blanks)."""
+    if isinstance(phase, str):
+        return RAYLEIGH_PHASES[_choice(RAYLEIGH_PHASES, phase, "phase")]()
+    return phase
+
+
 @dataclass(frozen=True)
 class RayleighOptics:
     """Rayleigh-scattering optics of a gas whose density profile is a number density [m^-3].
@@ -311,9 +320,7 @@ class RayleighOptics:
         if not np.isfinite(self.co2_ppm) or self.co2_ppm < 0.0:
             raise InputError(f"co2_ppm = {self.co2_ppm!r} must be >= 0", key="co2_ppm",
                              value=self.co2_ppm, allowed=">= 0 ppm")
-        phase = self.phase
-        if isinstance(phase, str):
-            phase = RAYLEIGH_PHASES[_choice(RAYLEIGH_PHASES, phase, "phase")]()
+        phase = rayleigh_phase(self.phase)
         object.__setattr__(self, "gas", gas)
         object.__setattr__(self, "king", king)
         object.__setattr__(self, "phase", phase)
