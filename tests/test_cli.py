@@ -336,3 +336,18 @@ def test_monte_carlo_radiance_comes_with_its_standard_error(capsys):
     assert len(rows) == 2
     for row in rows:
         assert 0.0 < row["standard_error"] < 0.03 * row["radiance"]
+
+
+@pytest.mark.parametrize(("option", "value", "message"), [
+    ("--tonemap", "sepia", "unknown tone-mapping operator 'sepia'"),
+    ("--colour-space", "cmyk", "unknown colour space 'cmyk'"),
+])
+def test_bad_image_option_is_rejected_before_any_table_is_computed(capsys, tmp_path, option,
+                                                                    value, message):
+    # The image options were checked only when saving, after tens of seconds of tables.
+    cache = tmp_path / "cache"
+    code, _, err = _run(capsys, ["render", "earth", option, value, "--cache-dir", str(cache),
+                                 "-o", str(tmp_path / "x.png")])
+    assert code == 2
+    assert message in _error_line(err)
+    assert not cache.exists() and not (tmp_path / "x.png").exists()

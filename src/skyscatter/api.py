@@ -54,6 +54,7 @@ __all__ = [
     "PerspectiveCamera",
     "SkyImage",
     "SolverOptions",
+    "check_image_options",
     "demo_mountains",
     "describe_gas",
     "list_presets",
@@ -165,6 +166,17 @@ def orbit_field_of_view_deg(altitude_m: float, planet_radius_m: float,
     return float(min(2.0 * half * margin, 170.0))
 
 
+def check_image_options(operator: str = "aces", colour_space: str = "srgb",
+                        exr_content: str = "rgb") -> None:
+    """Raise InputError for an unknown tone-mapping operator, colour space or EXR content, so
+    that a caller can reject them before rendering; `save_image` makes the same checks."""
+    if exr_content not in EXR_CONTENTS:
+        raise InputError(f"unknown EXR content {exr_content!r}; choose one of: "
+                         f"{', '.join(EXR_CONTENTS)}", key="exr_content", value=exr_content)
+    tonemap(np.zeros(3), operator)
+    xyz_to_rgb(np.zeros(3), colour_space)
+
+
 def save_image(image: SkyImage, png_path: str | Path | None = None,
                exr_path: str | Path | None = None, ev100: float | None = None,
                compensation_ev: float = 1.0, operator: str = "aces",
@@ -176,9 +188,7 @@ def save_image(image: SkyImage, png_path: str | Path | None = None,
     (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
     `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
     views from space from the starlight (incident-light metering: sunlit white is white)."""
-    if exr_content not in EXR_CONTENTS:
-        raise InputError(f"unknown EXR content {exr_content!r}; choose one of: "
-                         f"{', '.join(EXR_CONTENTS)}", key="exr_content", value=exr_content)
+    check_image_options(operator, colour_space, exr_content)
     xyz = image.xyz(balance_to_light)
     if ev100 is None and image.from_space:
         ev100 = incident_ev100(float(spectral_to_xyz(image.light_spectrum,

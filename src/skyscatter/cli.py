@@ -310,6 +310,7 @@ def _render(args: argparse.Namespace) -> None:
     from skyscatter.errors import InputError
     from skyscatter.render.progress import progress
 
+    api.check_image_options(args.tonemap, args.colour_space, args.exr_content)
     atmosphere = api.load_atmosphere(args.atmosphere)
     zenith = (args.sun_zenith if args.sun_zenith is not None
               else 90.0 - (30.0 if args.sun_elevation is None else args.sun_elevation))
