@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from skyscatter.errors import InputError
+from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = [
     "MATERIALS",
@@ -100,14 +101,14 @@ class ComplexIndex:
     def table(cls, wavelengths_nm: ArrayLike, n: ArrayLike, k: ArrayLike) -> ComplexIndex:
         """n and k at tabulated wavelengths [nm] (sorted here)."""
         wl = np.asarray(wavelengths_nm, dtype=np.float64).ravel()
-        order = np.argsort(wl)
         n = np.asarray(n, dtype=np.float64).ravel()
         k = np.asarray(k, dtype=np.float64).ravel()
         if n.shape != wl.shape or k.shape != wl.shape:
             raise InputError(f"refractive index table: {wl.size} wavelengths, {n.size} n and "
                              f"{k.size} k values; they must have one length",
                              key="wavelengths_nm", value=wl.size, allowed="equal lengths")
-        return cls(tuple(n[order]), tuple(k[order]), tuple(wl[order]))
+        real, imaginary = SpectralParameter.table(wl, n), SpectralParameter.table(wl, k)
+        return cls(real.values, imaginary.values, real.wavelengths_nm)
 
     @property
     def is_constant(self) -> bool:
@@ -115,12 +116,9 @@ class ComplexIndex:
 
     def at(self, wavelengths_nm: ArrayLike) -> np.ndarray:
         """m = n + i k on `wavelengths_nm` [nm], complex, the shape of the input. [-]"""
-        wl = np.asarray(wavelengths_nm, dtype=np.float64)
-        if self.wavelengths_nm is None:
-            return np.full(wl.shape, complex(self.n[0], self.k[0]))
-        n = np.interp(wl, self.wavelengths_nm, self.n)
-        k = np.interp(wl, self.wavelengths_nm, self.k)
-        return n + 1j * k
+        real = SpectralParameter(self.n, self.wavelengths_nm).at(wavelengths_nm)
+        imaginary = SpectralParameter(self.k, self.wavelengths_nm).at(wavelengths_nm)
+        return real + 1j * imaginary
 
 
 # Bond & Bergstrom (2006), Aerosol Sci. Technol. 40, 27, doi:10.1080/02786820500421521: the
