@@ -91,6 +91,7 @@ def load_atmosphere(name_or_path: str | Path) -> Atmosphere:
     return parse_atmosphere(raw, path)
 
 
+PLANET_BODIES = ("earth", "mars")  # [planet] body: bodies with an ephemeris (astro/)
 KNOWN_TOP_LEVEL = ("name", "description", "sources", "planet", "star", "atmosphere",
                    "constituent", "tables", "gas")
 # Bounds of [tables] orders: 1 is single scattering only; past 1000 a typo is likelier than a
@@ -108,6 +109,7 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
     planet_table = root.table("planet")
     radius = planet_table.number("radius_m", low=1.0, low_open=True)
     albedo = planet_table.spectral("ground_albedo", 0.1, low=0.0, high=1.0)
+    body = planet_table.text("body", "", choices=PLANET_BODIES)
     planet_mass = (planet_table.number("mass_kg", low=0.0, low_open=True)
                    if planet_table.has("mass_kg") else None)  # for [gas]: g = G M / R^2
     planet_table.finish()
@@ -141,7 +143,7 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
         close = difflib.get_close_matches(key, KNOWN_TOP_LEVEL, n=1)
         hint = f"; did you mean '{close[0]}'?" if close else ""
         raise ConfigError(f"unknown key {key!r}{hint}", path=path, key=key)
-    planet = Planet(name=name, radius_m=radius, ground_albedo=albedo, star=star)
+    planet = Planet(name=name, radius_m=radius, ground_albedo=albedo, star=star, body=body)
     return Atmosphere(planet=planet, top_altitude_m=top, constituents=tuple(constituents),
                       name=name, description=description, source=str(path),
                       scattering_orders=orders)

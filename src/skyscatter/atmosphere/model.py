@@ -79,6 +79,9 @@ class Planet:
     radius_m: float
     ground_albedo: SpectralParameter  # Lambertian reflectance [-]
     star: Star
+    # Which solar-system body the planet is, for skies at a date and time (astro/): "earth",
+    # "mars", or "" (an imagined planet: no ephemeris, the sun is placed by hand)
+    body: str = ""
 
 
 @dataclass(frozen=True)

@@ -25,9 +25,12 @@ __all__ = [
     "SkyImage",
     "Viewpoint",
     "add_sun_disk",
+    "camera_image",
+    "diffuse_radiance",
     "ground_viewpoint",
     "orbit_viewpoint",
     "render_sky",
+    "sky_image",
     "sun_direction",
 ]
 
@@ -104,33 +107,55 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     `surfaces.surface_radiance` (table solver only)."""
     profile = solver.profile
     directions, valid = camera.directions()
-    world_directions = viewpoint.direction_to_world(directions)
     world_sun = viewpoint.direction_to_world(sun_dir)
-    every_pixel = bool(valid.all())  # perspective and panorama: no masking, no copies
-    rays = (world_directions.reshape(-1, 3) if every_pixel
-            else np.ascontiguousarray(world_directions[valid]))
-    radiance = np.empty((rays.shape[0], profile.n_wavelengths))
-    if ground is not None:
-        surface, hit = surface_radiance(solver, viewpoint.position_m, rays, world_sun, ground)
-        hits, misses = np.flatnonzero(hit), np.flatnonzero(~hit)
-        radiance[hits] = surface
-        if progress is not None:
-            progress(hits.size)
-        radiance[misses] = solver.sky_radiance(viewpoint.position_m, rays[misses], world_sun,
-                                               progress)
-    else:
-        radiance[:] = solver.sky_radiance(viewpoint.position_m, rays, world_sun, progress)
-    if every_pixel:
-        spectral = radiance.reshape(directions.shape[:2] + (profile.n_wavelengths,))
-    else:
-        spectral = np.zeros(directions.shape[:2] + (profile.n_wavelengths,))
-        spectral[valid] = radiance
+    spectral = camera_image(directions, valid, profile.n_wavelengths, lambda rays: (
+        diffuse_radiance(solver, viewpoint.position_m, rays, world_sun, ground, progress)),
+        viewpoint)
     sun_transmittance = solver.transmittance(viewpoint.position_m, world_sun)
     if ground is not None and ground.terrain is not None and ground.terrain.shadowed(
             viewpoint.position_m, world_sun)[0]:
         sun_transmittance = np.zeros_like(sun_transmittance)  # the sun is behind a mountain
     add_sun_disk(spectral, camera, directions, valid, sun_dir, star,
                  profile.wavelengths_nm, sun_transmittance)
+    return sky_image(spectral, directions, valid, viewpoint, profile)
+
+
+def camera_image(directions: np.ndarray, valid: np.ndarray, n_wavelengths: int,
+                 radiance_of: Callable[[np.ndarray], np.ndarray],
+                 viewpoint: Viewpoint) -> np.ndarray:
+    """(h, w, n_wl) image of `radiance_of(world rays (n, 3)) -> (n, n_wl)` over a camera's
+    valid pixels (`directions` (h, w, 3) in the viewpoint's local frame); 0 elsewhere."""
+    world_directions = viewpoint.direction_to_world(directions)
+    if bool(valid.all()):  # perspective and panorama: no masking, no copies
+        radiance = radiance_of(world_directions.reshape(-1, 3))
+        return radiance.reshape(directions.shape[:2] + (n_wavelengths,))
+    spectral = np.zeros(directions.shape[:2] + (n_wavelengths,))
+    spectral[valid] = radiance_of(np.ascontiguousarray(world_directions[valid]))
+    return spectral
+
+
+def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light: np.ndarray,
+                     ground: Ground | None = None,
+                     progress: Callable[[int], None] | None = None) -> np.ndarray:
+    """Sky (and, with `ground`, surface) radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along world
+    `rays` (n, 3) from `position`, lit from `world_light` with the profile's top-of-atmosphere
+    irradiance."""
+    if ground is None:
+        return solver.sky_radiance(position, rays, world_light, progress)
+    radiance = np.empty((rays.shape[0], solver.profile.n_wavelengths))
+    surface, hit = surface_radiance(solver, position, rays, world_light, ground)
+    hits, misses = np.flatnonzero(hit), np.flatnonzero(~hit)
+    radiance[hits] = surface
+    if progress is not None:
+        progress(hits.size)
+    radiance[misses] = solver.sky_radiance(position, rays[misses], world_light, progress)
+    return radiance
+
+
+def sky_image(spectral: np.ndarray, directions: np.ndarray, valid: np.ndarray,
+              viewpoint: Viewpoint, profile) -> SkyImage:
+    """The SkyImage of a finished spectral image, with the pixels to meter: those looking
+    above the horizontal, or, looking down from space, the lit ones."""
     sky = valid & (directions[..., 2] > 0.0)
     if not np.any(sky):  # looking down from space: meter on what is lit, not on black space
         lit = valid & np.any(spectral > 0.0, axis=-1)

@@ -20,6 +20,16 @@ Sources:
   tone reproduction for digital images", ACM TOG 21(3), 267, eq. 1, doi:10.1145/566654.566575;
   departure: pixels with zero luminance are left out instead of adding a small δ, so the
   result does not depend on δ.
+* Night adaptation (`night_compensation_ev`): the key value of Krawczyk, Myszkowski & Seidel
+  (2005), "Lightness perception in tone reproduction for high dynamic range images", Computer
+  Graphics Forum 24(3), 635 (the automatic key value), doi:10.1111/j.1467-8659.2005.00888.x:
+  α(L̄) = 1.03 − 2 / (2 + log10(L̄ + 1)), L̄ the log-average luminance [cd m⁻²]. Dim scenes get a
+  lower key, so night looks dark instead of being metered up to a daylight grey. We apply it
+  relative to a daylight sky (L̄ = 3000 cd m⁻², α = 0.665): log2(α(L̄) / α(3000)) stops, 0 by
+  day, −0.8 at 10 cd m⁻², −4.5 at night. Sky pixels below the luminance of the natural
+  moonless night sky, 22.0 mag arcsec⁻² in V (Falchi et al. 2016, "The new world atlas of
+  artificial night sky brightness", Sci. Adv. 2, e1600377, doi:10.1126/sciadv.1600377: 174
+  µcd m⁻²), are metered as that luminance, so a black sky with a few stars meters as night.
 * Operators: `exponential` 1 − exp(−x) (Bruneton 2017, precomputed_atmospheric_scattering demo,
   without its 1/2.2 gamma); `aces` x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14) clipped to
   [0, 1] (Narkowicz 2016, "ACES Filmic Tone Mapping Curve", blog post of 2016-01-06, a fit to
@@ -42,8 +52,11 @@ from skyscatter.spectrum.colour import encode_srgb_transfer
 __all__ = [
     "OPERATORS",
     "METER_CALIBRATION_K",
+    "NATURAL_NIGHT_SKY_CD_M2",
     "aces_narkowicz2016",
     "auto_ev100",
+    "night_adapted_exposure",
+    "night_compensation_ev",
     "clamp",
     "exponential",
     "exposure_scale",
@@ -55,6 +68,8 @@ __all__ = [
 METER_CALIBRATION_K = 12.5  # cd s m⁻², reflected-light meter calibration constant (ISO 2720)
 INCIDENT_CALIBRATION_C = 250.0  # lx s, incident-light meter, flat receptor (ISO 2720: 240-400)
 _ISO_SPEED = 100.0  # EV100 is defined for ISO 100
+NATURAL_NIGHT_SKY_CD_M2 = 174e-6  # cd m⁻², 22.0 mag arcsec⁻² V (Falchi et al. 2016)
+_DAYLIGHT_LOG_AVERAGE_CD_M2 = 3000.0  # cd m⁻², where night_compensation_ev is 0
 _SATURATION_FACTOR = 78.0 / (0.65 * _ISO_SPEED)  # = 1.2; 78/(q S), q = 0.65 (Lagarde 2014)
 _LARGEST_INPUT = 1e150  # inputs are clipped here so x² stays finite in float64
 
@@ -102,6 +117,31 @@ def auto_ev100(luminance: ArrayLike, valid: ArrayLike | None = None) -> float:
                          "give an explicit EV100 instead", key="luminance")
     log_average = float(np.exp(np.mean(np.log(lum[use]))))
     return float(np.log2(log_average * _ISO_SPEED / METER_CALIBRATION_K))
+
+
+def night_compensation_ev(log_average_luminance: float) -> float:
+    """Exposure change [EV] for a scene of log-average luminance L̄ [cd m⁻²]:
+    log2(α(L̄) / α(3000)), α(L) = 1.03 − 2 / (2 + log10(L + 1)) (Krawczyk et al. 2005; module
+    docstring). 0 for a daylight sky, about −4.5 at night."""
+    def key(luminance: float) -> float:
+        return 1.03 - 2.0 / (2.0 + np.log10(luminance + 1.0))
+
+    if not (np.isfinite(log_average_luminance) and log_average_luminance >= 0.0):
+        raise InputError(f"log-average luminance {log_average_luminance!r} must be finite and "
+                         ">= 0 [cd m^-2]", key="luminance", value=log_average_luminance)
+    return float(np.log2(key(log_average_luminance) / key(_DAYLIGHT_LOG_AVERAGE_CD_M2)))
+
+
+def night_adapted_exposure(luminance: ArrayLike, sky: ArrayLike) -> tuple[float, float]:
+    """(EV100, night compensation [EV]) for an image by day or night: the reflected-light
+    meter of `auto_ev100` over the `sky` pixels with every luminance held at least at the
+    natural night sky's (`NATURAL_NIGHT_SKY_CD_M2`), and `night_compensation_ev` of that
+    log-average luminance. [EV]"""
+    lum = np.asarray(luminance, dtype=np.float64)
+    floor = np.where(np.isfinite(lum), np.maximum(lum, NATURAL_NIGHT_SKY_CD_M2), np.nan)
+    ev100 = auto_ev100(floor, sky)
+    log_average = 2.0**ev100 * METER_CALIBRATION_K / _ISO_SPEED
+    return ev100, night_compensation_ev(log_average)
 
 
 def incident_ev100(illuminance_lux: float) -> float:
