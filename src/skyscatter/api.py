@@ -8,12 +8,15 @@
 
 from __future__ import annotations
 
+import datetime
 import itertools
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from skyscatter.astro.time import parse_time
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.gas import describe_gas
 from skyscatter.atmosphere.model import Atmosphere
@@ -29,19 +32,34 @@ from skyscatter.render.scene import (
     render_sky,
     sun_direction,
 )
+try:  # TEMPORARY while the helpers write render/moon.py, stars.py, lunar_eclipse.py
+    from skyscatter.render.lunar_eclipse import EclipseOptics
+    from skyscatter.render.sky_at_time import (
+        Ephemeris,
+        Observer,
+        SkyObjects,
+        ephemeris,
+        render_sky_at,
+    )
+except ImportError:
+    pass
 from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
 from skyscatter.render.tonemap import (
+    adapted_ev100,
     auto_ev100,
     exposure_scale,
     incident_ev100,
+    night_adapted_exposure,
     to_srgb8,
     tonemap,
 )
+from skyscatter.render.video_io import VideoWriter, video_format
 from skyscatter.spectrum.colour import spectral_to_xyz, xyz_to_rgb
 from skyscatter.spectrum.grid import checked_grid, checked_wavelengths, wavelength_grid
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
+from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import SolverOptions, make_solver
 
@@ -51,8 +69,10 @@ __all__ = [
     "FisheyeCamera",
     "Ground",
     "Heightfield",
+    "Observer",
     "PerspectiveCamera",
     "SkyImage",
+    "SkyObjects",
     "SolverOptions",
     "check_image_options",
     "demo_mountains",
@@ -62,8 +82,12 @@ __all__ = [
     "load_solver",
     "look_at_direction",
     "orbit_field_of_view_deg",
+    "make_observer",
     "render",
+    "render_at",
     "save_image",
+    "sky_ephemeris",
+    "timelapse",
     "sky_radiance_rows",
     "solver_options",
     "sun_direction",
@@ -132,6 +156,140 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
                       atmosphere.planet.star, progress, ground)
 
 
+def make_observer(time: str | datetime.datetime, latitude_deg: float, longitude_deg: float,
+                  elevation_m: float = 0.0) -> Observer:
+    """An `Observer` from an ISO 8601 time with a time zone (or an aware datetime), latitude
+    [deg, north +], longitude [deg, east +] and elevation above the ground [m]."""
+    if isinstance(time, str):
+        when = parse_time(time)
+    elif isinstance(time, datetime.datetime) and time.utcoffset() is not None:
+        when = time.astimezone(datetime.UTC)
+    else:
+        raise InputError(f"time {time!r} needs a time zone, e.g. 2024-06-21T21:30+02:00",
+                         key="time", value=time)
+    _check_range("latitude", latitude_deg, -90.0, 90.0)
+    _check_range("longitude", longitude_deg, -360.0, 360.0)
+    _check_range("elevation_m", elevation_m, -500.0, 1e7)
+    return Observer(when, float(latitude_deg), float(longitude_deg), float(elevation_m))
+
+
+def sky_ephemeris(atmosphere: Atmosphere, observer: Observer) -> Ephemeris:
+    """Sun, moon and sky orientation for `observer` on the atmosphere's planet ([planet] body:
+    Earth or Mars)."""
+    return ephemeris(atmosphere.planet.body, observer)
+
+
+def render_at(atmosphere: Atmosphere, camera: Camera, observer: Observer,
+              objects: SkyObjects | None = None, wavelengths_nm: Sequence[float] | None = None,
+              solver: str = "lut", options: SolverOptions | None = None,
+              progress: Callable[[int], None] | None = None,
+              orbit_altitude_m: float | None = None, ground: Ground | None = None) -> SkyImage:
+    """The whole sky for `observer` (`make_observer`): the atmosphere lit by the sun and the
+    moon, the sun's and moon's disks, the stars (`objects`). The camera stands at the
+    observer's elevation, or with `orbit_altitude_m` hangs that high above the observer's
+    latitude/longitude (pitch -90 looks at the planet's centre). Other arguments as
+    `render`."""
+    engine = load_solver(atmosphere, wavelengths_nm, solver, options)
+    return _render_at(engine, atmosphere, camera, observer, objects or SkyObjects(), progress,
+                      orbit_altitude_m, ground)
+
+
+def _render_at(engine, atmosphere: Atmosphere, camera: Camera, observer: Observer,
+               objects: SkyObjects, progress: Callable[[int], None] | None,
+               orbit_altitude_m: float | None, ground: Ground | None) -> SkyImage:
+    sky = sky_ephemeris(atmosphere, observer)
+    radius = engine.profile.bottom_radius_m
+    if orbit_altitude_m is None:
+        viewpoint = viewpoint_at(observer.elevation_m, radius)
+    else:
+        _check_range("orbit altitude", orbit_altitude_m, 0.0, 1e12)
+        viewpoint = viewpoint_at(orbit_altitude_m, radius, observer.latitude_deg,
+                                 observer.longitude_deg)
+    optics = _eclipse_optics(engine) if sky.moon is not None else None
+    return render_sky_at(engine, camera, viewpoint, atmosphere.planet.star, sky, objects,
+                         progress, ground, optics)
+
+
+def _eclipse_optics(engine) -> EclipseOptics | None:
+    """The grazing transmittance and bending of the planet's air, for the light in the
+    umbra; None when the solver has no transmittance table or the air no Rayleigh gas."""
+    if not hasattr(engine, "tables"):
+        return None
+    try:
+        grazing_deflection_rad(engine.profile, [0.0])
+    except InputError:
+        return None
+    return EclipseOptics(
+        grazing_transmittance=lambda heights: grazing_transmittance(engine, heights),
+        grazing_deflection=lambda heights: grazing_deflection_rad(engine.profile, heights))
+
+
+@dataclass(frozen=True)
+class Timelapse:
+    """What `timelapse` wrote: the video, the frames and each frame's exposure."""
+
+    video: Path
+    frames: list[Path]
+    ev100: list[float]
+
+
+def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.datetime],
+              latitude_deg: float, longitude_deg: float, video_path: str | Path,
+              frames_dir: str | Path, elevation_m: float = 0.0, fps: float = 24.0,
+              objects: SkyObjects | None = None,
+              wavelengths_nm: Sequence[float] | None = None, solver: str = "lut",
+              options: SolverOptions | None = None, compensation_ev: float = 1.0,
+              operator: str = "aces", colour_space: str = "srgb",
+              adaptation_time_s: float = 600.0,
+              on_frame: Callable[[int, datetime.datetime, float], None] | None = None,
+              orbit_altitude_m: float | None = None) -> Timelapse:
+    """Render the sky at each of `times` (aware datetimes) for one place and write the frames
+    (PNG, `frames_dir/frame_00001.png` ...) and a video (`video_path`, .mp4 or .gif).
+
+    The tables are computed (or loaded) once and serve every frame. The exposure follows the
+    night-adapted meter (`night_adapted_exposure`) through a first-order low-pass of time
+    constant `adaptation_time_s` in simulated time (`adapted_ev100`), so day, twilight and
+    night flow into each other. With `objects.scintillation` (a random generator) the stars
+    twinkle, a new draw each frame. `on_frame(index, time, ev100)` is called after each
+    frame."""
+    if len(times) < 1:
+        raise InputError("a time-lapse needs at least one time", key="times", value=times)
+    check_image_options(operator, colour_space)
+    video_format(video_path)
+    observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
+    engine = load_solver(atmosphere, wavelengths_nm, solver, options)
+    objects = objects or SkyObjects()
+    frames_dir = Path(frames_dir)
+    frames, exposures = [], []
+    ev100 = None
+    with VideoWriter(video_path, fps) as video:
+        for index, observer in enumerate(observers):
+            image = _render_at(engine, atmosphere, camera, observer, objects, None,
+                               orbit_altitude_m, None)
+            xyz = image.xyz()
+            metered, night = night_adapted_exposure(xyz[..., 1], image.sky)
+            elapsed = ((observer.time_utc - observers[index - 1].time_utc).total_seconds()
+                       if index else 0.0)
+            ev100 = adapted_ev100(ev100, metered - night, abs(elapsed), adaptation_time_s)
+            rgb8 = _display_rgb8(xyz_to_rgb(xyz, colour_space), image.valid, ev100,
+                                 compensation_ev, operator)
+            path = frames_dir / f"frame_{index + 1:05d}.png"
+            write_png(path, rgb8, text={"Software": "skyscatter", "EV100": f"{ev100:.3f}",
+                                        "Time": observer.time_utc.isoformat()})
+            video.add(rgb8)
+            frames.append(path)
+            exposures.append(ev100)
+            if on_frame is not None:
+                on_frame(index, observer.time_utc, ev100)
+    return Timelapse(Path(video_path), frames, exposures)
+
+
+def _display_rgb8(linear_rgb: np.ndarray, valid: np.ndarray, ev100: float,
+                  compensation_ev: float, operator: str) -> np.ndarray:
+    display = tonemap(linear_rgb, operator, exposure_scale(ev100, compensation_ev))
+    return to_srgb8(display * valid[..., None])
+
+
 def viewpoint_at(altitude_m: float, planet_radius_m: float, latitude_deg: float | None = None,
                  longitude_deg: float = 0.0) -> Viewpoint:
     """The camera's place: above the north pole (`latitude_deg` None, the frame of
@@ -181,24 +339,28 @@ def save_image(image: SkyImage, png_path: str | Path | None = None,
                exr_path: str | Path | None = None, ev100: float | None = None,
                compensation_ev: float = 1.0, operator: str = "aces",
                colour_space: str = "srgb", balance_to_light: bool = False,
-               exr_content: str = "rgb") -> float:
+               exr_content: str = "rgb", adapt_to_night: bool = False) -> float:
     """Write a tone-mapped 8-bit PNG and/or a linear float32 EXR; returns the EV100 used.
 
     EXR contents: "rgb" (linear `colour_space`, 1.0 = 1 cd m^-2 of luminance), "luminance"
     (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
     `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
-    views from space from the starlight (incident-light metering: sunlit white is white)."""
+    views from space from the starlight (incident-light metering: sunlit white is white);
+    `adapt_to_night` meters night skies as night (`night_adapted_exposure`: darker than a
+    daylight grey, the exposure returned includes that shift)."""
     check_image_options(operator, colour_space, exr_content)
     xyz = image.xyz(balance_to_light)
     if ev100 is None and image.from_space:
         ev100 = incident_ev100(float(spectral_to_xyz(image.light_spectrum,
                                                      image.wavelengths_nm)[1]))
+    elif ev100 is None and adapt_to_night:
+        metered, night = night_adapted_exposure(xyz[..., 1], image.sky)
+        ev100 = metered - night
     elif ev100 is None:
         ev100 = auto_ev100(xyz[..., 1], image.sky)
     linear = xyz_to_rgb(xyz, colour_space)
     if png_path is not None:
-        display = tonemap(linear, operator, exposure_scale(ev100, compensation_ev))
-        write_png(png_path, to_srgb8(display * image.valid[..., None]),
+        write_png(png_path, _display_rgb8(linear, image.valid, ev100, compensation_ev, operator),
                   text={"Software": "skyscatter", "EV100": f"{ev100:.3f}",
                         "ColourSpace": colour_space})
     if exr_path is not None:

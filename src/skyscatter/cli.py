@@ -1,4 +1,5 @@
-"""Command line: `skyscatter render | radiance | precompute | validate | presets`. Thin: parse,
+"""Command line: `skyscatter render | timelapse | radiance | precompute | validate | presets`.
+Thin: parse,
 call the library, print.
 
 User errors (`SkyscatterError`) print one line and exit with code 2; anything else is our bug
@@ -65,6 +66,25 @@ def _exposure(text: str) -> float | None:
             f"'{text}' is neither 'auto' nor an EV100 number") from None
 
 
+_DURATION_UNITS = {"s": 1.0, "sec": 1.0, "min": 60.0, "m": 60.0, "h": 3600.0, "d": 86400.0}
+
+
+def _duration_s(text: str) -> float:
+    """'10min' -> 600.0, '30s', '1.5h', '1d' (argparse type) [s]."""
+    stripped = text.strip().lower()
+    for unit in sorted(_DURATION_UNITS, key=len, reverse=True):
+        if stripped.endswith(unit):
+            try:
+                value = float(stripped[: -len(unit)]) * _DURATION_UNITS[unit]
+            except ValueError:
+                break
+            if value > 0.0:
+                return value
+            raise argparse.ArgumentTypeError(f"'{text}' must be > 0")
+    raise argparse.ArgumentTypeError(
+        f"'{text}' is not a duration; write a number with a unit: 30s, 10min, 1.5h, 1d")
+
+
 MAX_BINS = 471  # 1 nm bins over 360-830 nm, the resolution of the CIE tables
 
 
@@ -114,6 +134,37 @@ def _add_cache_arguments(command: argparse.ArgumentParser) -> None:
                          help="compute the tables in memory; neither read nor write the cache")
 
 
+def _add_place_arguments(command: argparse.ArgumentParser, required: bool = False) -> None:
+    """--lat/--lon/--elevation-m: the observer's place for --time (and, for --camera orbit, the
+    point below the camera)."""
+    command.add_argument("--lat", type=float, default=None, required=required, metavar="DEG",
+                         help="observer latitude in degrees, north positive (with --time; "
+                         "orbit camera: the latitude below it, default 0)")
+    command.add_argument("--lon", type=float, default=None, required=required, metavar="DEG",
+                         help="observer longitude in degrees, east positive (with --time; "
+                         "orbit camera: the longitude below it, default 0)")
+    command.add_argument("--elevation-m", "--altitude", dest="altitude", type=float,
+                         default=0.0, metavar="M",
+                         help="observer height above the ground (sea level) in metres "
+                         "(default 0)")
+
+
+def _add_sky_object_arguments(command: argparse.ArgumentParser) -> None:
+    """What is drawn besides the atmosphere in skies at a date (--time)."""
+    command.add_argument("--no-stars", action="store_true", help="leave out the stars")
+    command.add_argument("--no-moon", action="store_true",
+                         help="leave out the moon and moonlight")
+    command.add_argument("--milky-way", action="store_true",
+                         help="add the integrated light of the stars fainter than the "
+                         "catalogue (the Milky Way)")
+    command.add_argument("--magnitude-limit", type=float, default=None, metavar="MAG",
+                         help="draw the stars brighter than this V magnitude (default: the "
+                         "whole Hipparcos catalogue, about 118 000 stars)")
+    command.add_argument("--twinkle", type=int, default=None, metavar="SEED",
+                         help="stars scintillate (random, seeded; in a time-lapse one draw per "
+                         "frame)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="skyscatter", description="Physically based skies of Earth, Mars and other "
@@ -143,6 +194,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="sun zenith angle in degrees (0 = overhead)")
     sun.add_argument("--sun-elevation", type=float, metavar="DEG",
                      help="sun elevation above the horizon in degrees (default 30)")
+    sun.add_argument("--time", default=None, metavar="ISO8601",
+                     help="date and time with a time zone, e.g. 2024-06-21T21:30+02:00: the "
+                     "sun, moon and stars for --lat/--lon (Earth and Mars presets)")
     render.add_argument("--sun-azimuth", type=float, default=180.0, metavar="DEG",
                         help="sun azimuth from north towards east in degrees (default 180)")
     render.add_argument("--camera", choices=CAMERAS, default="fisheye",
@@ -161,10 +215,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--distance-km", type=float, default=None, metavar="KM",
                         help="orbit camera: height above the ground in km (default: the "
                         "planet's radius)")
-    render.add_argument("--lat", type=float, default=0.0, metavar="DEG",
-                        help="orbit camera: latitude below the camera in degrees (default 0)")
-    render.add_argument("--lon", type=float, default=0.0, metavar="DEG",
-                        help="orbit camera: longitude below the camera in degrees (default 0)")
+    _add_place_arguments(render)
     render.add_argument("--look-at", type=_look_at, default=None, metavar="LAT,LON[,ALT_KM]",
                         help="orbit camera: aim at this point instead of the planet's centre "
                         "(the local vertical stays up, so the horizon is level)")
@@ -173,8 +224,6 @@ def build_parser() -> argparse.ArgumentParser:
                         "panorama centre, degrees (default 180: south)")
     render.add_argument("--pitch", type=float, default=10.0, metavar="DEG",
                         help="perspective view elevation in degrees (default 10)")
-    render.add_argument("--altitude", type=float, default=0.0, metavar="M",
-                        help="observer altitude above the ground in metres (default 0)")
     render.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
                         help="N bins over 360-830 nm, or a comma-separated list in nm "
                         "(default 16 bins)")
@@ -192,6 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--terrain-height", type=float, default=4500.0, metavar="M",
                         help="height of full white in the heightmap in metres; for 'demo', "
                         "the highest peak (default 4500)")
+    _add_sky_object_arguments(render)
     render.add_argument("--exposure", type=_exposure, default=None, metavar="EV100|auto",
                         help="exposure value EV100, or auto (default auto)")
     render.add_argument("--exposure-compensation", type=float, default=1.0, metavar="EV",
@@ -212,6 +262,59 @@ def build_parser() -> argparse.ArgumentParser:
                         default="rgb", help="what the EXR holds (default rgb)")
     render.set_defaults(run=_render)
 
+    timelapse = commands.add_parser(
+        "timelapse", help="render a day-night sequence to MP4 or GIF plus the frames",
+        description="Render the sky over a time range at one place, frame by frame, reusing "
+        "the precomputed tables; the exposure adapts smoothly from day to night. Writes the "
+        "video (.mp4 or .gif) and every frame as PNG. Example: skyscatter timelapse earth "
+        "--start 2024-06-21T20:00+02:00 --end 2024-06-22T00:00+02:00 --step 10min --lat 52.52 "
+        "--lon 13.40 -o berlin.mp4")
+    timelapse.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
+                           help="an Earth or Mars preset, or a TOML file with [planet] body")
+    timelapse.add_argument("--start", required=True, metavar="ISO8601",
+                           help="first frame's time with a time zone")
+    timelapse.add_argument("--end", required=True, metavar="ISO8601",
+                           help="last frame's time with a time zone")
+    frames = timelapse.add_mutually_exclusive_group()
+    frames.add_argument("--step", type=_duration_s, default=None, metavar="DURATION",
+                        help="time between frames: 30s, 10min, 1h ... (default: 60 frames)")
+    frames.add_argument("--frames", type=_positive_int, default=None, metavar="N",
+                        help="number of frames, evenly spread from --start to --end")
+    _add_place_arguments(timelapse, required=True)
+    timelapse.add_argument("--camera", choices=CAMERAS[:3], default="fisheye",
+                           help="fisheye (default), panorama or perspective")
+    timelapse.add_argument("--size", type=_positive_int, default=384, metavar="PIXELS",
+                           help="image height in pixels (default 384)")
+    timelapse.add_argument("--aspect", type=float, default=16 / 9,
+                           help="perspective width / height (default 16/9)")
+    timelapse.add_argument("--fov", type=float, default=None, metavar="DEG",
+                           help="perspective vertical field of view (default 60)")
+    timelapse.add_argument("--heading", type=float, default=180.0, metavar="DEG",
+                           help="view azimuth for perspective and panorama (default 180)")
+    timelapse.add_argument("--pitch", type=float, default=10.0, metavar="DEG",
+                           help="perspective view elevation (default 10)")
+    timelapse.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
+                           help="N bins over 360-830 nm or a list in nm (default 16 bins)")
+    _add_solver_arguments(timelapse, 64)
+    _add_sky_object_arguments(timelapse)
+    timelapse.add_argument("--fps", type=float, default=12.0,
+                           help="video frames per second (default 12)")
+    timelapse.add_argument("--adaptation-minutes", type=float, default=10.0, metavar="MIN",
+                           help="time constant of the exposure's adaptation, in simulated "
+                           "minutes (default 10; 0 meters every frame on its own)")
+    timelapse.add_argument("--exposure-compensation", type=float, default=1.0, metavar="EV",
+                           help="brightens the metered exposure by this many stops (default +1)")
+    timelapse.add_argument("--tonemap", default="aces", help="aces (default), exponential, "
+                           "reinhard or clamp")
+    timelapse.add_argument("--colour-space", default="srgb",
+                           help="srgb (default), display-p3, rec2020 or acescg")
+    timelapse.add_argument("-o", "--output", type=Path, default=Path("timelapse.mp4"),
+                           help="video path, .mp4 or .gif (default timelapse.mp4)")
+    timelapse.add_argument("--frames-dir", type=Path, default=None, metavar="DIR",
+                           help="where the PNG frames go (default: beside the video, "
+                           "<name>_frames/)")
+    timelapse.set_defaults(run=_timelapse)
+
     radiance = commands.add_parser(
         "radiance", help="print spectral sky radiance as CSV or JSON",
         description="Print diffuse spectral sky radiance [W m^-2 sr^-1 nm^-1] (the sun disk "
@@ -219,8 +322,12 @@ def build_parser() -> argparse.ArgumentParser:
         "up; relative azimuth 0 looks towards the sun.")
     radiance.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
                           help="a preset name (see `skyscatter presets`) or a TOML file")
-    radiance.add_argument("--sun-zenith", type=_float_list, required=True, metavar="DEG,...",
-                          help="sun zenith angles in degrees")
+    radiance_sun = radiance.add_mutually_exclusive_group(required=True)
+    radiance_sun.add_argument("--sun-zenith", type=_float_list, metavar="DEG,...",
+                              help="sun zenith angles in degrees")
+    radiance_sun.add_argument("--time", default=None, metavar="ISO8601",
+                              help="date and time with a time zone: the sun's zenith angle "
+                              "there and then for --lat/--lon (Earth and Mars presets)")
     radiance.add_argument("--view-zenith", type=_float_list, default=[0.0], metavar="DEG,...",
                           help="view zenith angles in degrees (default 0)")
     radiance.add_argument("--view-azimuth", type=_float_list, default=[0.0],
@@ -228,8 +335,7 @@ def build_parser() -> argparse.ArgumentParser:
                           "degrees (default 0)")
     radiance.add_argument("--wavelengths", type=_float_list, default=[440.0, 550.0, 680.0],
                           metavar="NM,...", help="wavelengths in nm (default 440,550,680)")
-    radiance.add_argument("--altitude", type=float, default=0.0, metavar="M",
-                          help="observer altitude in metres (default 0)")
+    _add_place_arguments(radiance)
     _add_solver_arguments(radiance, 512)
     radiance.add_argument("--format", choices=("csv", "json"), default="csv",
                           help="output format (default csv)")
@@ -312,17 +418,20 @@ def _render(args: argparse.Namespace) -> None:
 
     api.check_image_options(args.tonemap, args.colour_space, args.exr_content)
     atmosphere = api.load_atmosphere(args.atmosphere)
+    observer = _observer(args) if args.time is not None else None
     zenith = (args.sun_zenith if args.sun_zenith is not None
               else 90.0 - (30.0 if args.sun_elevation is None else args.sun_elevation))
     orbit = args.camera == "orbit"
     altitude = args.altitude
     radius = atmosphere.planet.radius_m
+    latitude = 0.0 if args.lat is None else args.lat
+    longitude = 0.0 if args.lon is None else args.lon
     if orbit:
         altitude = radius if args.distance_km is None else args.distance_km * 1000.0
         if not altitude > 0.0:
             raise InputError(f"--distance-km {args.distance_km} must be > 0", key="distance_km",
                              value=args.distance_km)
-        camera = _orbit_camera(args, altitude, radius)
+        camera = _orbit_camera(args, altitude, radius, latitude, longitude)
     elif args.look_at is not None:
         raise InputError("--look-at is for --camera orbit; aim other cameras with --heading "
                          "and --pitch", key="look_at", value=args.look_at)
@@ -331,18 +440,98 @@ def _render(args: argparse.Namespace) -> None:
     ground = _ground(args, radius)
     with _solver_options(args, atmosphere) as options, progress(
             int(camera.valid_mask().sum()), "rendering", unit="ray") as bar:
-        image = api.render(atmosphere, camera, zenith, args.sun_azimuth, altitude,
-                           args.wavelengths, args.solver, options, bar.update,
-                           orbit_latitude_deg=args.lat if orbit else None,
-                           orbit_longitude_deg=args.lon, ground=ground)
+        if observer is not None:
+            image = api.render_at(atmosphere, camera, observer, _sky_objects(args),
+                                  args.wavelengths, args.solver, options, bar.update,
+                                  orbit_altitude_m=altitude if orbit else None, ground=ground)
+        else:
+            image = api.render(atmosphere, camera, zenith, args.sun_azimuth, altitude,
+                               args.wavelengths, args.solver, options, bar.update,
+                               orbit_latitude_deg=latitude if orbit else None,
+                               orbit_longitude_deg=longitude, ground=ground)
     ev100 = api.save_image(image, args.output, args.exr, args.exposure,
                            args.exposure_compensation, args.tonemap, args.colour_space,
-                           args.white_balance == "star", args.exr_content)
+                           args.white_balance == "star", args.exr_content,
+                           adapt_to_night=observer is not None)
     written = [str(args.output)] + ([str(args.exr)] if args.exr else [])
     print(f"wrote {', '.join(written)} (EV100 {ev100:.2f})", file=sys.stderr)
+    if observer is not None:
+        print(_sky_summary(api.sky_ephemeris(atmosphere, observer)), file=sys.stderr)
 
 
-def _orbit_camera(args: argparse.Namespace, altitude_m: float, radius_m: float):
+def _observer(args: argparse.Namespace, time: str | None = None):
+    """The Observer of --time (or `time`), --lat, --lon, --elevation-m."""
+    from skyscatter import api
+    from skyscatter.errors import InputError
+
+    if args.lat is None or args.lon is None:
+        raise InputError("--time needs the place too: give --lat and --lon in degrees (north "
+                         "and east positive)", key="lat", value=(args.lat, args.lon))
+    return api.make_observer(args.time if time is None else time, args.lat, args.lon,
+                             args.altitude)
+
+
+def _sky_objects(args: argparse.Namespace):
+    import numpy as np
+
+    from skyscatter import api
+
+    twinkle = None if args.twinkle is None else np.random.default_rng(args.twinkle)
+    return api.SkyObjects(stars=not args.no_stars, moon=not args.no_moon,
+                          milky_way=args.milky_way, magnitude_limit=args.magnitude_limit,
+                          scintillation=twinkle)
+
+
+def _sky_summary(sky) -> str:
+    """One line on where the sun (and moon) stand."""
+    line = (f"sun: altitude {sky.sun.altitude_deg:.2f} deg, azimuth {sky.sun.azimuth_deg:.2f} "
+            f"deg")
+    if sky.moon is not None:
+        line += (f"; moon: altitude {sky.moon.altitude_deg:.2f} deg, azimuth "
+                 f"{sky.moon.azimuth_deg:.2f} deg")
+    return line
+
+
+def _timelapse(args: argparse.Namespace) -> None:
+    import datetime
+
+    from skyscatter import api
+    from skyscatter.astro.time import parse_time
+    from skyscatter.errors import InputError
+    from skyscatter.render.progress import progress
+
+    api.check_image_options(args.tonemap, args.colour_space)
+    start, end = parse_time(args.start), parse_time(args.end)
+    if not end > start:
+        raise InputError(f"--end {args.end} must come after --start {args.start}", key="end",
+                         value=args.end)
+    span = (end - start).total_seconds()
+    if args.step is not None:
+        count = int(span // args.step) + 1
+    else:
+        count = args.frames if args.frames is not None else 60
+    if count > 100_000:
+        raise InputError(f"{count} frames is too many; give a longer --step or --frames",
+                         key="step", value=args.step)
+    step = args.step if args.step is not None else span / max(count - 1, 1)
+    times = [start + datetime.timedelta(seconds=i * step) for i in range(count)]
+    atmosphere = api.load_atmosphere(args.atmosphere)
+    _observer(args, args.start)  # checks the place before the tables are computed
+    camera = _camera(args)
+    frames_dir = args.frames_dir or args.output.with_name(f"{args.output.stem}_frames")
+    with _solver_options(args, atmosphere) as options, progress(count, "time-lapse",
+                                                                unit="frame") as bar:
+        result = api.timelapse(
+            atmosphere, camera, times, args.lat, args.lon, args.output, frames_dir,
+            args.altitude, args.fps, _sky_objects(args), args.wavelengths,
+            args.solver, options, args.exposure_compensation, args.tonemap, args.colour_space,
+            args.adaptation_minutes * 60.0, on_frame=lambda *_: bar.update(1))
+    print(f"wrote {result.video} and {len(result.frames)} frames in {frames_dir} (EV100 "
+          f"{min(result.ev100):.1f} to {max(result.ev100):.1f})", file=sys.stderr)
+
+
+def _orbit_camera(args: argparse.Namespace, altitude_m: float, radius_m: float,
+                  latitude_deg: float, longitude_deg: float):
     """Perspective camera `altitude_m` above --lat/--lon, looking at the planet's centre or at
     --look-at, north up."""
     from skyscatter import api
@@ -352,7 +541,7 @@ def _orbit_camera(args: argparse.Namespace, altitude_m: float, radius_m: float):
         return api.PerspectiveCamera(args.size, args.size, fov, heading_deg=0.0,
                                      pitch_deg=-90.0)
     latitude, longitude, altitude_km = args.look_at
-    viewpoint = api.viewpoint_at(altitude_m, radius_m, args.lat, args.lon)
+    viewpoint = api.viewpoint_at(altitude_m, radius_m, latitude_deg, longitude_deg)
     forward = api.look_at_direction(viewpoint, latitude, longitude, altitude_km * 1000.0,
                                     radius_m)
     up = (0.0, 0.0, 1.0) if abs(forward[2]) < 0.99 else (0.0, 1.0, 0.0)  # level horizon
@@ -412,8 +601,13 @@ def _camera(args: argparse.Namespace):
 def _radiance(args: argparse.Namespace) -> None:
     from skyscatter import api
     atmosphere = api.load_atmosphere(args.atmosphere)
+    sun_zenith = args.sun_zenith
+    if args.time is not None:
+        sky = api.sky_ephemeris(atmosphere, _observer(args))
+        print(_sky_summary(sky), file=sys.stderr)
+        sun_zenith = [sky.sun_zenith_deg]
     with _solver_options(args, atmosphere) as options:
-        rows = api.sky_radiance_rows(atmosphere, args.sun_zenith, args.view_zenith,
+        rows = api.sky_radiance_rows(atmosphere, sun_zenith, args.view_zenith,
                                      args.view_azimuth, args.wavelengths, args.altitude,
                                      args.solver, options)
     if args.format == "json":

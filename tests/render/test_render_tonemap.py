@@ -105,3 +105,46 @@ def test_srgb8_keeps_image_shape():
 def test_srgb8_refuses_nan():
     with pytest.raises(InputError, match="1 NaN values"):
         tm.to_srgb8(np.array([0.2, np.nan]))
+
+
+def test_night_compensation_follows_the_krawczyk_key():
+    # alpha(L) = 1.03 - 2 / (2 + log10(L + 1)) (Krawczyk et al. 2005), relative to L = 3000.
+    def key(luminance):
+        return 1.03 - 2.0 / (2.0 + math.log10(luminance + 1.0))
+
+    assert tm.night_compensation_ev(3000.0) == pytest.approx(0.0, abs=1e-12)
+    for luminance in (1e-4, 0.05, 10.0, 1e4):
+        expected = math.log2(key(luminance) / key(3000.0))
+        assert tm.night_compensation_ev(luminance) == pytest.approx(expected, rel=1e-12)
+    # night is exposed darker than day, and the change is monotonic
+    values = [tm.night_compensation_ev(x) for x in (1e-4, 1e-2, 1.0, 100.0, 3000.0)]
+    assert values == sorted(values) and values[0] < -4.0
+    with pytest.raises(InputError):
+        tm.night_compensation_ev(-1.0)
+
+
+def test_night_adapted_exposure_meters_a_black_sky_with_stars_as_night():
+    # A black sky with a few bright star pixels meters at the natural night sky's luminance
+    # (Falchi et al. 2016), not at the stars'.
+    sky = np.zeros((64, 64))
+    sky[3, 5] = sky[40, 9] = 50.0
+    ev100, night = tm.night_adapted_exposure(sky, np.ones_like(sky, dtype=bool))
+    floor_ev = math.log2(tm.NATURAL_NIGHT_SKY_CD_M2 * 100.0 / tm.METER_CALIBRATION_K)
+    assert ev100 == pytest.approx(floor_ev, abs=0.02)
+    assert night == pytest.approx(tm.night_compensation_ev(tm.NATURAL_NIGHT_SKY_CD_M2), abs=0.01)
+    # a bright uniform day sky is metered as before, with no night shift
+    day = np.full((8, 8), 3000.0)
+    ev_day, night_day = tm.night_adapted_exposure(day, np.ones_like(day, dtype=bool))
+    assert ev_day == pytest.approx(tm.auto_ev100(day), abs=1e-12)
+    assert night_day == pytest.approx(0.0, abs=1e-9)
+
+
+def test_adapted_ev100_is_a_first_order_low_pass():
+    # After one time constant a step is followed by 1 - 1/e of its size; with no history or
+    # tau = 0 the meter is used as it is.
+    assert tm.adapted_ev100(None, 5.0, 60.0, 600.0) == 5.0
+    assert tm.adapted_ev100(10.0, 5.0, 60.0, 0.0) == 5.0
+    assert tm.adapted_ev100(10.0, 0.0, 600.0, 600.0) == pytest.approx(10.0 * math.exp(-1.0))
+    # two half steps equal one whole step (exponential smoothing composes)
+    half = tm.adapted_ev100(tm.adapted_ev100(10.0, 0.0, 300.0, 600.0), 0.0, 300.0, 600.0)
+    assert half == pytest.approx(tm.adapted_ev100(10.0, 0.0, 600.0, 600.0), rel=1e-12)

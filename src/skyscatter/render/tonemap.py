@@ -51,6 +51,7 @@ from skyscatter.spectrum.colour import encode_srgb_transfer
 
 __all__ = [
     "OPERATORS",
+    "adapted_ev100",
     "METER_CALIBRATION_K",
     "NATURAL_NIGHT_SKY_CD_M2",
     "aces_narkowicz2016",
@@ -142,6 +143,17 @@ def night_adapted_exposure(luminance: ArrayLike, sky: ArrayLike) -> tuple[float,
     ev100 = auto_ev100(floor, sky)
     log_average = 2.0**ev100 * METER_CALIBRATION_K / _ISO_SPEED
     return ev100, night_compensation_ev(log_average)
+
+
+def adapted_ev100(previous_ev100: float | None, metered_ev100: float, elapsed_s: float,
+                  time_constant_s: float) -> float:
+    """Exposure that follows the metered one smoothly in time, as an eye or an auto-exposure
+    camera adapts: EV ← EV + (EV_metered − EV)(1 − exp(−Δt / τ)), a first-order low-pass in
+    stops; the metered value itself when there is no previous one or τ = 0. [EV]"""
+    if previous_ev100 is None or time_constant_s <= 0.0:
+        return float(metered_ev100)
+    weight = 1.0 - np.exp(-max(elapsed_s, 0.0) / time_constant_s)
+    return float(previous_ev100 + (metered_ev100 - previous_ev100) * weight)
 
 
 def incident_ev100(illuminance_lux: float) -> float:

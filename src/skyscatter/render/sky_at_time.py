@@ -1,0 +1,254 @@
+"""The whole sky for a date, time and place: atmosphere, sun, moon and stars together.
+
+`ephemeris(body, observer)` gathers the astronomy of one instant (astro/): the sun's and the
+moon's topocentric positions and the rotation from J2000 to the observer's east-north-up frame.
+`render_sky_at(...)` then composes, in physical units (W m⁻² sr⁻¹ nm⁻¹):
+
+1. the sky lit by the sun, from its geometric (airless) direction, through civil, nautical and
+   astronomical twilight (the solver covers the sun down to `solver.profile` tables' lowest
+   sun; below that the sunlit sky is left out), scaled by (d_preset / d_date)² for the sun's
+   distance on that date;
+2. the sky lit by the moon (Earth): the same solver with the moon's direction, times the moon's
+   spectral irradiance over the sun's (`render.moon.moon_irradiance`); scattering is linear
+   in the source, so one set of tables serves both lights;
+3. the sun's disk at its refracted (apparent) position, its angular size from the distance of
+   the date, limb-darkened and transmitted (red at sunset);
+4. the moon's disk (phase, earthshine, eclipses: `render.moon`, `render.lunar_eclipse`);
+5. the stars of the Hipparcos 2 catalogue moved by proper motion and precessed to the date,
+   refracted, dimmed by the transmittance along each line of sight, optionally twinkling, and
+   the integrated light of the unresolved stars (Milky Way) as an option (`render.stars`).
+
+Refraction moves what is seen through the air (disks and stars; Saemundsson 1986 via
+`astro.earth_sky.refract`), not the light that scatters in it (the tables assume straight
+rays), so the sky is lit by the sun's geometric direction as the seed's reference
+implementation does (seed 003, Appendix S.12).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import functools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from skyscatter.astro.earth_sky import (
+    SkyPosition,
+    geocentric_sun_moon_m,
+    moon_position,
+    refract,
+    sun_position,
+)
+from skyscatter.astro.frames import j2000_to_horizon_matrix, mars_j2000_to_horizon_matrix
+from skyscatter.astro.mars_time import mars_sun_position
+from skyscatter.astro.star_catalogue import load_star_catalogue
+from skyscatter.errors import InputError
+from skyscatter.render.camera import Camera
+from skyscatter.render.lunar_eclipse import EclipseOptics
+from skyscatter.render.moon import add_moon_disk, moon_irradiance
+from skyscatter.render.scene import (
+    SkyImage,
+    Viewpoint,
+    add_sun_disk,
+    camera_image,
+    diffuse_radiance,
+    sky_image,
+)
+from skyscatter.render.stars import add_star_background, add_stars, scintillation_factors
+from skyscatter.render.surfaces import Ground
+from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, stellar_irradiance
+from skyscatter.spectrum.star import Star
+
+__all__ = ["BODIES", "Ephemeris", "Observer", "SkyObjects", "ephemeris", "render_sky_at"]
+
+BODIES = ("earth", "mars")
+# Mean obliquity of the ecliptic at J2000, 84381.406" (IAU 2006, Hilton et al. 2006, Celest.
+# Mech. Dyn. Astr. 94, 351): the ecliptic north pole in J2000 equatorial coordinates is
+# (0, -sin ε, cos ε). The moon's spin axis is within 1.54° of it (Cassini's laws).
+_OBLIQUITY_J2000_RAD = math.radians(84381.406 / 3600.0)
+ECLIPTIC_NORTH_POLE_J2000 = np.array([0.0, -math.sin(_OBLIQUITY_J2000_RAD),
+                                      math.cos(_OBLIQUITY_J2000_RAD)])
+# Refraction: standard air at the ground for Earth (Meeus ch. 16: 1010 hPa, 10 °C); Mars' mean
+# surface pressure 6.1 hPa (NASA Mars fact sheet) at 210 K scales it to under 0.01°.
+_REFRACTION_AIR = {"earth": (1010.0, 10.0), "mars": (6.1, -63.0)}
+
+
+@dataclass(frozen=True)
+class Observer:
+    """Where and when: an aware UTC time, planetographic latitude [deg] (north positive),
+    longitude [deg] (east positive) and elevation above the ground [m]."""
+
+    time_utc: datetime.datetime
+    latitude_deg: float
+    longitude_deg: float
+    elevation_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class SkyObjects:
+    """What is drawn besides the atmosphere and the sun.
+
+    stars            the catalogue's stars down to `magnitude_limit` (None: all 117 955)
+    moon             the moon's disk and moonlight in the sky (Earth)
+    milky_way        the integrated light of the stars fainter than the catalogue
+    scintillation    a random generator: each star's brightness twinkles (one draw per frame)
+    """
+
+    stars: bool = True
+    moon: bool = True
+    milky_way: bool = False
+    magnitude_limit: float | None = None
+    scintillation: np.random.Generator | None = None
+
+
+@dataclass(frozen=True)
+class Ephemeris:
+    """The astronomy of one instant for one observer (positions are topocentric, airless)."""
+
+    body: str
+    observer: Observer
+    sun: SkyPosition
+    moon: SkyPosition | None  # None on Mars
+    to_horizon: np.ndarray  # (3, 3): J2000 equatorial unit vectors -> local east-north-up
+    sun_geocentric_m: np.ndarray | None  # (3,) J2000, Earth only (eclipses)
+    moon_geocentric_m: np.ndarray | None
+
+    @property
+    def sun_zenith_deg(self) -> float:
+        return 90.0 - self.sun.altitude_deg
+
+
+def ephemeris(body: str, observer: Observer) -> Ephemeris:
+    """Sun, moon and sky orientation for `observer` on `body` ("earth" or "mars")."""
+    if body not in BODIES:
+        raise InputError(
+            "this planet has no ephemeris (its config has no [planet] body), so --time cannot "
+            "place the sun; give --sun-zenith/--sun-azimuth instead, or use an Earth or Mars "
+            "preset", key="body", value=body, allowed=", ".join(BODIES))
+    o = observer
+    if body == "mars":
+        return Ephemeris(body, o, mars_sun_position(o.time_utc, o.latitude_deg, o.longitude_deg),
+                         None, mars_j2000_to_horizon_matrix(o.time_utc, o.latitude_deg,
+                                                            o.longitude_deg), None, None)
+    sun_geo, moon_geo = geocentric_sun_moon_m(o.time_utc)
+    return Ephemeris(
+        body, o, sun_position(o.time_utc, o.latitude_deg, o.longitude_deg, o.elevation_m),
+        moon_position(o.time_utc, o.latitude_deg, o.longitude_deg, o.elevation_m),
+        j2000_to_horizon_matrix(o.time_utc, o.latitude_deg, o.longitude_deg), sun_geo, moon_geo)
+
+
+def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky: Ephemeris,
+                  objects: SkyObjects | None = None,
+                  progress: Callable[[int], None] | None = None,
+                  ground: Ground | None = None,
+                  eclipse_optics: EclipseOptics | None = None) -> SkyImage:
+    """Spectral image of the sky of `sky` (an `ephemeris`) seen by `camera` from `viewpoint`
+    (its local frame is the observer's east-north-up frame). `star` is the planet's star as
+    configured; its distance is replaced by the date's. `eclipse_optics` gives the grazing
+    transmittance and refraction of the planet's air for the light in the umbra (lunar
+    eclipses; None: the umbra is dark)."""
+    objects = objects or SkyObjects()
+    profile = solver.profile
+    wavelengths = profile.wavelengths_nm
+    position = viewpoint.position_m
+    directions, valid = camera.directions()
+    sun_today = dataclasses.replace(star, distance_m=sky.sun.distance_m)
+    distance_scale = (star.distance_m / sky.sun.distance_m) ** 2
+    sun_true = sky.sun.direction()
+    lights = []
+    if _sun_lights_the_sky(solver, sun_true):
+        lights.append((viewpoint.direction_to_world(sun_true), distance_scale))
+    moonlight = None
+    if objects.moon and sky.moon is not None and sky.moon.altitude_deg > -5.0:
+        moonlight = _moonlight(sky, sun_today, wavelengths, eclipse_optics, profile)
+        if np.any(moonlight > 0.0):
+            lights.append((viewpoint.direction_to_world(sky.moon.direction()),
+                           moonlight / profile.toa_irradiance))
+
+    def radiance_of(rays: np.ndarray) -> np.ndarray:
+        total = np.zeros((rays.shape[0], profile.n_wavelengths))
+        for world_light, scale in lights:
+            total += scale * diffuse_radiance(solver, position, rays, world_light, ground,
+                                              progress)
+        return total
+
+    spectral = camera_image(directions, valid, profile.n_wavelengths, radiance_of, viewpoint)
+    pressure, temperature = _REFRACTION_AIR[sky.body]
+    sun_seen = refract(sun_true, pressure, temperature)
+    add_sun_disk(spectral, camera, directions, valid, sun_seen, sun_today, wavelengths,
+                 _transmittance(solver, viewpoint, sun_seen[None], ground)[0])
+    if moonlight is not None:
+        moon_seen = refract(sky.moon.direction(), pressure, temperature)
+        add_moon_disk(spectral, camera, directions, valid, moon_seen, sky.moon.distance_m,
+                      sun_true, sky.to_horizon @ ECLIPTIC_NORTH_POLE_J2000, wavelengths,
+                      sun_today.irradiance_toa(wavelengths),
+                      _transmittance(solver, viewpoint, moon_seen[None], ground)[0],
+                      eclipse=_eclipse(sky, eclipse_optics, wavelengths))
+    if objects.stars:
+        _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky, objects,
+                             wavelengths, ground, pressure, temperature)
+    if objects.milky_way:
+        add_star_background(spectral, valid, directions, sky.to_horizon, wavelengths,
+                            lambda rays: _transmittance(solver, viewpoint, rays, ground))
+    return sky_image(spectral, directions, valid, viewpoint, profile)
+
+
+def _sun_lights_the_sky(solver, sun_true: np.ndarray) -> bool:
+    """True while the sun is above the lowest sun the solver's tables hold (deep twilight);
+    below it the sunlit sky is far below the night sky and is left out."""
+    lowest = getattr(getattr(solver, "tables", None), "min_cos_sun_zenith", -1.0)
+    return bool(sun_true[2] >= lowest)
+
+
+def _transmittance(solver, viewpoint: Viewpoint, local_directions: np.ndarray,
+                   ground: Ground | None) -> np.ndarray:
+    """Transmittance (n, n_wl) from the observer out of the atmosphere along local directions;
+    0 where the planet (or terrain) is in the way."""
+    world = viewpoint.direction_to_world(np.asarray(local_directions, dtype=np.float64))
+    position = viewpoint.position_m
+    along = world @ position
+    radius = solver.profile.bottom_radius_m
+    blocked = (along < 0.0) & (position @ position - along**2 < radius**2)
+    if ground is not None and ground.terrain is not None:
+        blocked |= ground.terrain.shadowed(position, world)
+    result = np.zeros((world.shape[0], solver.profile.n_wavelengths))
+    if np.any(~blocked):
+        result[~blocked] = solver.transmittance(position, world[~blocked])
+    return result
+
+
+def _moonlight(sky: Ephemeris, sun: Star, wavelengths: np.ndarray,
+               eclipse_optics: EclipseOptics | None, profile) -> np.ndarray:
+    """The moon's spectral irradiance at the top of the atmosphere [W m⁻² nm⁻¹]."""
+    return moon_irradiance(sky.moon.direction(), sky.moon.distance_m, sky.sun.direction(),
+                           wavelengths, sun.irradiance_toa(wavelengths),
+                           eclipse=_eclipse(sky, eclipse_optics, wavelengths))
+
+
+def _eclipse(sky: Ephemeris, optics: EclipseOptics | None, wavelengths: np.ndarray):
+    return None
+
+
+def _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky: Ephemeris,
+                         objects: SkyObjects, wavelengths, ground, pressure, temperature):
+    catalogue = load_star_catalogue(objects.magnitude_limit)
+    local = catalogue.directions_at(sky.observer.time_utc) @ sky.to_horizon.T
+    seen = refract(local, pressure, temperature)
+    up = np.flatnonzero(seen[:, 2] > 0.0)
+    irradiance = _star_irradiance(objects.magnitude_limit, tuple(wavelengths))[up]
+    transmittance = _transmittance(solver, viewpoint, seen[up], ground)
+    if objects.scintillation is not None:
+        airmass = 1.0 / np.maximum(seen[up, 2], 0.05)
+        irradiance = irradiance * scintillation_factors(airmass, objects.scintillation)[:, None]
+    add_stars(spectral, camera, valid, seen[up], irradiance, transmittance)
+
+
+@functools.lru_cache(maxsize=4)
+def _star_irradiance(magnitude_limit: float | None, wavelengths: tuple[float, ...]) -> np.ndarray:
+    """Top-of-atmosphere spectral irradiance (n_stars, n_wl) of the catalogue's stars."""
+    catalogue = load_star_catalogue(magnitude_limit)
+    temperature = colour_temperature_from_b_minus_v(catalogue.b_minus_v)
+    return stellar_irradiance(catalogue.v_magnitude, temperature, np.asarray(wavelengths))
