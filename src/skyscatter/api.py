@@ -32,17 +32,14 @@ from skyscatter.render.scene import (
     render_sky,
     sun_direction,
 )
-try:  # TEMPORARY while the helpers write render/moon.py, stars.py, lunar_eclipse.py
-    from skyscatter.render.lunar_eclipse import EclipseOptics
-    from skyscatter.render.sky_at_time import (
-        Ephemeris,
-        Observer,
-        SkyObjects,
-        ephemeris,
-        render_sky_at,
-    )
-except ImportError:
-    pass
+from skyscatter.render.sky_at_time import (
+    EclipseOptics,
+    Ephemeris,
+    Observer,
+    SkyObjects,
+    ephemeris,
+    render_sky_at,
+)
 from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
 from skyscatter.render.tonemap import (
@@ -219,9 +216,12 @@ def _eclipse_optics(engine) -> EclipseOptics | None:
         grazing_deflection_rad(engine.profile, [0.0])
     except InputError:
         return None
+    profile = engine.profile
     return EclipseOptics(
         grazing_transmittance=lambda heights: grazing_transmittance(engine, heights),
-        grazing_deflection=lambda heights: grazing_deflection_rad(engine.profile, heights))
+        grazing_deflection=lambda heights: grazing_deflection_rad(profile, heights),
+        planet_radius_m=profile.bottom_radius_m,
+        top_altitude_m=profile.top_radius_m - profile.bottom_radius_m)
 
 
 @dataclass(frozen=True)

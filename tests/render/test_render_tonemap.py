@@ -113,12 +113,16 @@ def test_night_compensation_follows_the_krawczyk_key():
         return 1.03 - 2.0 / (2.0 + math.log10(luminance + 1.0))
 
     assert tm.night_compensation_ev(3000.0) == pytest.approx(0.0, abs=1e-12)
-    for luminance in (1e-4, 0.05, 10.0, 1e4):
+    for luminance in (30.0, 300.0, 1e4):
         expected = math.log2(key(luminance) / key(3000.0))
         assert tm.night_compensation_ev(luminance) == pytest.approx(expected, rel=1e-12)
+    # dark scenes: the metered grey 1/9.6 (K q / 78) goes to Krawczyk's dark-scene key 0.03
+    for luminance in (1e-4, 0.05, 1.0):
+        assert tm.night_compensation_ev(luminance) == pytest.approx(math.log2(0.03 * 9.6),
+                                                                    rel=1e-12)
     # night is exposed darker than day, and the change is monotonic
-    values = [tm.night_compensation_ev(x) for x in (1e-4, 1e-2, 1.0, 100.0, 3000.0)]
-    assert values == sorted(values) and values[0] < -4.0
+    values = [tm.night_compensation_ev(x) for x in (1e-4, 1e-2, 1.0, 30.0, 100.0, 3000.0)]
+    assert values == sorted(values) and values[0] < -1.7
     with pytest.raises(InputError):
         tm.night_compensation_ev(-1.0)
 

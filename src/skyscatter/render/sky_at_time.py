@@ -44,11 +44,12 @@ from skyscatter.astro.earth_sky import (
 )
 from skyscatter.astro.frames import j2000_to_horizon_matrix, mars_j2000_to_horizon_matrix
 from skyscatter.astro.mars_time import mars_sun_position
+from skyscatter.astro.moon_phase import EARTH_SHADOW_RADIUS_M, eclipse_magnitudes
 from skyscatter.astro.star_catalogue import load_star_catalogue
 from skyscatter.errors import InputError
 from skyscatter.render.camera import Camera
-from skyscatter.render.lunar_eclipse import EclipseOptics
-from skyscatter.render.moon import add_moon_disk, moon_irradiance
+from skyscatter.render.lunar_eclipse import eclipse_factor
+from skyscatter.render.moon import MoonGeometry, add_moon_disk, moon_irradiance
 from skyscatter.render.scene import (
     SkyImage,
     Viewpoint,
@@ -57,12 +58,18 @@ from skyscatter.render.scene import (
     diffuse_radiance,
     sky_image,
 )
-from skyscatter.render.stars import add_star_background, add_stars, scintillation_factors
+from skyscatter.render.stars import (
+    add_star_background,
+    add_stars,
+    airmass_kasten_young_1989,
+    scintillation_factors,
+)
 from skyscatter.render.surfaces import Ground
 from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, stellar_irradiance
 from skyscatter.spectrum.star import Star
 
-__all__ = ["BODIES", "Ephemeris", "Observer", "SkyObjects", "ephemeris", "render_sky_at"]
+__all__ = ["BODIES", "EclipseOptics", "Ephemeris", "Observer", "SkyObjects", "ephemeris",
+           "render_sky_at"]
 
 BODIES = ("earth", "mars")
 # Mean obliquity of the ecliptic at J2000, 84381.406" (IAU 2006, Hilton et al. 2006, Celest.
@@ -102,6 +109,19 @@ class SkyObjects:
     milky_way: bool = False
     magnitude_limit: float | None = None
     scintillation: np.random.Generator | None = None
+
+
+@dataclass(frozen=True)
+class EclipseOptics:
+    """The planet's air for the light in the umbra (`lunar_eclipse.eclipse_factor`):
+    `grazing_transmittance(tangent altitudes (k,) [m]) -> (k, n_wl)`, `grazing_deflection(
+    tangent altitudes) -> (k,)` [rad] (`transport.limb`), the planet's radius and the top of
+    its refracting air [m]."""
+
+    grazing_transmittance: Callable[[np.ndarray], np.ndarray]
+    grazing_deflection: Callable[[np.ndarray], np.ndarray]
+    planet_radius_m: float
+    top_altitude_m: float
 
 
 @dataclass(frozen=True)
@@ -161,12 +181,12 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     lights = []
     if _sun_lights_the_sky(solver, sun_true):
         lights.append((viewpoint.direction_to_world(sun_true), distance_scale))
-    moonlight = None
+    moon = None
     if objects.moon and sky.moon is not None and sky.moon.altitude_deg > -5.0:
-        moonlight = _moonlight(sky, sun_today, wavelengths, eclipse_optics, profile)
-        if np.any(moonlight > 0.0):
+        moon = _moon_light(sky, sun_today, wavelengths, eclipse_optics)
+        if np.any(moon.irradiance > 0.0):
             lights.append((viewpoint.direction_to_world(sky.moon.direction()),
-                           moonlight / profile.toa_irradiance))
+                           moon.irradiance / profile.toa_irradiance))
 
     def radiance_of(rays: np.ndarray) -> np.ndarray:
         total = np.zeros((rays.shape[0], profile.n_wavelengths))
@@ -180,19 +200,20 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     sun_seen = refract(sun_true, pressure, temperature)
     add_sun_disk(spectral, camera, directions, valid, sun_seen, sun_today, wavelengths,
                  _transmittance(solver, viewpoint, sun_seen[None], ground)[0])
-    if moonlight is not None:
+    if moon is not None:
         moon_seen = refract(sky.moon.direction(), pressure, temperature)
-        add_moon_disk(spectral, camera, directions, valid, moon_seen, sky.moon.distance_m,
-                      sun_true, sky.to_horizon @ ECLIPTIC_NORTH_POLE_J2000, wavelengths,
-                      sun_today.irradiance_toa(wavelengths),
+        seen = dataclasses.replace(moon.geometry, moon_direction=moon_seen)
+        add_moon_disk(spectral, camera, directions, valid, seen, wavelengths,
+                      moon.solar_irradiance,
                       _transmittance(solver, viewpoint, moon_seen[None], ground)[0],
-                      eclipse=_eclipse(sky, eclipse_optics, wavelengths))
+                      eclipse=moon.eclipse)
     if objects.stars:
         _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky, objects,
                              wavelengths, ground, pressure, temperature)
     if objects.milky_way:
         add_star_background(spectral, valid, directions, sky.to_horizon, wavelengths,
-                            lambda rays: _transmittance(solver, viewpoint, rays, ground))
+                            lambda rays: _transmittance(solver, viewpoint, rays, ground),
+                            objects.magnitude_limit)
     return sky_image(spectral, directions, valid, viewpoint, profile)
 
 
@@ -220,16 +241,55 @@ def _transmittance(solver, viewpoint: Viewpoint, local_directions: np.ndarray,
     return result
 
 
-def _moonlight(sky: Ephemeris, sun: Star, wavelengths: np.ndarray,
-               eclipse_optics: EclipseOptics | None, profile) -> np.ndarray:
-    """The moon's spectral irradiance at the top of the atmosphere [W m⁻² nm⁻¹]."""
-    return moon_irradiance(sky.moon.direction(), sky.moon.distance_m, sky.sun.direction(),
-                           wavelengths, sun.irradiance_toa(wavelengths),
-                           eclipse=_eclipse(sky, eclipse_optics, wavelengths))
+@dataclass(frozen=True)
+class _Moon:
+    geometry: MoonGeometry  # true (airless) directions, the observer's east-north-up frame
+    solar_irradiance: np.ndarray  # (n_wl,) sunlight at the moon [W m⁻² nm⁻¹]
+    eclipse: Callable[[np.ndarray], np.ndarray] | None
+    irradiance: np.ndarray  # (n_wl,) the moon's light at the top of the air [W m⁻² nm⁻¹]
 
 
-def _eclipse(sky: Ephemeris, optics: EclipseOptics | None, wavelengths: np.ndarray):
-    return None
+def _moon_light(sky: Ephemeris, sun: Star, wavelengths: np.ndarray,
+                optics: EclipseOptics | None) -> _Moon:
+    """The moon's geometry, its sunlight, the eclipse shading near full moon, and the
+    disk-integrated moonlight (`moon.moon_irradiance`)."""
+    geometry = MoonGeometry(sky.moon.direction(), sky.moon.distance_m, sky.sun.direction(),
+                            sky.to_horizon @ ECLIPTIC_NORTH_POLE_J2000, sky.sun.distance_m)
+    solar = sun.irradiance_toa(wavelengths)
+    eclipse = _eclipse(sky, optics, wavelengths)
+    return _Moon(geometry, solar, eclipse,
+                 moon_irradiance(geometry, wavelengths, solar, eclipse=eclipse))
+
+
+def _eclipse(sky: Ephemeris, optics: EclipseOptics | None, wavelengths: np.ndarray
+             ) -> Callable[[np.ndarray], np.ndarray] | None:
+    """`eclipse(points (n, 3) relative to the observer, east-north-up [m]) -> (n, n_wl)`, the
+    sunlight reaching those points of the moon in the Earth's shadow; None when the moon is
+    outside the penumbra (`astro.moon_phase.eclipse_magnitudes`)."""
+    if sky.moon_geocentric_m is None:
+        return None
+    _, penumbral_magnitude = eclipse_magnitudes(sky.moon_geocentric_m, sky.sun_geocentric_m)
+    if penumbral_magnitude < -0.05:  # the moon clear of the penumbra (with a margin)
+        return None
+    to_j2000 = sky.to_horizon.T
+    # the observer relative to the Earth's centre: the geocentric moon minus the topocentric
+    observer_j2000 = sky.moon_geocentric_m - to_j2000 @ (sky.moon.distance_m
+                                                         * sky.moon.direction())
+
+    if optics is None:  # no air: the bare geometric shadow
+        def no_light(heights: np.ndarray) -> np.ndarray:
+            return np.zeros((np.size(heights), wavelengths.size))
+
+        optics = EclipseOptics(no_light, lambda heights: np.zeros(np.size(heights)),
+                               EARTH_SHADOW_RADIUS_M, 0.0)
+
+    def eclipse(points_enu: np.ndarray) -> np.ndarray:
+        points = observer_j2000 + points_enu @ sky.to_horizon
+        return eclipse_factor(points, sky.sun_geocentric_m, optics.grazing_transmittance,
+                              optics.grazing_deflection, optics.planet_radius_m,
+                              top_altitude_m=optics.top_altitude_m)
+
+    return eclipse
 
 
 def _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky: Ephemeris,
@@ -240,10 +300,12 @@ def _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky: Epheme
     up = np.flatnonzero(seen[:, 2] > 0.0)
     irradiance = _star_irradiance(objects.magnitude_limit, tuple(wavelengths))[up]
     transmittance = _transmittance(solver, viewpoint, seen[up], ground)
+    twinkle = None
     if objects.scintillation is not None:
-        airmass = 1.0 / np.maximum(seen[up, 2], 0.05)
-        irradiance = irradiance * scintillation_factors(airmass, objects.scintillation)[:, None]
-    add_stars(spectral, camera, valid, seen[up], irradiance, transmittance)
+        airmass = airmass_kasten_young_1989(np.degrees(np.arccos(seen[up, 2])))
+        twinkle = scintillation_factors(airmass, objects.scintillation,
+                                        altitude_m=sky.observer.elevation_m)
+    add_stars(spectral, camera, valid, seen[up], irradiance, transmittance, twinkle)
 
 
 @functools.lru_cache(maxsize=4)

@@ -26,10 +26,13 @@ Sources:
   α(L̄) = 1.03 − 2 / (2 + log10(L̄ + 1)), L̄ the log-average luminance [cd m⁻²]. Dim scenes get a
   lower key, so night looks dark instead of being metered up to a daylight grey. We apply it
   relative to a daylight sky (L̄ = 3000 cd m⁻², α = 0.665): log2(α(L̄) / α(3000)) stops, 0 by
-  day, −0.8 at 10 cd m⁻², −4.5 at night. Sky pixels below the luminance of the natural
-  moonless night sky, 22.0 mag arcsec⁻² in V (Falchi et al. 2016, "The new world atlas of
-  artificial night sky brightness", Sci. Adv. 2, e1600377, doi:10.1126/sciadv.1600377: 174
-  µcd m⁻²), are metered as that luminance, so a black sky with a few stars meters as night.
+  day, −0.8 at 30 cd m⁻², held at −1.79 below about 12 cd m⁻² (civil twilight and night):
+  there the metered log-average lands at 0.03 of the clipping level instead of 1/9.6, the key
+  Krawczyk's formula gives a dark scene (α → 0.03 as L̄ → 0). Its full drop relative to a
+  daylight key (−4.5 stops) left moonlit skies nearly black on a display. Sky pixels below the
+  luminance of the natural moonless night sky, 22.0 mag arcsec⁻² in V (Falchi et al. 2016,
+  "The new world atlas of artificial night sky brightness", Sci. Adv. 2, e1600377,
+  doi:10.1126/sciadv.1600377: 174 µcd m⁻²), are metered as that luminance, so a black sky with a few stars meters as night.
 * Operators: `exponential` 1 − exp(−x) (Bruneton 2017, precomputed_atmospheric_scattering demo,
   without its 1/2.2 gamma); `aces` x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14) clipped to
   [0, 1] (Narkowicz 2016, "ACES Filmic Tone Mapping Curve", blog post of 2016-01-06, a fit to
@@ -70,6 +73,7 @@ METER_CALIBRATION_K = 12.5  # cd s m⁻², reflected-light meter calibration con
 INCIDENT_CALIBRATION_C = 250.0  # lx s, incident-light meter, flat receptor (ISO 2720: 240-400)
 _ISO_SPEED = 100.0  # EV100 is defined for ISO 100
 NATURAL_NIGHT_SKY_CD_M2 = 174e-6  # cd m⁻², 22.0 mag arcsec⁻² V (Falchi et al. 2016)
+_DARK_SCENE_KEY = 0.03  # Krawczyk et al. (2005): their key value as L̄ -> 0
 _DAYLIGHT_LOG_AVERAGE_CD_M2 = 3000.0  # cd m⁻², where night_compensation_ev is 0
 _SATURATION_FACTOR = 78.0 / (0.65 * _ISO_SPEED)  # = 1.2; 78/(q S), q = 0.65 (Lagarde 2014)
 _LARGEST_INPUT = 1e150  # inputs are clipped here so x² stays finite in float64
@@ -122,15 +126,19 @@ def auto_ev100(luminance: ArrayLike, valid: ArrayLike | None = None) -> float:
 
 def night_compensation_ev(log_average_luminance: float) -> float:
     """Exposure change [EV] for a scene of log-average luminance L̄ [cd m⁻²]:
-    log2(α(L̄) / α(3000)), α(L) = 1.03 − 2 / (2 + log10(L + 1)) (Krawczyk et al. 2005; module
-    docstring). 0 for a daylight sky, about −4.5 at night."""
+    max(log2(α(L̄) / α(3000)), log2(0.03 · 9.6)), α(L) = 1.03 − 2 / (2 + log10(L + 1))
+    (Krawczyk et al. 2005; module docstring). 0 for a daylight sky, −1.79 in twilight and at
+    night."""
     def key(luminance: float) -> float:
         return 1.03 - 2.0 / (2.0 + np.log10(luminance + 1.0))
 
     if not (np.isfinite(log_average_luminance) and log_average_luminance >= 0.0):
         raise InputError(f"log-average luminance {log_average_luminance!r} must be finite and "
                          ">= 0 [cd m^-2]", key="luminance", value=log_average_luminance)
-    return float(np.log2(key(log_average_luminance) / key(_DAYLIGHT_LOG_AVERAGE_CD_M2)))
+    shift = np.log2(key(log_average_luminance) / key(_DAYLIGHT_LOG_AVERAGE_CD_M2))
+    metered_grey = METER_CALIBRATION_K / (_ISO_SPEED * _SATURATION_FACTOR)  # 1/9.6
+    floor = np.log2(_DARK_SCENE_KEY / metered_grey)
+    return float(max(shift, floor))
 
 
 def night_adapted_exposure(luminance: ArrayLike, sky: ArrayLike) -> tuple[float, float]:

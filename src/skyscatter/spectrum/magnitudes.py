@@ -24,8 +24,9 @@
   cells, `spectrum.grid`).
 
 Checks (tests/spectrum/test_spectrum_magnitudes.py): the ASTM G173-03 solar spectrum gives
-V = -26.75 against -26.76 (Willmer 2018, ApJS 236, 47, doi:10.3847/1538-4365/aabfdf, Table 3);
-a V = 0.03, B-V = 0 star has f_λ(550 nm) = 3.57e-11 W m⁻² nm⁻¹ (Vega measured: 3.6e-11).
+V = -26.761 against -26.76 (Willmer 2018, ApJS 236, 47, doi:10.3847/1538-4365/aabfdf, Table 3);
+a V = 0.03, B-V = 0 star has f_λ(555.6 nm) = 3.434e-11 W m⁻² nm⁻¹ (Vega measured: 3.44e-11,
+Hayes 1985, IAU Symp. 111, 225).
 
 Public names: `V_PASSBAND_BESSELL_1990`, `V_ZERO_POINT_FLUX`, `v_band_mean`,
 `v_magnitude_of_spectrum`, `colour_temperature_from_b_minus_v`,
@@ -163,9 +164,10 @@ def colour_temperature_from_b_minus_v(b_minus_v: ArrayLike) -> np.ndarray:
 
 
 def colour_temperature_from_b_minus_v_seed(b_minus_v: ArrayLike) -> np.ndarray:
-    """The thesis's rough colour temperature, T = 7000 K / (B-V + 0.56) (seed digest §2.8).
+    """The thesis's colour temperature, T = 7000 K / (B-V + 0.56) (thesis eq. 4.26, after Jensen
+    et al. 2001 / Olson 1998; seed digest §2.8).
 
-    Kept to compare renderings with the thesis; it gives 5738 K for the Sun (B-V = 0.65) but
+    Kept to compare renderings with the thesis; it gives 5785 K for the Sun (B-V = 0.65) but
     diverges for B-V -> -0.56, so inputs are clipped to [-0.4, 3.0] as in
     `colour_temperature_from_b_minus_v` (the physical model; use that one).
 
@@ -243,7 +245,8 @@ def stellar_irradiance(v_magnitude: ArrayLike, temperature_k: ArrayLike,
                          allowed="> 0 [K]")
     v, t = np.broadcast_arrays(v, t)
     unique_t, inverse = np.unique(t, return_inverse=True)
-    shape = _planck_cell_averages(unique_t, cell_edges(wl)) / _planck_v_band_means(unique_t)[:, None]
+    shape = (_planck_cell_averages(unique_t, cell_edges(wl))
+             / _planck_v_band_means(unique_t)[:, None])
     scale = V_ZERO_POINT_FLUX * 10.0 ** (-v / _POGSON)
     return shape[inverse.reshape(t.shape)] * scale[..., None]
 
