@@ -32,7 +32,8 @@ Sources:
   daylight key (−4.5 stops) left moonlit skies nearly black on a display. Sky pixels below the
   luminance of the natural moonless night sky, 22.0 mag arcsec⁻² in V (Falchi et al. 2016,
   "The new world atlas of artificial night sky brightness", Sci. Adv. 2, e1600377,
-  doi:10.1126/sciadv.1600377: 174 µcd m⁻²), are metered as that luminance, so a black sky with a few stars meters as night.
+  doi:10.1126/sciadv.1600377: 174 µcd m⁻²), are metered as that luminance, so a black sky
+  with a few stars meters as night.
 * Operators: `exponential` 1 − exp(−x) (Bruneton 2017, precomputed_atmospheric_scattering demo,
   without its 1/2.2 gamma); `aces` x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14) clipped to
   [0, 1] (Narkowicz 2016, "ACES Filmic Tone Mapping Curve", blog post of 2016-01-06, a fit to
