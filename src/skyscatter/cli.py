@@ -419,6 +419,9 @@ def _render(args: argparse.Namespace) -> None:
     api.check_image_options(args.tonemap, args.colour_space, args.exr_content)
     atmosphere = api.load_atmosphere(args.atmosphere)
     observer = _observer(args) if args.time is not None else None
+    summary = None
+    if observer is not None:  # checks that the planet has an ephemeris before any table work
+        summary = _sky_summary(api.sky_ephemeris(atmosphere, observer))
     zenith = (args.sun_zenith if args.sun_zenith is not None
               else 90.0 - (30.0 if args.sun_elevation is None else args.sun_elevation))
     orbit = args.camera == "orbit"
@@ -455,8 +458,8 @@ def _render(args: argparse.Namespace) -> None:
                            adapt_to_night=observer is not None)
     written = [str(args.output)] + ([str(args.exr)] if args.exr else [])
     print(f"wrote {', '.join(written)} (EV100 {ev100:.2f})", file=sys.stderr)
-    if observer is not None:
-        print(_sky_summary(api.sky_ephemeris(atmosphere, observer)), file=sys.stderr)
+    if summary is not None:
+        print(summary, file=sys.stderr)
 
 
 def _observer(args: argparse.Namespace, time: str | None = None):
@@ -516,7 +519,7 @@ def _timelapse(args: argparse.Namespace) -> None:
     step = args.step if args.step is not None else span / max(count - 1, 1)
     times = [start + datetime.timedelta(seconds=i * step) for i in range(count)]
     atmosphere = api.load_atmosphere(args.atmosphere)
-    _observer(args, args.start)  # checks the place before the tables are computed
+    api.sky_ephemeris(atmosphere, _observer(args, args.start))  # checks before the tables
     camera = _camera(args)
     frames_dir = args.frames_dir or args.output.with_name(f"{args.output.stem}_frames")
     with _solver_options(args, atmosphere) as options, progress(count, "time-lapse",

@@ -68,8 +68,8 @@ from skyscatter.render.surfaces import Ground
 from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, stellar_irradiance
 from skyscatter.spectrum.star import Star
 
-__all__ = ["BODIES", "EclipseOptics", "Ephemeris", "Observer", "SkyObjects", "ephemeris",
-           "render_sky_at"]
+__all__ = ["BODIES", "EclipseOptics", "Ephemeris", "MoonLight", "Observer", "SkyObjects",
+           "ephemeris", "moon_light", "render_sky_at"]
 
 BODIES = ("earth", "mars")
 # Mean obliquity of the ecliptic at J2000, 84381.406" (IAU 2006, Hilton et al. 2006, Celest.
@@ -183,7 +183,7 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
         lights.append((viewpoint.direction_to_world(sun_true), distance_scale))
     moon = None
     if objects.moon and sky.moon is not None and sky.moon.altitude_deg > -5.0:
-        moon = _moon_light(sky, sun_today, wavelengths, eclipse_optics)
+        moon = moon_light(sky, sun_today, wavelengths, eclipse_optics)
         if np.any(moon.irradiance > 0.0):
             lights.append((viewpoint.direction_to_world(sky.moon.direction()),
                            moon.irradiance / profile.toa_irradiance))
@@ -242,22 +242,24 @@ def _transmittance(solver, viewpoint: Viewpoint, local_directions: np.ndarray,
 
 
 @dataclass(frozen=True)
-class _Moon:
+class MoonLight:
+    """The moon of an `Ephemeris` as a light source and a disk to draw."""
+
     geometry: MoonGeometry  # true (airless) directions, the observer's east-north-up frame
     solar_irradiance: np.ndarray  # (n_wl,) sunlight at the moon [W m⁻² nm⁻¹]
     eclipse: Callable[[np.ndarray], np.ndarray] | None
     irradiance: np.ndarray  # (n_wl,) the moon's light at the top of the air [W m⁻² nm⁻¹]
 
 
-def _moon_light(sky: Ephemeris, sun: Star, wavelengths: np.ndarray,
-                optics: EclipseOptics | None) -> _Moon:
+def moon_light(sky: Ephemeris, sun: Star, wavelengths: np.ndarray,
+                optics: EclipseOptics | None) -> MoonLight:
     """The moon's geometry, its sunlight, the eclipse shading near full moon, and the
     disk-integrated moonlight (`moon.moon_irradiance`)."""
     geometry = MoonGeometry(sky.moon.direction(), sky.moon.distance_m, sky.sun.direction(),
                             sky.to_horizon @ ECLIPTIC_NORTH_POLE_J2000, sky.sun.distance_m)
     solar = sun.irradiance_toa(wavelengths)
     eclipse = _eclipse(sky, optics, wavelengths)
-    return _Moon(geometry, solar, eclipse,
+    return MoonLight(geometry, solar, eclipse,
                  moon_irradiance(geometry, wavelengths, solar, eclipse=eclipse))
 
 

@@ -150,8 +150,9 @@ def scintillation_factors(airmass: ArrayLike, rng: np.random.Generator,
         Intensity factors, > 0, mean 1. [-]
     """
     x = np.asarray(airmass, dtype=np.float64)
-    if not np.all(np.isfinite(x) & (x >= 1.0 - 1e-9)):
-        bad = float(x[~(np.isfinite(x) & (x >= 1.0 - 1e-9))].flat[0])
+    # Kasten & Young's fit gives 0.99988 at the zenith: values just below 1 count as 1
+    if not np.all(np.isfinite(x) & (x >= 0.999)):
+        bad = float(x[~(np.isfinite(x) & (x >= 0.999))].flat[0])
         raise InputError(f"airmass = {bad!r} must be finite and >= 1", key="airmass", value=bad,
                          allowed=">= 1")
     for name, value in (("aperture_m", aperture_m), ("exposure_s", exposure_s)):

@@ -1,0 +1,145 @@
+"""The whole sky at a date: where the sun, the stars and the moon land in the image (checked
+against PyEphem's own positions and refraction, an implementation independent of astro/frames
+and of our refraction), and what a lunar eclipse does to the moonlight."""
+
+import datetime
+import math
+
+import ephem
+import numpy as np
+import pytest
+
+from skyscatter import api
+from skyscatter.render.moon import moon_irradiance
+from skyscatter.render.sky_at_time import moon_light
+from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.spectrum.magnitudes import v_magnitude_of_spectrum
+
+BERLIN = (52.52, 13.40)
+HONOLULU = (21.31, -157.86)
+
+
+@pytest.fixture(scope="module")
+def earth():
+    atmosphere = api.load_atmosphere("earth")
+    solver = api.load_solver(atmosphere, wavelength_grid(4),
+                             options=api.solver_options(atmosphere, orders=2))
+    return atmosphere, solver
+
+
+def _ephem_observer(when: datetime.datetime, latitude: float, longitude: float,
+                    pressure_hpa: float = 0.0) -> ephem.Observer:
+    observer = ephem.Observer()
+    observer.lat, observer.lon = str(latitude), str(longitude)
+    observer.elevation = 0.0
+    observer.date = ephem.Date(when.astimezone(datetime.UTC).replace(tzinfo=None))
+    observer.pressure, observer.temp = pressure_hpa, 10.0
+    return observer
+
+
+def _pixel_of(camera, altitude_deg: float, azimuth_deg: float) -> tuple[float, float]:
+    direction = api.sun_direction(90.0 - altitude_deg, azimuth_deg)
+    row, column = camera.direction_to_pixel(direction)
+    return float(row), float(column)
+
+
+def _peak_near(image: np.ndarray, row: float, column: float, radius: int = 4):
+    """(row, column) of the brightest pixel within `radius` of (row, column)."""
+    r0, c0 = int(row), int(column)
+    window = image[r0 - radius:r0 + radius + 1, c0 - radius:c0 + radius + 1]
+    i, j = np.unravel_index(np.argmax(window), window.shape)
+    return r0 - radius + i, c0 - radius + j
+
+
+def test_bright_stars_land_where_pyephem_puts_them(earth):
+    # Berlin, a moonless January night; only stars brighter than V = 1.0. PyEphem (its own
+    # precession, nutation and aberration; refraction at 1010 hPa and 10 C like ours) gives
+    # each star's apparent alt/az; the star's image peak must be within one pixel of it
+    # (0.35 deg at 512 px): catalogue -> precession -> horizon frame -> refraction -> lens.
+    atmosphere, solver = earth
+    when = datetime.datetime(2024, 1, 10, 22, 0, tzinfo=datetime.UTC)
+    camera = api.FisheyeCamera(512)
+    observer = api.make_observer(when, *BERLIN)
+    image = api.render_at(atmosphere, camera, observer, api.SkyObjects(magnitude_limit=1.0),
+                          wavelength_grid(4), options=api.solver_options(atmosphere, orders=2))
+    luminance = image.xyz()[..., 1]
+    site = _ephem_observer(when, *BERLIN, pressure_hpa=1010.0)
+    checked = 0
+    for name in ("Capella", "Sirius", "Betelgeuse", "Rigel", "Aldebaran", "Procyon"):
+        star = ephem.star(name)
+        star.compute(site)
+        altitude, azimuth = math.degrees(star.alt), math.degrees(star.az)
+        if altitude < 10.0:
+            continue
+        row, column = _pixel_of(camera, altitude, azimuth)
+        peak = _peak_near(luminance, row, column)
+        assert abs(peak[0] + 0.5 - row) <= 1.0 and abs(peak[1] + 0.5 - column) <= 1.0, name
+        checked += 1
+    assert checked >= 4
+
+
+def test_the_sun_disk_is_at_pyephems_refracted_position(earth):
+    # Berlin, a winter noon: the sun (a sub-4-pixel disk deposited in one pixel) is the
+    # image's brightest pixel, within one pixel of PyEphem's refracted alt/az.
+    atmosphere, _ = earth
+    when = datetime.datetime(2024, 12, 21, 11, 0, tzinfo=datetime.UTC)
+    camera = api.FisheyeCamera(256)
+    image = api.render_at(atmosphere, camera, api.make_observer(when, *BERLIN),
+                          api.SkyObjects(stars=False), wavelength_grid(4),
+                          options=api.solver_options(atmosphere, orders=2))
+    sun = ephem.Sun()
+    sun.compute(_ephem_observer(when, *BERLIN, pressure_hpa=1010.0))
+    row, column = _pixel_of(camera, math.degrees(sun.alt), math.degrees(sun.az))
+    luminance = image.xyz()[..., 1]
+    peak = np.unravel_index(np.argmax(luminance), luminance.shape)
+    assert abs(peak[0] + 0.5 - row) <= 1.0 and abs(peak[1] + 0.5 - column) <= 1.0
+
+
+def test_total_lunar_eclipse_dims_and_reddens_the_moon(earth):
+    # 2022-11-08, greatest eclipse 10:59 UTC (umbral magnitude 1.359, NASA), seen from
+    # Honolulu. The moonlight through our own atmosphere's grazing transmittance and
+    # refraction (transport/limb.py) against the same moon unshaded: total eclipses fade the
+    # moon by about 10-14 magnitudes and turn it copper-red (Keen 1983, Science 222, 1011;
+    # Danjon scale). The bounds are wide because the real fading depends on clouds and
+    # volcanic aerosol along the terminator, which our clear atmosphere leaves out.
+    atmosphere, solver = earth
+    wavelengths = solver.profile.wavelengths_nm
+    sky = api.sky_ephemeris(atmosphere, api.make_observer(
+        datetime.datetime(2022, 11, 8, 10, 59, tzinfo=datetime.UTC), *HONOLULU))
+    sun = atmosphere.planet.star
+    optics = api._eclipse_optics(solver)
+    eclipsed = moon_light(sky, sun, wavelengths, optics)
+    uneclipsed = moon_irradiance(eclipsed.geometry, wavelengths, eclipsed.solar_irradiance)
+    fading = (v_magnitude_of_spectrum(wavelengths, eclipsed.irradiance)
+              - v_magnitude_of_spectrum(wavelengths, uneclipsed))
+    assert 8.0 < float(fading) < 16.0
+    ratio = eclipsed.irradiance / uneclipsed
+    assert ratio[-1] > 5.0 * ratio[0]  # red (~770 nm) passes, blue (~420 nm) does not
+    # before the umbra arrives (penumbral phase, 08:45 UTC) the moon is only slightly dimmed
+    penumbral = api.sky_ephemeris(atmosphere, api.make_observer(
+        datetime.datetime(2022, 11, 8, 8, 45, tzinfo=datetime.UTC), *HONOLULU))
+    light = moon_light(penumbral, sun, wavelengths, optics)
+    plain = moon_irradiance(light.geometry, wavelengths, light.solar_irradiance)
+    assert 0.2 < float(np.mean(light.irradiance / plain)) < 1.0
+
+
+def test_the_lit_side_of_a_waxing_moon_faces_the_sun(earth):
+    # First quarter, 2024-01-18 around 17:00 UTC in Berlin: in a narrow view centred on the
+    # moon the brightness centroid lies off the disk centre towards the projected sun.
+    atmosphere, _ = earth
+    when = datetime.datetime(2024, 1, 18, 17, 0, tzinfo=datetime.UTC)
+    sky = api.sky_ephemeris(atmosphere, api.make_observer(when, *BERLIN))
+    moon, sun = sky.moon.direction(), sky.sun.direction()
+    camera = api.PerspectiveCamera.from_forward_up(64, 64, 1.0, moon, (0.0, 0.0, 1.0))
+    image = api.render_at(atmosphere, camera, api.make_observer(when, *BERLIN),
+                          api.SkyObjects(stars=False), wavelength_grid(4),
+                          options=api.solver_options(atmosphere, orders=2))
+    luminance = image.xyz()[..., 1]
+    moon_pixels = luminance > 50.0 * np.median(luminance)
+    rows, columns = np.nonzero(moon_pixels)
+    weights = luminance[moon_pixels]
+    centroid = np.array([rows @ weights, columns @ weights]) / weights.sum()
+    centre = np.array(camera.direction_to_pixel(moon)) - 0.5
+    towards_sun = np.array(camera.direction_to_pixel(moon + 0.01 * (sun - moon))) - 0.5
+    offset, expected = centroid - centre, towards_sun - centre
+    assert offset @ expected / (np.linalg.norm(offset) * np.linalg.norm(expected)) > 0.9
