@@ -12,6 +12,7 @@ import pytest
 from skyscatter import api
 from skyscatter.render.moon import moon_irradiance
 from skyscatter.render.sky_at_time import moon_light
+from skyscatter.spectrum.colour import spectral_to_xyz
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.spectrum.magnitudes import v_magnitude_of_spectrum
 
@@ -143,3 +144,41 @@ def test_the_lit_side_of_a_waxing_moon_faces_the_sun(earth):
     towards_sun = np.array(camera.direction_to_pixel(moon + 0.01 * (sun - moon))) - 0.5
     offset, expected = centroid - centre, towards_sun - centre
     assert offset @ expected / (np.linalg.norm(offset) * np.linalg.norm(expected)) > 0.9
+
+
+def test_moonlit_sky_agrees_with_krisciunas_and_schaefer(earth):
+    # Krisciunas & Schaefer (1991), PASP 103, 1033, eqs. 15-21: the V-band brightness of the
+    # moonlit sky, B = f(rho) I* 10^(-0.4 k X(Z_moon)) (1 - 10^(-0.4 k X(Z))) [nL], with
+    # f(rho) = 10^5.36 (1.06 + cos^2 rho) + 10^(6.15 - rho/40), I* = 10^(-0.4 (3.84 + 0.026
+    # |alpha| + 4e-9 alpha^4)), X(Z) = (1 - 0.96 sin^2 Z)^-1/2, 1 nL = 3.183e-6 cd m^-2; k from
+    # our own zenith transmittance at 550 nm. Full moon over Berlin, 55 deg high. Their model
+    # fits measurements to 8-23 % rms; we allow 25 % away from the moon, and 60 % 10 deg from
+    # it, where the aerosol's forward peak (theirs: Mauna Kea's, ours: a continental haze)
+    # decides the aureole.
+    atmosphere, solver = earth
+    profile = solver.profile
+    wavelengths = profile.wavelengths_nm
+    sky = api.sky_ephemeris(atmosphere, api.make_observer("2024-01-25T23:00+01:00", *BERLIN))
+    moon = moon_light(sky, atmosphere.planet.star, wavelengths, None)
+    position = np.array([0.0, 0.0, profile.bottom_radius_m + 1.0])
+    zenith_transmittance = solver.transmittance(position, np.array([[0.0, 0.0, 1.0]]))[0]
+    k = -2.5 * math.log10(np.interp(550.0, wavelengths, zenith_transmittance))
+    alpha = math.degrees(math.acos(np.clip(
+        -moon.geometry.moon_direction @ moon.geometry.sun_from_moon, -1.0, 1.0)))
+
+    def airmass(zenith_deg):
+        return (1.0 - 0.96 * math.sin(math.radians(zenith_deg)) ** 2) ** -0.5
+
+    brightness = 10.0 ** (-0.4 * (3.84 + 0.026 * alpha + 4e-9 * alpha**4))
+    moon_zenith = 90.0 - sky.moon.altitude_deg
+    for view_zenith, azimuth_offset, tolerance in ((0.0, 0.0, 0.25), (60.0, 90.0, 0.25),
+                                                   (75.0, 180.0, 0.25), (45.0, 0.0, 0.6)):
+        view = api.sun_direction(view_zenith, sky.moon.azimuth_deg + azimuth_offset)
+        rho = math.degrees(math.acos(view @ sky.moon.direction()))
+        f = 10**5.36 * (1.06 + math.cos(math.radians(rho)) ** 2) + 10 ** (6.15 - rho / 40.0)
+        expected = (f * brightness * 10 ** (-0.4 * k * airmass(moon_zenith))
+                    * (1.0 - 10 ** (-0.4 * k * airmass(view_zenith))) * 3.183e-6)
+        radiance = solver.sky_radiance(position, view[None], sky.moon.direction())[0]
+        luminance = spectral_to_xyz(radiance * moon.irradiance / profile.toa_irradiance,
+                                    wavelengths)[1]
+        assert luminance == pytest.approx(expected, rel=tolerance), (view_zenith, rho)
