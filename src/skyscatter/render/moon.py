@@ -86,6 +86,7 @@ from numpy.typing import ArrayLike
 
 from skyscatter.astro.moon_phase import MOON_RADIUS_M
 from skyscatter.errors import InputError
+from skyscatter.render.scene import deposit_small_disk
 from skyscatter.spectrum.grid import checked_grid
 from skyscatter.spectrum.star import AU_M
 
@@ -123,7 +124,6 @@ MARE_TO_HIGHLAND_ALBEDO = 0.07 / 0.13  # normal albedos, Lunar Sourcebook (Heike
 EARTH_GEOMETRIC_ALBEDO = 0.367  # -, Allen's Astrophysical Quantities (Cox 2000)
 EARTH_MEAN_RADIUS_M = 6_371_000.0  # m, IUGG mean radius R_1 (Moritz 2000, J. Geod. 74, 128)
 MEAN_MOON_DISTANCE_M = 384_400_000.0  # m, the distance Allen's V(α) refers to
-SPLAT_PIXELS = 4.0  # a disk covering fewer pixels than this goes into one pixel (as the Sun's)
 
 # Maria: (name, centre latitude [deg N], centre longitude [deg E], diameter [km]). Single discs:
 # IAU Gazetteer of Planetary Nomenclature centres and diameters. Chains (Procellarum, Frigoris):
@@ -616,7 +616,7 @@ def add_moon_disk(spectral: np.ndarray, camera, directions: np.ndarray, valid: n
                   eclipse: Callable[[np.ndarray], np.ndarray] | None = None) -> None:
     """Add the transmitted lunar disk to `spectral` (h, w, n_wl) in place.
 
-    Like `scene.add_sun_disk`: when the disk's solid angle is below `SPLAT_PIXELS` (4) times
+    Like `scene.add_sun_disk`: when the disk's solid angle is below `scene.SPLAT_PIXELS` (4) times
     that of the pixel containing its centre, the whole `moon_irradiance` × `transmittance`
     goes into that pixel (divided by its solid angle), so the image carries the Moon's flux at
     any resolution; otherwise each pixel whose centre ray hits the Moon gets
@@ -639,18 +639,10 @@ def add_moon_disk(spectral: np.ndarray, camera, directions: np.ndarray, valid: n
         Atmospheric transmittance from the observer towards the Moon. [-]
     """
     trans = np.asarray(transmittance, dtype=np.float64)
-    if not np.any(trans > 0.0):
-        return
-    solid_angles = camera.pixel_solid_angles()
-    row, column = (float(x) for x in camera.direction_to_pixel(geometry.moon_direction))
-    if not (np.isfinite(row) and np.isfinite(column)):
-        return  # behind a perspective camera
-    i, j = int(np.floor(row)), int(np.floor(column))
-    inside_image = 0 <= i < spectral.shape[0] and 0 <= j < spectral.shape[1]
-    if inside_image and solid_angles[i, j] * SPLAT_PIXELS > geometry.solid_angle_sr:
-        if valid[i, j]:
-            spectral[i, j] += moon_irradiance(geometry, wavelengths_nm, solar_irradiance_at_moon,
-                                              earthshine, eclipse) * trans / solid_angles[i, j]
+    if not np.any(trans > 0.0) or deposit_small_disk(
+            spectral, camera, valid, geometry.moon_direction, geometry.solid_angle_sr,
+            lambda: moon_irradiance(geometry, wavelengths_nm, solar_irradiance_at_moon,
+                                    earthshine, eclipse) * trans):
         return
     cos_angle = directions @ geometry.moon_direction
     inside = valid & (cos_angle > math.cos(geometry.angular_radius_rad))

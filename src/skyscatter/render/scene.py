@@ -25,6 +25,7 @@ __all__ = [
     "SkyImage",
     "Viewpoint",
     "add_sun_disk",
+    "deposit_small_disk",
     "camera_image",
     "diffuse_radiance",
     "ground_viewpoint",
@@ -34,7 +35,7 @@ __all__ = [
     "sun_direction",
 ]
 
-SUN_SPLAT_PIXELS = 4.0  # a disk covering fewer pixels than this is deposited into one pixel
+SPLAT_PIXELS = 4.0  # a disk covering fewer pixels than this is deposited into one pixel
 
 
 def sun_direction(zenith_deg: float, azimuth_deg: float) -> np.ndarray:
@@ -165,22 +166,35 @@ def sky_image(spectral: np.ndarray, directions: np.ndarray, valid: np.ndarray,
                     from_space)
 
 
+def deposit_small_disk(spectral: np.ndarray, camera: Camera, valid: np.ndarray,
+                       direction: np.ndarray, disk_solid_angle_sr: float,
+                       irradiance: Callable[[], np.ndarray]) -> bool:
+    """For a disk (sun, moon) smaller than `SPLAT_PIXELS` times the pixel that holds its centre:
+    add its whole `irradiance()` (n_wl) [W m^-2 nm^-1] to that pixel as radiance (divided by
+    the pixel's solid angle), so the image carries the disk's flux at any resolution. Returns
+    True when the disk is done with (deposited, or behind a perspective camera), False when the
+    caller must draw it pixel by pixel."""
+    row, column = (float(v) for v in camera.direction_to_pixel(direction))
+    if not (np.isfinite(row) and np.isfinite(column)):
+        return True  # behind a perspective camera
+    i, j = int(np.floor(row)), int(np.floor(column))
+    if not (0 <= i < spectral.shape[0] and 0 <= j < spectral.shape[1]):
+        return False  # centre outside the image: the visible part is drawn per pixel
+    pixel = camera.pixel_solid_angles()[i, j]
+    if pixel * SPLAT_PIXELS <= disk_solid_angle_sr:
+        return False
+    if valid[i, j]:
+        spectral[i, j] += irradiance() / pixel
+    return True
+
+
 def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
                  valid: np.ndarray, sun_dir: np.ndarray, star: Star,
                  wavelengths_nm: np.ndarray, transmittance: np.ndarray) -> None:
     """Add the transmitted sun disk to `spectral` (h, w, n_wl) in place."""
-    if not np.any(transmittance > 0.0):
-        return
-    solid_angles = camera.pixel_solid_angles()
-    row, column = (float(v) for v in camera.direction_to_pixel(sun_dir))
-    if not (np.isfinite(row) and np.isfinite(column)):
-        return  # behind a perspective camera
-    i, j = int(np.floor(row)), int(np.floor(column))
-    inside_image = 0 <= i < spectral.shape[0] and 0 <= j < spectral.shape[1]
-    if inside_image and solid_angles[i, j] * SUN_SPLAT_PIXELS > star.solid_angle_sr:
-        if valid[i, j]:
-            spectral[i, j] += (star.irradiance_toa(wavelengths_nm) * transmittance
-                               / solid_angles[i, j])
+    if not np.any(transmittance > 0.0) or deposit_small_disk(
+            spectral, camera, valid, sun_dir, star.solid_angle_sr,
+            lambda: star.irradiance_toa(wavelengths_nm) * transmittance):
         return
     sin_alpha = np.sin(star.angular_radius_rad)
     cos_angle = np.clip(directions @ sun_dir, -1.0, 1.0)
