@@ -29,8 +29,9 @@ a V = 0.03, B-V = 0 star has f_λ(555.6 nm) = 3.434e-11 W m⁻² nm⁻¹ (Vega m
 Hayes 1985, IAU Symp. 111, 225).
 
 Public names: `V_PASSBAND_BESSELL_1990`, `V_ZERO_POINT_FLUX`, `v_band_mean`,
-`v_magnitude_of_spectrum`, `colour_temperature_from_b_minus_v`,
-`colour_temperature_from_b_minus_v_seed`, `stellar_irradiance`.
+`v_magnitude_of_spectrum`, `colour_temperature_from_b_minus_v`, `stellar_irradiance`. The
+thesis's T = 7000 K / (B-V + 0.56) (seed 003 eq. 4.26) gives 5785 K for the Sun, close to the
+5778 K used here, but diverges for blue stars (B-V -> -0.56).
 """
 
 from __future__ import annotations
@@ -46,7 +47,6 @@ __all__ = [
     "V_PASSBAND_BESSELL_1990",
     "V_ZERO_POINT_FLUX",
     "colour_temperature_from_b_minus_v",
-    "colour_temperature_from_b_minus_v_seed",
     "stellar_irradiance",
     "v_band_mean",
     "v_magnitude_of_spectrum",
@@ -161,28 +161,6 @@ def colour_temperature_from_b_minus_v(b_minus_v: ArrayLike) -> np.ndarray:
     """
     bv = np.clip(_checked_finite(b_minus_v, "b_minus_v", "mag"), -0.4, 3.0)
     return 4600.0 * (1.0 / (0.92 * bv + 1.7) + 1.0 / (0.92 * bv + 0.62))
-
-
-def colour_temperature_from_b_minus_v_seed(b_minus_v: ArrayLike) -> np.ndarray:
-    """The thesis's colour temperature, T = 7000 K / (B-V + 0.56) (thesis eq. 4.26, after Jensen
-    et al. 2001 / Olson 1998; seed digest §2.8).
-
-    Kept to compare renderings with the thesis; it gives 5785 K for the Sun (B-V = 0.65) but
-    diverges for B-V -> -0.56, so inputs are clipped to [-0.4, 3.0] as in
-    `colour_temperature_from_b_minus_v` (the physical model; use that one).
-
-    Parameters
-    ----------
-    b_minus_v : array_like, shape S
-        Johnson B-V colour index. [mag]
-
-    Returns
-    -------
-    ndarray, shape S
-        Colour temperature. [K]
-    """
-    bv = np.clip(_checked_finite(b_minus_v, "b_minus_v", "mag"), -0.4, 3.0)
-    return 7000.0 / (bv + 0.56)
 
 
 def _planck_cell_averages(temperature_k: np.ndarray, edges: np.ndarray) -> np.ndarray:
