@@ -9,7 +9,6 @@ from skyscatter.spectrum.magnitudes import (
     V_PASSBAND_BESSELL_1990,
     V_ZERO_POINT_FLUX,
     colour_temperature_from_b_minus_v,
-    colour_temperature_from_b_minus_v_seed,
     stellar_irradiance,
     v_band_mean,
     v_magnitude_of_spectrum,
@@ -86,7 +85,6 @@ def test_ballesteros_temperature_of_the_sun():
     # Ballesteros (2012) eq. 14 with the Sun's B-V = 0.65: 5778 K; the Sun's T_eff is 5772 K.
     # Tolerance 150 K: the formula's stated accuracy.
     assert colour_temperature_from_b_minus_v(0.65) == pytest.approx(5772.0, abs=150.0)
-    assert colour_temperature_from_b_minus_v_seed(0.65) == pytest.approx(5785.1, abs=0.1)
 
 
 def test_colour_temperature_decreases_with_b_minus_v_and_stays_finite():
