@@ -154,6 +154,8 @@ def _add_sky_object_arguments(command: argparse.ArgumentParser) -> None:
     command.add_argument("--no-stars", action="store_true", help="leave out the stars")
     command.add_argument("--no-moon", action="store_true",
                          help="leave out the moon and moonlight")
+    command.add_argument("--no-airglow", action="store_true",
+                         help="leave out the night glow of the upper atmosphere (Earth)")
     command.add_argument("--milky-way", action="store_true",
                          help="add the integrated light of the stars fainter than the "
                          "catalogue (the Milky Way)")
@@ -481,7 +483,8 @@ def _sky_objects(args: argparse.Namespace):
 
     twinkle = None if args.twinkle is None else np.random.default_rng(args.twinkle)
     return api.SkyObjects(stars=not args.no_stars, moon=not args.no_moon,
-                          milky_way=args.milky_way, magnitude_limit=args.magnitude_limit,
+                          milky_way=args.milky_way, airglow=not args.no_airglow,
+                          magnitude_limit=args.magnitude_limit,
                           scintillation=twinkle)
 
 

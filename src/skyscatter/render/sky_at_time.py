@@ -13,7 +13,8 @@ moon's topocentric positions and the rotation from J2000 to the observer's east-
    in the source, so one set of tables serves both lights;
 3. the sun's disk at its refracted (apparent) position, its angular size from the distance of
    the date, limb-darkened and transmitted (red at sunset);
-4. the moon's disk (phase, earthshine, eclipses: `render.moon`, `render.lunar_eclipse`);
+4. the moon's disk (phase, earthshine, eclipses: `render.moon`, `render.lunar_eclipse`), and
+   on Earth the airglow of the upper atmosphere seen through the air (`render.airglow`);
 5. the stars of the Hipparcos 2 catalogue moved by proper motion and precessed to the date,
    refracted, dimmed by the transmittance along each line of sight, optionally twinkling, and
    the integrated light of the unresolved stars (Milky Way) as an option (`render.stars`).
@@ -47,6 +48,7 @@ from skyscatter.astro.mars_time import mars_sun_position
 from skyscatter.astro.moon_phase import EARTH_SHADOW_RADIUS_M, eclipse_magnitudes
 from skyscatter.astro.star_catalogue import load_star_catalogue
 from skyscatter.errors import InputError
+from skyscatter.render.airglow import airglow_radiance
 from skyscatter.render.camera import Camera
 from skyscatter.render.lunar_eclipse import eclipse_factor
 from skyscatter.render.moon import MoonGeometry, add_moon_disk, moon_irradiance
@@ -81,6 +83,7 @@ ECLIPTIC_NORTH_POLE_J2000 = np.array([0.0, -math.sin(_OBLIQUITY_J2000_RAD),
 # Refraction: standard air at the ground for Earth (Meeus ch. 16: 1010 hPa, 10 °C); Mars' mean
 # surface pressure 6.1 hPa (NASA Mars fact sheet) at 210 K scales it to under 0.01°.
 _REFRACTION_AIR = {"earth": (1010.0, 10.0), "mars": (6.1, -63.0)}
+LOWEST_AIRGLOW_M = 85e3  # m; observers above the OH layer see no airglow overhead (left out)
 
 
 @dataclass(frozen=True)
@@ -100,6 +103,7 @@ class SkyObjects:
 
     stars            the catalogue's stars down to `magnitude_limit` (None: all 117 955)
     moon             the moon's disk and moonlight in the sky (Earth)
+    airglow          the night glow of the upper atmosphere (Earth; `render.airglow`)
     milky_way        the integrated light of the stars fainter than the catalogue
     scintillation    a random generator: each star's brightness twinkles (one draw per frame)
     """
@@ -107,6 +111,7 @@ class SkyObjects:
     stars: bool = True
     moon: bool = True
     milky_way: bool = False
+    airglow: bool = True
     magnitude_limit: float | None = None
     scintillation: np.random.Generator | None = None
 
@@ -188,11 +193,19 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
             lights.append((viewpoint.direction_to_world(sky.moon.direction()),
                            moon.irradiance / profile.toa_irradiance))
 
+    observer_radius = float(np.linalg.norm(position))
+    glow = (objects.airglow and sky.body == "earth"
+            and observer_radius < profile.bottom_radius_m + LOWEST_AIRGLOW_M)
+
     def radiance_of(rays: np.ndarray) -> np.ndarray:
         total = np.zeros((rays.shape[0], profile.n_wavelengths))
         for world_light, scale in lights:
             total += scale * diffuse_radiance(solver, position, rays, world_light, ground,
                                               progress)
+        if glow:
+            total += airglow_radiance(rays @ position / observer_radius, wavelengths,
+                                      observer_radius, profile.bottom_radius_m) * (
+                _world_transmittance(solver, position, rays, ground))
         return total
 
     spectral = camera_image(directions, valid, profile.n_wavelengths, radiance_of, viewpoint)
@@ -229,7 +242,12 @@ def _transmittance(solver, viewpoint: Viewpoint, local_directions: np.ndarray,
     """Transmittance (n, n_wl) from the observer out of the atmosphere along local directions;
     0 where the planet (or terrain) is in the way."""
     world = viewpoint.direction_to_world(np.asarray(local_directions, dtype=np.float64))
-    position = viewpoint.position_m
+    return _world_transmittance(solver, viewpoint.position_m, world, ground)
+
+
+def _world_transmittance(solver, position: np.ndarray, world: np.ndarray,
+                         ground: Ground | None) -> np.ndarray:
+    """`_transmittance` for world directions (n, 3) from `position`."""
     along = world @ position
     radius = solver.profile.bottom_radius_m
     blocked = (along < 0.0) & (position @ position - along**2 < radius**2)
