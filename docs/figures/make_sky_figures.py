@@ -31,6 +31,11 @@ FIGURES = {
 }
 MOON_PHASES = [("waxing crescent", "2024-01-14T16:30Z"), ("first quarter", "2024-01-18T17:00Z"),
                ("waxing gibbous", "2024-01-22T20:00Z"), ("full", "2024-01-25T22:00Z")]
+# Fixed exposures, as a photographer would set them: the sunlit moon (about 3000 cd m^-2 at
+# full moon) and the eclipsed one, 10 magnitudes fainter at mid-totality.
+MOON_EXPOSURE = ["--exposure", "13.5", "--tonemap", "reinhard"]
+ECLIPSE_EXPOSURES = {"2022-11-08T08:45Z": "13.5", "2022-11-08T09:40Z": "13.5",
+                     "2022-11-08T10:59Z": "2"}
 
 
 def aim(atmosphere, time: str, latitude: float, longitude: float, body: str) -> list[str]:
@@ -69,15 +74,16 @@ def make_moon_figures(folder: Path) -> None:
         name = f"moon_{label.replace(' ', '_')}.png"
         phases.append(render(name, ["earth", "--time", time, "--lat", BERLIN[0], "--lon",
                                     BERLIN[1], *aim(earth, time, 52.52, 13.40, "moon"), "--fov",
-                                    "0.8", "--size", "160", "--aspect", "1", "--no-stars"],
-                             folder))
+                                    "0.8", "--size", "160", "--aspect", "1", "--no-stars",
+                                    *MOON_EXPOSURE], folder))
     montage(phases, IMAGES / "moon_phases.png")
     eclipse = []
-    for time in ("2022-11-08T08:45Z", "2022-11-08T09:40Z", "2022-11-08T10:59Z"):
+    for time, ev100 in ECLIPSE_EXPOSURES.items():
         eclipse.append(render(f"eclipse_{time[-6:-1].replace(':', '')}.png", [
             "earth", "--time", time, "--lat", "21.31", "--lon", "-157.86",
             *aim(earth, time, 21.31, -157.86, "moon"), "--fov", "0.8", "--size", "160",
-            "--aspect", "1", "--no-stars"], folder))
+            "--aspect", "1", "--no-stars", "--exposure", ev100, "--tonemap", "reinhard"],
+            folder))
     montage(eclipse, IMAGES / "lunar_eclipse_2022.png")
 
 
