@@ -199,9 +199,9 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
 
     def radiance_of(rays: np.ndarray) -> np.ndarray:
         total = np.zeros((rays.shape[0], profile.n_wavelengths))
-        for world_light, scale in lights:
+        for index, (world_light, scale) in enumerate(lights):  # progress: the first light's
             total += scale * diffuse_radiance(solver, position, rays, world_light, ground,
-                                              progress)
+                                              progress if index == 0 else None)
         if glow:
             total += airglow_radiance(rays @ position / observer_radius, wavelengths,
                                       observer_radius, profile.bottom_radius_m) * (
