@@ -4,6 +4,14 @@
     atmosphere = api.load_atmosphere("earth")
     image = api.render(atmosphere, api.FisheyeCamera(512), sun_zenith_deg=60.0)
     api.save_image(image, png_path="sky.png", exr_path="sky.exr")
+
+The whole sky at a date and place (sun, moon, stars; Earth and Mars presets):
+
+    berlin = api.make_observer("2024-06-21T21:30+02:00", 52.52, 13.40)
+    image = api.render_at(atmosphere, api.FisheyeCamera(512), berlin)
+    api.save_image(image, png_path="berlin.png", adapt_to_night=True)
+    api.timelapse(atmosphere, api.FisheyeCamera(256), times, 52.52, 13.40, "night.mp4",
+                  "night_frames")
 """
 
 from __future__ import annotations
