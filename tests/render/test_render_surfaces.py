@@ -115,7 +115,10 @@ def test_day_twilight_and_night_across_the_terminator(solver):
     # the planet spans columns 13-67; the terminator is at column 40
     day, twilight, night = row[41:67], row[35:40], row[14:34]
     assert np.all(np.diff(day) > 0.0)  # brighter towards the sun
-    assert np.all(np.diff(twilight) > 0.0) and twilight[0] > 1e-4 and twilight[-1] < 0.1
+    # the faintest twilight column: 8.3e-5 of the day with single scattering ray marched through
+    # the lit part of each ray (issue 6; 1.3e-4 when the tables interpolated it across the
+    # terminator); well above the night's 1e-5
+    assert np.all(np.diff(twilight) > 0.0) and twilight[0] > 4e-5 and twilight[-1] < 0.1
     assert np.all(night < 1e-5)  # the planet's shadow (measured: 1e-6, the tables' floor)
     assert image.from_space
 

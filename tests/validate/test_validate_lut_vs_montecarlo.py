@@ -13,8 +13,10 @@ from skyscatter.validate.common import table_solver
 from skyscatter.validate.lut_vs_montecarlo import (
     MEDIAN_LIMIT,
     P95_LIMIT,
+    TWILIGHT_MEDIAN_LIMIT,
     SolverComparison,
     _checks,
+    _plan,
     compare_solvers,
     sky_grid,
 )
@@ -37,9 +39,16 @@ def _comparison(atmosphere: str, sun_zenith: float, error: float) -> SolverCompa
                             mc * (1.0 + error), mc, mc * 0.01, 100, 1.0)
 
 
-def test_only_earth_by_day_is_held_to_the_limits():
+def test_only_earth_by_day_and_at_sun_zenith_92_is_held_to_the_limits():
     assert _checks(_comparison("mars-costa", 30.0, 0.5)) == []
-    assert _checks(_comparison("earth, Rayleigh only", 92.0, 0.5)) == []
+    assert _checks(_comparison("mars-costa", 92.0, 0.5)) == []
+    assert _checks(_comparison("earth, Rayleigh only", 94.0, 0.5)) == []
+    assert _checks(_comparison("earth, Rayleigh only", 104.0, 0.5)) == []
+    # twilight, 2 deg below the horizon: the median per band only (issue 6)
+    twilight = _checks(_comparison("earth, Rayleigh only", 92.0, 0.9 * TWILIGHT_MEDIAN_LIMIT))
+    assert len(twilight) == 2 and all(c.passed for c in twilight)
+    assert not any(c.passed for c in _checks(
+        _comparison("earth, Rayleigh only", 92.0, 1.1 * TWILIGHT_MEDIAN_LIMIT)))
     passing = _checks(_comparison("earth, Rayleigh only", 80.0, 0.9 * MEDIAN_LIMIT))
     failing = _checks(_comparison("earth, Rayleigh only", 80.0, 1.1 * P95_LIMIT))
     assert len(passing) == 4 and all(c.passed for c in passing)  # median and p95 per band
@@ -83,3 +92,19 @@ def test_variants_keep_or_scale_constituents():
         only_constituents(earth, ["soot"])
     with pytest.raises(InputError, match="NAME:CONSTITUENT"):
         load_variant("earth:aerosol*lots")
+
+
+def test_the_standard_plan_reaches_astronomical_twilight_with_more_paths():
+    standard, quick = _plan(False), _plan(True)
+    assert {100.0, 104.0, 108.0} <= set(standard.twilight_sun_zeniths_deg)
+    assert standard.deep_twilight_paths > standard.twilight_paths
+    assert quick.twilight_sun_zeniths_deg == (94.0,)  # the quick run stays quick
+
+
+def test_a_band_without_monte_carlo_light_has_no_error_percentile():
+    grid = sky_grid((0.0, 40.0), (0.0,))
+    mc = np.array([[0.0, 1.0], [0.0, 2.0]])
+    comparison = SolverComparison("earth", 108.0, np.array([440.0, 550.0]), grid, mc + 0.1, mc,
+                                  mc * 0.1, 100, 1.0)
+    median = comparison.percentile(50)
+    assert np.isnan(median[0]) and median[1] == pytest.approx(0.075)

@@ -140,12 +140,9 @@ def phase_values(phase_table, nu, out):
 
 
 @njit(cache=True)
-def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r,
-                       n_mu, n_mu_s, n_nu):
-    """Lower entries and weights (i_r, a_r, i_mu, a_mu, i_mu_s, a_mu_s, i_nu, a_nu) of the
-    quadrilinear lookup of (r, mu, mu_s, nu) in a scattering table. The mu interpolation stays
-    inside the half chosen by `hits_ground`."""
-    i_r, a_r = _axis(texel_index(scattering_u_r(r, bottom_radius, top_radius, n_r), n_r), n_r)
+def _mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu):
+    """(i, a): lower entry and weight of the ray (r, mu) on a mu axis of n_mu entries
+    (`scattering_u_mu`), the interpolation kept inside the half chosen by `hits_ground`."""
     u_mu = scattering_u_mu(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
     half = n_mu // 2
     f_mu = u_mu * n_mu - 0.5
@@ -155,7 +152,17 @@ def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, 
     else:
         f_mu = min(max(f_mu, float(half)), n_mu - 1.0)
         i_mu = min(int(f_mu), n_mu - 2)
-    a_mu = f_mu - i_mu
+    return i_mu, f_mu - i_mu
+
+
+@njit(cache=True)
+def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r,
+                       n_mu, n_mu_s, n_nu):
+    """Lower entries and weights (i_r, a_r, i_mu, a_mu, i_mu_s, a_mu_s, i_nu, a_nu) of the
+    quadrilinear lookup of (r, mu, mu_s, nu) in a scattering table. The mu interpolation stays
+    inside the half chosen by `hits_ground`."""
+    i_r, a_r = _axis(texel_index(scattering_u_r(r, bottom_radius, top_radius, n_r), n_r), n_r)
+    i_mu, a_mu = _mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
     i_s, a_s = _axis(texel_index(
         scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s), n_mu_s), n_mu_s)
     i_nu, a_nu = _axis(scattering_u_nu(nu) * (n_nu - 1), n_nu)
@@ -211,6 +218,48 @@ def scattering_lookup(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i
     for t in range(2 * n_t):
         for w in range(n_wl):
             out[w] += pair_values[t * n_wl + w]
+
+
+@njit(cache=True)
+def geometric_mu_s_correction(flat, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu, i_s, a_s,
+                              i_nu, a_nu, share, slices, out):
+    """out[w] += share * (geometric - linear interpolation in mu_s) of the last table of the
+    interleaved `flat` (the orders >= 2), at the corners of `scattering_corners`; slices
+    (2, n_wl) is scratch.
+
+    In twilight the orders >= 2 fall by a factor of 3-10 from one mu_s cell to the next (the
+    lit air recedes), and linear interpolation between the cells overestimates them by up to
+    the ratio's arithmetic / geometric mean; v0^(1 - a) v1^a follows an exponential decay
+    exactly. The two mu_s slices are each interpolated linearly in (r, mu, nu), as
+    `scattering_lookup` does; `share` (`exact_single_weight`) blends it in as the sun sets,
+    so daytime lookups are unchanged."""
+    n_wl = out.size
+    m = n_t * n_wl
+    s_nu = m
+    s_s = n_nu * s_nu
+    s_mu = n_mu_s * s_s
+    s_r = n_mu * s_mu
+    last = (n_t - 1) * n_wl
+    slices[:, :] = 0.0
+    base = i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu + last
+    for dr in range(2):
+        wr = a_r if dr == 1 else 1.0 - a_r
+        for dm in range(2):
+            wm = wr * (a_mu if dm == 1 else 1.0 - a_mu)
+            if wm == 0.0:
+                continue
+            for ds in range(2):
+                offset = base + dr * s_r + dm * s_mu + ds * s_s
+                for w in range(n_wl):
+                    slices[ds, w] += wm * ((1.0 - a_nu) * flat[offset + w]
+                                           + a_nu * flat[offset + m + w])
+    for w in range(n_wl):
+        v0 = slices[0, w]
+        v1 = slices[1, w]
+        if v0 > 0.0 and v1 > 0.0:
+            linear = (1.0 - a_s) * v0 + a_s * v1
+            geometric = math.exp((1.0 - a_s) * math.log(v0) + a_s * math.log(v1))
+            out[w] += share * (geometric - linear)
 
 
 def flat_tables(tables: np.ndarray) -> np.ndarray:
@@ -711,17 +760,331 @@ def _enter_atmosphere(ox, oy, oz, dx, dy, dz, top_radius):
     return ox + d * dx, oy + d * dy, oz + d * dz, d, True
 
 
+# --------------------------------------------------------------------------------------------
+# Single scattering ray-marched at lookup time (twilight)
+# --------------------------------------------------------------------------------------------
+
+# Sun zenith cosines between which the lookups go over from the single-scattering table to
+# `lit_single_scattering` (smoothstep in mu_s): the table by day (median error 0.05 %), the
+# march once the sun nears the horizon, where interpolating the table in mu_s across the
+# terminator leaks light into the planet's shadow (docs/physics/tables.md, "Twilight").
+EXACT_SINGLE_FROM_COS = math.cos(math.radians(85.0))
+EXACT_SINGLE_TO_COS = math.cos(math.radians(90.0))
+# Samples of each sunlit piece of a view ray (`lit_single_scattering`); 32 keep the order-1
+# radiance within ~0.3 % of a 256-sample ray march (tests/transport/test_transport_tables.py).
+EXACT_SINGLE_SAMPLES = 16
+
+
+@njit(cache=True)
+def exact_single_weight(mu_s):
+    """Share [0, 1] of single scattering taken from `lit_single_scattering` rather than from
+    the table at the ray's start, cos(sun zenith) mu_s [-]: 0 above EXACT_SINGLE_FROM_COS, 1
+    below EXACT_SINGLE_TO_COS, smoothstep between (continuous with its derivative, so a
+    time-lapse shows no switch)."""
+    x = (EXACT_SINGLE_FROM_COS - mu_s) / (EXACT_SINGLE_FROM_COS - EXACT_SINGLE_TO_COS)
+    x = min(max(x, 0.0), 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+@njit(cache=True)
+def _cylinder_roots(r, mu, mu_s, nu, radius):
+    """(t_1, t_2, found): distances along the ray (r, mu) where the distance of the point
+    from the planet-sun axis, q(t)^2 = |p|^2 - (p . s)^2 with p . s = r mu_s + t nu and
+    |p|^2 = r^2 + 2 r mu t + t^2, equals `radius` [m]: (1 - nu^2) t^2 + 2 r (mu - mu_s nu) t
+    + r^2 (1 - mu_s^2) - radius^2 = 0. found is False when q > radius all along the ray; a
+    ray parallel to the axis is inside for all t when q < radius (t_1 = -inf, t_2 = inf)."""
+    a = 1.0 - nu * nu
+    b = r * (mu - mu_s * nu)
+    c = r * r * (1.0 - mu_s * mu_s) - radius * radius
+    if a <= 1e-12:
+        if c < 0.0:
+            return -math.inf, math.inf, True
+        return 0.0, 0.0, False
+    discriminant = b * b - a * c
+    if discriminant <= 0.0:
+        return 0.0, 0.0, False
+    root = math.sqrt(discriminant)
+    return (-b - root) / a, (-b + root) / a, True
+
+
+@njit(cache=True)
+def shadow_interval(r, mu, mu_s, nu, bottom_radius, sun_angular_radius):
+    """(t_a, t_b) [m]: the distances along the ray (r, mu) (sun zenith cosine mu_s, view-sun
+    cosine nu at its start) where no part of the sun disk is above the horizon, the planet's
+    umbra; empty when t_a >= t_b.
+
+    For a point sun the shadow is the half-cylinder {p . s < 0, q < R_b} behind the planet
+    (q the distance from the planet-sun axis; `_cylinder_roots`). The top limb of a disk of
+    angular radius alpha stays above the horizon while q cos alpha - (p . s) sin alpha > R_b
+    (psi = sun zenith - alpha, r sin psi = q cos alpha - (p . s) sin alpha, and the limb sets
+    when r sin psi = R_b), so each end of the interval is moved inwards to the cylinder of
+    radius (R_b - |p . s| sin alpha) / cos alpha, with p . s taken at the end (two fixed-point
+    steps from the point-sun end, where `sun_visible_fraction` = 1/2)."""
+    t_1, t_2, found = _cylinder_roots(r, mu, mu_s, nu, bottom_radius)
+    if not found:
+        return 0.0, 0.0
+    # behind the planet: p . s = r mu_s + t nu < 0
+    lo, hi = t_1, t_2
+    if nu > 0.0:
+        hi = min(hi, -r * mu_s / nu)
+    elif nu < 0.0:
+        lo = max(lo, -r * mu_s / nu)
+    elif mu_s >= 0.0:
+        return 0.0, 0.0
+    if lo >= hi:
+        return 0.0, 0.0
+    sin_alpha = math.sin(sun_angular_radius)
+    cos_alpha = math.cos(sun_angular_radius)
+    if sin_alpha > 0.0:
+        if lo == t_1 and math.isfinite(lo):
+            end = lo
+            for _ in range(2):  # |p . s| at the moved end, once more
+                shrunk = (bottom_radius - abs(r * mu_s + end * nu) * sin_alpha) / cos_alpha
+                end, _, inside = _cylinder_roots(r, mu, mu_s, nu, shrunk)
+                if not inside:
+                    return 0.0, 0.0
+            lo = max(lo, end)
+        if hi == t_2 and math.isfinite(hi):
+            end = hi
+            for _ in range(2):
+                shrunk = (bottom_radius - abs(r * mu_s + end * nu) * sin_alpha) / cos_alpha
+                _, end, inside = _cylinder_roots(r, mu, mu_s, nu, shrunk)
+                if not inside:
+                    return 0.0, 0.0
+            hi = min(hi, end)
+    return lo, hi
+
+
+@njit(cache=True)
+def _piece_distances(t_0, t_1, dense_at_start, n_samples, out):
+    """n_samples + 1 distances from t_0 to t_1 into out, crowded quadratically at t_0
+    (`dense_at_start`) or at t_1: the shadow's edge of a sunlit piece of a view ray."""
+    length = t_1 - t_0
+    for k in range(n_samples + 1):
+        if dense_at_start:
+            out[k] = t_0 + length * (k / n_samples) ** 2
+        else:
+            out[k] = t_1 - length * ((n_samples - k) / n_samples) ** 2
+    out[n_samples] = t_1
+
+
+@njit(cache=True)
+def _lit_piece(r, mu, mu_s, nu, samples, total, hits_ground, bottom_radius, top_radius,
+               sun_angular_radius, h_step, density, scatterers, transmittance, observer, here,
+               sun, dens, out):
+    """out[s, w] += int T(x, p) n_s(p) T_sun(p) V(p) dt, trapezoid rule on the `total`
+    increasing distances `samples` along the ray (r, mu). observer (n_wl,): T from the ray's
+    start to the top (along -mu for rays that hit the ground); the others are scratch. T(x, p)
+    is the ratio of two transmittance lookups, as in `transmittance_along` (the observer's
+    half hoisted out of the loop); T_sun as in `single_scattering_table`."""
+    n_wl = out.shape[1]
+    n_r_t = transmittance.shape[0]
+    # the whole disk is up when mu_s >= mu_h + sun_clear (as in `single_scattering_table`)
+    sun_clear = sun_angular_radius * (1.0 + 0.5 * sun_angular_radius)
+    for k in range(total):
+        t = samples[k]
+        weight = 0.5 * ((t - samples[k - 1] if k > 0 else 0.0)
+                        + (samples[k + 1] - t if k < total - 1 else 0.0))
+        if weight <= 0.0:
+            continue
+        r_p = math.sqrt(max(r * r + 2.0 * r * mu * t + t * t, 0.0))
+        r_p = min(max(r_p, bottom_radius), top_radius)
+        mu_p = min(max((r * mu + t) / r_p, -1.0), 1.0)
+        mu_s_p = min(max((r * mu_s + t * nu) / r_p, -1.0), 1.0)
+        mu_h = horizon_cos_zenith(r_p, bottom_radius)
+        visible = 1.0
+        if mu_s_p < mu_h + sun_clear:
+            visible = sun_visible_fraction(r_p, mu_s_p, bottom_radius, sun_angular_radius)
+            if visible <= 0.0:
+                continue
+        # both lookups at r_p share the r part (`transmittance_to_top` in two halves)
+        x_r, d_min, d_max = transmittance_x_r(r_p, bottom_radius, top_radius)
+        row, a_row = _axis(x_r * (n_r_t - 1), n_r_t)
+        transmittance_in_row(transmittance, row, a_row, transmittance_x_mu(
+            r_p, max(mu_s_p, mu_h), top_radius, d_min, d_max), sun)
+        density_at(r_p - bottom_radius, h_step, density, dens)
+        transmittance_in_row(transmittance, row, a_row, transmittance_x_mu(
+            r_p, -mu_p if hits_ground else mu_p, top_radius, d_min, d_max), here)
+        if hits_ground:
+            for w in range(n_wl):
+                here[w] = min(here[w] / observer[w], 1.0) if observer[w] > 0.0 else 0.0
+        else:
+            for w in range(n_wl):
+                here[w] = min(observer[w] / here[w], 1.0) if here[w] > 0.0 else 0.0
+        for w in range(n_wl):
+            here[w] *= sun[w] * visible * weight
+        for s in range(scatterers.size):
+            n_s = dens[scatterers[s]]
+            for w in range(n_wl):
+                out[s, w] += n_s * here[w]
+
+
+@njit(cache=True)
+def lit_single_scattering(r, mu, mu_s, nu, d, hits_ground, bottom_radius, top_radius,
+                          sun_angular_radius, n_samples, h_step, density, scatterers,
+                          transmittance, samples, observer, here, sun, dens, out):
+    """Single scattering without phase function along the view ray (r, mu) up to distance d
+    [m] (the ground or the top), out (n_s, n_wl) = int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt
+    [density m], ray-marched over the parts of the ray outside the planet's umbra only
+    (`shadow_interval`): up to two pieces of n_samples intervals each, densest at the
+    shadow's edge, where a twilight sky gets its light; a ray without umbra is sampled as a
+    table ray (`table_ray_distances`). The integrand is that of `single_scattering_table`,
+    with T_sun and T(x, p) from the transmittance table and the densities of the profile
+    (`_kernels.density_at`). Radiance = sum_s p_s(nu) E_sun beta_s,s out[s]. samples
+    (n_samples + 8,), observer, here, sun (n_wl,) and dens (n_c,) are scratch."""
+    out[:, :] = 0.0
+    if d <= 0.0:
+        return
+    if hits_ground:
+        transmittance_to_top(r, -mu, bottom_radius, top_radius, transmittance, observer)
+    else:
+        transmittance_to_top(r, mu, bottom_radius, top_radius, transmittance, observer)
+    t_a, t_b = shadow_interval(r, mu, mu_s, nu, bottom_radius, sun_angular_radius)
+    if t_a >= t_b or t_b <= 0.0 or t_a >= d:  # no umbra on [0, d]: one piece
+        total = table_ray_distances(r, mu, d, hits_ground, n_samples, samples)
+        _lit_piece(r, mu, mu_s, nu, samples, total, hits_ground, bottom_radius, top_radius,
+                   sun_angular_radius, h_step, density, scatterers, transmittance, observer,
+                   here, sun, dens, out)
+        return
+    if t_a > 0.0:
+        _piece_distances(0.0, t_a, False, n_samples, samples)
+        _lit_piece(r, mu, mu_s, nu, samples, n_samples + 1, hits_ground, bottom_radius,
+                   top_radius, sun_angular_radius, h_step, density, scatterers, transmittance,
+                   observer, here, sun, dens, out)
+    if t_b < d:
+        _piece_distances(max(t_b, 0.0), d, True, n_samples, samples)
+        _lit_piece(r, mu, mu_s, nu, samples, n_samples + 1, hits_ground, bottom_radius,
+                   top_radius, sun_angular_radius, h_step, density, scatterers, transmittance,
+                   observer, here, sun, dens, out)
+
+
+# The view table of `single_scattering_view_table`: rays that hit the ground on the
+# scattering table's mu mapping, the others on `_view_sky_theta`; the azimuth from the sun's
+# vertical plane uniform.
+VIEW_TABLE_MU = 256
+VIEW_TABLE_PHI = 64
+# The view table holds log(value): in twilight the light of neighbouring directions differs by
+# orders of magnitude, which linear interpolation would smear into the darker one (measured:
+# 95th percentile 5 % at sun zenith 96 deg linear, see tests). Values below the floor
+# [density m] are 0 for any purpose (an air column of 1e-300 molecules m^-2).
+VIEW_TABLE_FLOOR = 1e-300
+
+
+@njit(cache=True)
+def _view_sky_theta(x, theta_h):
+    """View zenith angle [rad] of entry x in [0, 1] of the sky half of the view table:
+    theta = theta_h (1 - (1 - x)^2), theta_h the horizon's zenith angle: uniform at the zenith
+    (the Bruneton mapping's first cells there are 18-26 deg wide, too coarse for the shadow's
+    edge crossing the zenith in twilight) and dense at the horizon."""
+    return theta_h * (1.0 - (1.0 - x) * (1.0 - x))
+
+
+@njit(cache=True)
+def _view_sky_axis(mu, theta_h, n_half):
+    """(i, a): lower entry and weight of the view zenith cosine mu on the sky half of the view
+    table (n_half entries; inverse of `_view_sky_theta`)."""
+    theta = math.acos(min(max(mu, -1.0), 1.0))
+    x = 1.0 - math.sqrt(max(1.0 - theta / theta_h, 0.0))
+    return _axis(x * (n_half - 1), n_half)
+
+
+@njit(parallel=True, cache=True)
+def single_scattering_view_table(r, mu_s, bottom_radius, top_radius, sun_angular_radius,
+                                 n_samples, h_step, density, scatterers, transmittance):
+    """`lit_single_scattering` for every view direction of one observer at radius r [m]
+    inside the atmosphere with the sun at zenith cosine mu_s: (VIEW_TABLE_MU, VIEW_TABLE_PHI,
+    n_s, n_wl), the logarithm of each value (floored at VIEW_TABLE_FLOOR), on view zenith
+    cosines mu (first half: rays that hit the ground, `scattering_mu_from_u`; second half:
+    the others, `_view_sky_theta`) x azimuths phi = pi k / (VIEW_TABLE_PHI - 1)
+    from the sun's vertical plane, nu = mu mu_s + sqrt((1 - mu^2)(1 - mu_s^2)) cos phi. For one
+    observer and sun the single scattering depends on (mu, phi) only, so a frame marches
+    16 k rays instead of one per pixel and `view_table_lookup` interpolates (the sky-view
+    table of Hillaire 2020, "A scalable and production ready sky and atmosphere rendering
+    technique", Comput. Graph. Forum 39(4), doi:10.1111/cgf.14050, §5.3)."""
+    n_s = scatterers.size
+    n_wl = transmittance.shape[2]
+    table = np.zeros((VIEW_TABLE_MU, VIEW_TABLE_PHI, n_s, n_wl))
+    sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+    half = VIEW_TABLE_MU // 2
+    theta_h = math.acos(horizon_cos_zenith(r, bottom_radius))
+    for i in prange(VIEW_TABLE_MU):
+        samples = np.empty(n_samples + 8)
+        observer = np.empty(n_wl)
+        here = np.empty(n_wl)
+        sun = np.empty(n_wl)
+        dens = np.empty(density.shape[0])
+        if i < half:
+            mu, hits_ground = scattering_mu_from_u((i + 0.5) / VIEW_TABLE_MU, r, bottom_radius,
+                                                   top_radius, VIEW_TABLE_MU)
+        else:
+            mu = math.cos(_view_sky_theta((i - half) / (half - 1.0), theta_h))
+            hits_ground = False
+        sin_v = math.sqrt(max(1.0 - mu * mu, 0.0))
+        if hits_ground:
+            d = distance_to_bottom_boundary(r, mu, bottom_radius)
+        else:
+            d = distance_to_top_boundary(r, mu, top_radius)
+        for k in range(VIEW_TABLE_PHI):
+            nu = mu * mu_s + sin_v * sin_s * math.cos(math.pi * k / (VIEW_TABLE_PHI - 1))
+            nu = min(max(nu, -1.0), 1.0)
+            lit_single_scattering(r, mu, mu_s, nu, d, hits_ground, bottom_radius, top_radius,
+                                  sun_angular_radius, n_samples, h_step, density, scatterers,
+                                  transmittance, samples, observer, here, sun, dens,
+                                  table[i, k])
+            for s in range(n_s):
+                for w in range(n_wl):
+                    table[i, k, s, w] = math.log(max(table[i, k, s, w], VIEW_TABLE_FLOOR))
+    return table
+
+
+@njit(cache=True)
+def view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius,
+                      out):
+    """Lookup of `single_scattering_view_table` for the ray (r, mu, nu) of its observer,
+    bilinear in the logarithm (geometric interpolation), into out (n_s, n_wl)."""
+    n_mu, n_phi = view_table.shape[0], view_table.shape[1]
+    if hits_ground:
+        i, a = _mu_axis(r, mu, True, bottom_radius, top_radius, n_mu)
+    else:
+        i, a = _view_sky_axis(mu, math.acos(horizon_cos_zenith(r, bottom_radius)), n_mu // 2)
+        i += n_mu // 2
+    spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+    cos_phi = 1.0
+    if spread > 1e-12:
+        cos_phi = min(max((nu - mu * mu_s) / spread, -1.0), 1.0)
+    k, b = _axis(math.acos(cos_phi) / math.pi * (n_phi - 1), n_phi)
+    floor = 0.5 * math.log(VIEW_TABLE_FLOOR)  # below it a corner was dark: 0
+    for s in range(out.shape[0]):
+        for w in range(out.shape[1]):
+            out[s, w] = 0.0
+            log_value = ((1.0 - a) * ((1.0 - b) * view_table[i, k, s, w]
+                                      + b * view_table[i, k + 1, s, w])
+                         + a * ((1.0 - b) * view_table[i + 1, k, s, w]
+                                + b * view_table[i + 1, k + 1, s, w]))
+            if log_value > floor:
+                out[s, w] = math.exp(log_value)
+
+
 @njit(parallel=True, cache=True)
 def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_radius, mu_s_min,
                       scattering, shape, phase_table, transmittance, irradiance, sun_irradiance,
-                      ground_albedo, sun_angular_radius, out):
+                      ground_albedo, sun_angular_radius, h_step, density, scatterers,
+                      single_factor, view_table, out):
     """Radiance from the tables into out (n_ray, n_wl) [W m^-2 sr^-1 nm^-1]:
     sum_s p_s(nu) S_s + M (`scattering` = the interleaved (S_1..S_n_s, M) from `flat_tables`;
     shape = (n_r, n_mu, n_mu_s, n_nu)), plus for rays that hit the ground the Lambertian ground
     albedo / pi (E_sun T_sun max(mu_s, 0) V + E_indirect) seen through T(x, g). origins is
     (1, 3) or (n_ray, 3); directions (n_ray, 3), normalised here. Observers in space start at
     the top boundary; rays that miss the atmosphere get 0. Bruneton 2017, `GetSkyRadiance`
-    and the demo's ground shading."""
+    and the demo's ground shading.
+
+    Single scattering comes from the table by day and from `lit_single_scattering` (ray
+    marched outside the planet's umbra, profile densities `density` (n_c, n_z) on levels
+    h_step apart, constituents `scatterers` (n_s,), single_factor = E_sun beta_s (n_s, n_wl))
+    once the sun at the ray's start nears the horizon, blended by `exact_single_weight`;
+    for one origin inside the atmosphere it is read from `view_table`
+    (`single_scattering_view_table` of that origin and sun), otherwise (view_table of size 0)
+    marched along each ray."""
     n_ray = directions.shape[0]
     n_r, n_mu, n_mu_s, n_nu = shape
     n_wl = out.shape[1]
@@ -735,6 +1098,10 @@ def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_rad
         t_view = np.empty(n_wl)
         t_sun = np.empty(n_wl)
         scratch = np.empty(n_wl)
+        samples = np.empty(EXACT_SINGLE_SAMPLES + 8)
+        dens = np.empty(density.shape[0])
+        exact = np.empty((n_s, n_wl))
+        slices = np.empty((2, n_wl))
         for i in range(block * RAYS_PER_BLOCK, min(n_ray, (block + 1) * RAYS_PER_BLOCK)):
             for w in range(n_wl):
                 out[i, w] = 0.0
@@ -755,14 +1122,38 @@ def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_rad
             r = min(max(r, bottom_radius), top_radius)
             hits_ground = ray_intersects_ground(r, mu, bottom_radius)
             phase_values(phase_table, nu, weights)
+            marched = exact_single_weight(mu_s)
+            for k in range(n_s * n_wl):
+                weights[k] *= 1.0 - marched
             value[:] = 0.0
             i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
                 r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
                 n_mu_s, n_nu)
             scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s,
                               a_s, i_nu, a_nu, pair_weights, pair_values, value)
+            if marched > 0.0:
+                geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu,
+                                          a_mu, i_s, a_s, i_nu, a_nu, marched, slices, value)
             if hits_ground:
                 d = distance_to_bottom_boundary(r, mu, bottom_radius)
+            else:
+                d = distance_to_top_boundary(r, mu, top_radius)
+            if marched > 0.0:
+                if view_table.shape[0] > 0:
+                    view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius,
+                                      top_radius, exact)
+                else:
+                    lit_single_scattering(r, mu, mu_s, nu, d, hits_ground, bottom_radius,
+                                          top_radius, sun_angular_radius,
+                                          EXACT_SINGLE_SAMPLES, h_step, density, scatterers,
+                                          transmittance, samples, t_view, scratch, t_sun, dens,
+                                          exact)
+                phase_values(phase_table, nu, weights)
+                for s in range(n_s):
+                    for w in range(n_wl):
+                        value[w] += (marched * weights[s * n_wl + w] * single_factor[s, w]
+                                     * exact[s, w])
+            if hits_ground:
                 mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
                 transmittance_along(r, mu, d, True, bottom_radius, top_radius, transmittance,
                                     t_view, scratch)

@@ -22,12 +22,15 @@ from numpy.typing import ArrayLike
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport import _table_kernels
-from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN_EARTH
+from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
 __all__ = ["LutSolver"]
 
 CHUNK_RAYS = 1 << 18  # rays per kernel call, so that progress can be reported
+# Samples per sunlit piece of the rays of the per-observer single-scattering table (16 k rays,
+# so they can be twice those of a per-ray march)
+VIEW_TABLE_SAMPLES = 64
 
 
 class LutSolver:
@@ -52,7 +55,7 @@ class LutSolver:
     name = "lut"
 
     def __init__(self, profile: OpticalProfile, resolution: TableResolution | None = None,
-                 orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN_EARTH,
+                 orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                  tables: AtmosphereTables | None = None,
                  progress: Callable[[int, int, str], None] | None = None) -> None:
         self.profile = profile
@@ -69,6 +72,14 @@ class LutSolver:
         self._shape = tuple(int(n) for n in tables.scattering.shape[:4])
         self._albedo = np.ascontiguousarray(profile.ground_albedo, dtype=np.float64)
         self._sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
+        # For single scattering ray-marched in twilight (`_table_kernels.lit_single_scattering`)
+        self._h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
+        self._density = np.ascontiguousarray(profile.density, dtype=np.float64)
+        self._scatterers = np.array(tables.scattering_constituents, dtype=np.int64)
+        self._single_factor = np.ascontiguousarray(  # E_sun beta_s, (n_s, n_wl)
+            self._sun_irradiance[None, :]
+            * profile.scattering_per_density[self._scatterers].reshape(
+                self._scatterers.size, profile.n_wavelengths), dtype=np.float64)
 
     def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
                      sun_direction: ArrayLike,
@@ -76,11 +87,18 @@ class LutSolver:
         """Diffuse spectral radiance [W m^-2 sr^-1 nm^-1] seen from `position` (planet-centred
         [m], (3,) or broadcastable to the directions) along `view_directions` (..., 3; any
         length), with the sun along `sun_direction` (3,). Returns (..., n_wl). `progress(n)` is
-        called with the number of rays done after each chunk."""
+        called with the number of rays done after each chunk.
+
+        Single scattering is looked up in the table while the sun at the ray's start is more
+        than 5 deg above the horizon and ray-marched through the sunlit parts of the ray
+        (with the transmittance table) once it is below the horizon, blended in between
+        (`_table_kernels.exact_single_weight`): the table's interpolation in the sun's zenith
+        cosine leaks light into the planet's shadow in twilight (docs/physics/tables.md)."""
         origins, directions, shape = _rays(position, view_directions)
         sun = _sun(sun_direction)
         p, t = self.profile, self.tables
         result = np.empty((directions.shape[0], p.n_wavelengths))
+        view_table = self._view_table(origins, sun)
         for start in range(0, directions.shape[0], CHUNK_RAYS):
             stop = min(start + CHUNK_RAYS, directions.shape[0])
             _table_kernels.sky_radiance_rays(
@@ -88,10 +106,30 @@ class LutSolver:
                 directions[start:stop], sun, t.bottom_radius_m, t.top_radius_m,
                 t.min_cos_sun_zenith, self._scattering, self._shape, t.phase, t.transmittance,
                 t.irradiance, self._sun_irradiance, self._albedo,
-                float(p.sun_angular_radius_rad), result[start:stop])
+                float(p.sun_angular_radius_rad), self._h_step, self._density,
+                self._scatterers, self._single_factor, view_table, result[start:stop])
             if progress is not None:
                 progress(stop - start)
         return result.reshape(shape + (p.n_wavelengths,))
+
+    def _view_table(self, origins: np.ndarray, sun: np.ndarray) -> np.ndarray:
+        """Single scattering of every view direction of the one observer in `origins` (1, 3)
+        when it is inside the atmosphere and the sun is low enough for the lookups to use it
+        (`_table_kernels.single_scattering_view_table`); otherwise an empty table, and the
+        kernel marches each ray itself."""
+        t = self.tables
+        n_s = len(t.scattering_constituents)
+        empty = np.zeros((0, 2, n_s, self.profile.n_wavelengths))
+        if origins.shape[0] != 1:
+            return empty
+        r = float(np.linalg.norm(origins[0]))
+        mu_s = float(origins[0] @ sun) / r if r > 0.0 else 1.0
+        if r > t.top_radius_m or _table_kernels.exact_single_weight(mu_s) <= 0.0:
+            return empty
+        return _table_kernels.single_scattering_view_table(
+            max(r, t.bottom_radius_m), mu_s, t.bottom_radius_m, t.top_radius_m,
+            float(self.profile.sun_angular_radius_rad), VIEW_TABLE_SAMPLES, self._h_step,
+            self._density, self._scatterers, t.transmittance)
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
                       distance_m: ArrayLike = np.inf) -> np.ndarray:

@@ -52,6 +52,7 @@ import math
 from numba import njit
 
 __all__ = [
+    "COS_SUN_ZENITH_MIN",
     "COS_SUN_ZENITH_MIN_EARTH",
     "distance_to_bottom_boundary",
     "distance_to_top_boundary",
@@ -80,8 +81,16 @@ __all__ = [
 ]
 
 # cos(102 deg): Bruneton 2017's suggestion for Earth (definitions.glsl, `mu_s_min`): the sun
-# 12 deg below the horizon, where the sky of Earth is dark. Use -0.5 for deep twilight.
+# 12 deg below the horizon, the end of nautical twilight.
 COS_SUN_ZENITH_MIN_EARTH = math.cos(math.radians(102.0))
+# cos(120 deg) = -0.5, the default of every atmosphere (issue 6): astronomical twilight ends at
+# 108 deg; from a ground observer's point of view the farthest sunlit air is where the sun is
+# about twice the horizon dip lower than for the observer (Earth, top at 100 km: 2 x 10.1
+# deg; Mars at 100 km: 2 x 13.8 deg), so the scattered sky is ~0 well before 120 deg and
+# the clamp below it does not show. With 40 cells (`TableResolution.scattering_mu_s`) the
+# mapping keeps its daytime cells about where 32 cells down to 102 deg had them (the second at
+# 36.2 deg instead of 37.4 deg; docs/physics/tables.md, "Twilight").
+COS_SUN_ZENITH_MIN = -0.5
 
 
 @njit(cache=True)

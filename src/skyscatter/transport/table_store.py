@@ -23,7 +23,7 @@ from skyscatter import __version__
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache, profile_fingerprint
-from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN_EARTH
+from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
 __all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_arrays"]
@@ -81,7 +81,7 @@ def tables_from_arrays(arrays: dict[str, np.ndarray],
 
 
 def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
-                  orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN_EARTH,
+                  orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                   cache: TableCache | None = None, force: bool = False,
                   progress: Callable[[int, int, str], None] | None = None,
                   log: Callable[[str], None] | None = None) -> AtmosphereTables:

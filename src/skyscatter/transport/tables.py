@@ -53,7 +53,7 @@ from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport import _kernels, _table_kernels
 from skyscatter.transport.table_parameterisation import (
-    COS_SUN_ZENITH_MIN_EARTH,
+    COS_SUN_ZENITH_MIN,
     scattering_r_from_u,
 )
 
@@ -74,8 +74,9 @@ class TableResolution:
     """Table sizes and quadrature counts of the precomputation.
 
     Table sizes default to Bruneton 2017 (atmosphere/constants.h): transmittance 256 (mu) x 64
-    (r); scattering r 32, mu 128 (two halves of 64), mu_s 32, nu 8; irradiance 64 (mu_s) x 16
-    (r). Quadrature:
+    (r); scattering r 32, mu 128 (two halves of 64), mu_s 40 (Bruneton: 32 down to sun zenith
+    102 deg; ours reach 120 deg, and 40 cells keep the daytime cells where 32 had them:
+    docs/physics/tables.md, "Twilight"), nu 8; irradiance 64 (mu_s) x 16 (r). Quadrature:
     transmittance_samples  column integral per transmittance entry (Bruneton: 500 intervals)
     ray_samples            samples along each scattering-table ray for single scattering
                            (Bruneton: 50 uniform; ours crowd near the lowest point)
@@ -98,7 +99,7 @@ class TableResolution:
     transmittance_mu: int = 256
     scattering_r: int = 32
     scattering_mu: int = 128
-    scattering_mu_s: int = 32
+    scattering_mu_s: int = 40
     scattering_nu: int = 8
     irradiance_r: int = 16
     irradiance_mu_s: int = 64
@@ -240,7 +241,7 @@ def _phase_matrices(phase: np.ndarray, resolution: TableResolution) -> np.ndarra
 
 
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
-                      orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN_EARTH,
+                      orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                       wavelength_batch: int = 16,
                       progress: Callable[[int, int, str], None] | None = None,
                       on_order: Callable[[int, slice, np.ndarray, np.ndarray], None] | None = None
@@ -258,7 +259,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         solver; 4 is Bruneton's default for Earth; dusty atmospheres need 10 or more).
     min_cos_sun_zenith : float
         mu_s_min, the smallest cos(sun zenith) tabulated (below it the sky of mu_s_min is
-        used): cos(102 deg) = -0.208 for Earth (Bruneton 2017); -0.5 covers deep twilight.
+        used): -0.5 (sun zenith 120 deg) by default, which covers astronomical twilight on
+        every planet (`table_parameterisation.COS_SUN_ZENITH_MIN`); Bruneton 2017 used
+        cos(102 deg) = -0.208 for Earth.
     wavelength_batch : int
         Wavelengths computed together; bounds the working memory (about 0.5 GB for 16
         wavelengths at the default resolution) besides the result tables.

@@ -1,13 +1,18 @@
 """Precomputed tables against the Monte Carlo reference: sky radiance from the ground on a grid
 of view zenith x relative azimuth, per wavelength band, for Earth (Rayleigh only; + ozone;
-+ aerosol) and Mars, the sun from the zenith to 6 deg below the horizon.
++ aerosol) and Mars, the sun from the zenith to 18 deg below the horizon (the end of
+astronomical twilight).
 
 The Monte Carlo solver (`transport.monte_carlo`) makes no approximation beyond the atmosphere's
 definition and a 1e-4 ray-marching error, so what separates the two is the tables' own error
 (parameterisation, interpolation, quadrature and the truncated orders) plus the Monte Carlo
 noise, which is reported beside each figure. The threshold of issue 4: for Earth with the sun
 zenith <= 80 deg and view zenith <= 85 deg, the median |tables / Monte Carlo - 1| per wavelength
-band <= 2 % and its 95th percentile <= 5 %.
+band <= 2 % and its 95th percentile <= 5 %. Issue 6 (twilight): for Earth with the sun
+2 deg below the horizon the median <= 6 % per band (measured 3.3-4.5 % in the worst band, the
+Monte Carlo noise 1-2 % there); deeper in twilight the Monte Carlo noise grows to 10-70 %
+(96-100 deg) and its mean misses the rare paths that reach the far sunlit air (at 104-108 deg
+most directions get no light at all), so those rows are reported, not checked.
 
 Public names: `SkyGrid`, `sky_grid`, `SolverComparison`, `compare_solvers`, `run`.
 """
@@ -45,6 +50,11 @@ MEDIAN_LIMIT = 0.02  # issue 4: median |relative error| per band, Earth, sun zen
 P95_LIMIT = 0.05  # issue 4: 95th percentile
 CHECKED_SUN_ZENITH_DEG = 80.0
 CHECKED_VIEW_ZENITH_DEG = 85.0
+# issue 6: Earth, sun zenith 92 deg, median per band; measured 3.3-4.5 % (worst band), of
+# which the Monte Carlo noise (1-2 % in the blue) is a part
+TWILIGHT_MEDIAN_LIMIT = 0.06
+CHECKED_TWILIGHT_SUN_ZENITH_DEG = 92.0
+DEEP_TWILIGHT_SUN_ZENITH_DEG = 99.0  # from here on the Monte Carlo gets deep_twilight_paths
 
 
 @dataclass(frozen=True)
@@ -92,8 +102,14 @@ class SolverComparison:
                             np.nan)
 
     def percentile(self, q: float) -> np.ndarray:
-        """q-th percentile of |relative error| per wavelength (n_wl,)."""
-        return np.nanpercentile(np.abs(self.relative_error), q, axis=0)
+        """q-th percentile of |relative error| per wavelength (n_wl,); NaN for a band where
+        the Monte Carlo mean is 0 in every direction."""
+        error = np.abs(self.relative_error)
+        out = np.full(error.shape[1], np.nan)
+        seen = np.any(np.isfinite(error), axis=0)
+        if np.any(seen):
+            out[seen] = np.nanpercentile(error[:, seen], q, axis=0)
+        return out
 
     @property
     def within_noise(self) -> float:
@@ -142,6 +158,7 @@ class _Plan:
     wavelengths_nm: np.ndarray
     day_paths: int
     twilight_paths: int
+    deep_twilight_paths: int = 0  # sun zenith >= DEEP_TWILIGHT_SUN_ZENITH_DEG
 
 
 def _earth_variants() -> tuple[Atmosphere, ...]:
@@ -158,13 +175,13 @@ def _plan(quick: bool) -> _Plan:
         earth = _earth_variants()
         return _Plan((earth[0], earth[2], load_atmosphere("mars-costa")), (30.0, 75.0), (94.0,),
                      sky_grid((0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0), (0.0, 90.0, 180.0)),
-                     wavelength_grid(8), 3000, 6000)
+                     wavelength_grid(8), 3000, 6000, 6000)
     return _Plan(_earth_variants() + (load_atmosphere("mars-costa"),
                                       load_atmosphere("mars-physical")),
-                 (0.0, 30.0, 60.0, 75.0, 85.0), (92.0, 94.0, 96.0),
+                 (0.0, 30.0, 60.0, 75.0, 85.0), (92.0, 94.0, 96.0, 100.0, 104.0, 108.0),
                  sky_grid((0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 75.0, 80.0, 85.0),
                           azimuths),
-                 wavelength_grid(8), 4000, 10000)
+                 wavelength_grid(8), 4000, 10000, 20000)
 
 
 def _is_checked(comparison: SolverComparison) -> bool:
@@ -172,8 +189,22 @@ def _is_checked(comparison: SolverComparison) -> bool:
             and comparison.sun_zenith_deg <= CHECKED_SUN_ZENITH_DEG)
 
 
+def _is_checked_twilight(comparison: SolverComparison) -> bool:
+    return (comparison.atmosphere.startswith("earth")
+            and comparison.sun_zenith_deg == CHECKED_TWILIGHT_SUN_ZENITH_DEG)
+
+
+def _paths(plan: _Plan, sun_zenith_deg: float) -> int:
+    if sun_zenith_deg <= 90.0:
+        return plan.day_paths
+    if sun_zenith_deg >= DEEP_TWILIGHT_SUN_ZENITH_DEG and plan.deep_twilight_paths:
+        return plan.deep_twilight_paths
+    return plan.twilight_paths
+
+
 def _checks(comparison: SolverComparison) -> list[Check]:
-    if not _is_checked(comparison):
+    day = _is_checked(comparison)
+    if not day and not _is_checked_twilight(comparison):
         return []
     inside = comparison.grid.view_zenith_deg <= CHECKED_VIEW_ZENITH_DEG
     error = np.abs(comparison.relative_error[inside])
@@ -182,10 +213,12 @@ def _checks(comparison: SolverComparison) -> list[Check]:
         where = (f"{comparison.atmosphere}, sun zenith {comparison.sun_zenith_deg:g} deg, "
                  f"{wavelength:.0f} nm")
         checks.append(Check(f"{where}: median |tables / Monte Carlo - 1|",
-                            100.0 * float(np.nanmedian(error[:, w])), 100.0 * MEDIAN_LIMIT, "%"))
-        checks.append(Check(f"{where}: 95th percentile",
-                            100.0 * float(np.nanpercentile(error[:, w], 95.0)),
-                            100.0 * P95_LIMIT, "%"))
+                            100.0 * float(np.nanmedian(error[:, w])),
+                            100.0 * (MEDIAN_LIMIT if day else TWILIGHT_MEDIAN_LIMIT), "%"))
+        if day:
+            checks.append(Check(f"{where}: 95th percentile",
+                                100.0 * float(np.nanpercentile(error[:, w], 95.0)),
+                                100.0 * P95_LIMIT, "%"))
     return checks
 
 
@@ -200,13 +233,13 @@ def run(settings: ValidationSettings) -> CaseResult:
         tables = table_solver(atmosphere, profile, settings)
         suns = plan.day_sun_zeniths_deg + plan.twilight_sun_zeniths_deg
         for sun_zenith in suns:
-            paths = plan.day_paths if sun_zenith <= 90.0 else plan.twilight_paths
+            paths = _paths(plan, sun_zenith)
             mc = MonteCarloSolver(profile, n_samples=paths, seed=settings.seed)
             comparison = compare_solvers(tables, mc, atmosphere.name, sun_zenith, plan.grid)
             comparisons.append(comparison)
             settings.log(f"{atmosphere.name}, sun zenith {sun_zenith:g} deg: median "
-                         f"{format_percent(float(np.max(comparison.percentile(50))))}, p95 "
-                         f"{format_percent(float(np.max(comparison.percentile(95))))} (worst "
+                         f"{format_percent(float(np.nanmax(comparison.percentile(50))))}, p95 "
+                         f"{format_percent(float(np.nanmax(comparison.percentile(95))))} (worst "
                          f"band), Monte Carlo {comparison.seconds:.1f} s")
     result = CaseResult(KEY, "Precomputed tables vs Monte Carlo", _summary(plan, comparisons))
     result.tables = [_table(plan, comparisons, atmosphere.name)
@@ -241,7 +274,8 @@ def _summary(plan: _Plan, comparisons: list[SolverComparison]) -> str:
         f"({plan.wavelengths_nm[0]:.0f}-{plan.wavelengths_nm[-1]:.0f} nm), from the "
         "precomputed tables (Bruneton's resolution, each atmosphere's own orders) and from the "
         f"Monte Carlo reference ({plan.day_paths} paths per ray and band by day, "
-        f"{plan.twilight_paths} in twilight; {paths / 1e6:.1f} M paths at "
+        f"{plan.twilight_paths} in twilight, {plan.deep_twilight_paths} from sun zenith "
+        f"{DEEP_TWILIGHT_SUN_ZENITH_DEG:g} deg; {paths / 1e6:.1f} M paths at "
         f"{rate / 1e6:.2f} M paths/s). Errors are |tables / Monte Carlo - 1| over the grid; the "
         "Monte Carlo noise (median relative standard error) is listed beside them, with the share "
         "of values where the two agree within 2 standard errors (about 95 % if the noise "
@@ -249,7 +283,9 @@ def _summary(plan: _Plan, comparisons: list[SolverComparison]) -> str:
         f"(Earth, sun zenith <= {CHECKED_SUN_ZENITH_DEG:g} deg): median <= "
         f"{100 * MEDIAN_LIMIT:g} %, 95th percentile <= {100 * P95_LIMIT:g} % in every band; "
         f"worst measured: median {format_percent(worst_median)}, 95th percentile "
-        f"{format_percent(worst_p95)}.")
+        f"{format_percent(worst_p95)}. Twilight (Earth, sun zenith "
+        f"{CHECKED_TWILIGHT_SUN_ZENITH_DEG:g} deg): median <= {100 * TWILIGHT_MEDIAN_LIMIT:g} % "
+        "in every band; deeper twilight is reported only (see the notes).")
 
 
 def _table(plan: _Plan, comparisons: list[SolverComparison], atmosphere: str) -> Table:
@@ -258,7 +294,8 @@ def _table(plan: _Plan, comparisons: list[SolverComparison], atmosphere: str) ->
         if c.atmosphere != atmosphere:
             continue
         median, p95, noise = c.percentile(50), c.percentile(95), c.noise
-        cells = [f"{format_percent(m, 1)} / {format_percent(p, 1)}"
+        # NaN: the Monte Carlo found no light in any direction of this band (deep twilight)
+        cells = [f"{format_percent(m, 1)} / {format_percent(p, 1)}" if np.isfinite(m) else "–"
                  for m, p in zip(median, p95, strict=True)]
         rows.append([f"{c.sun_zenith_deg:g}"] + cells
                     + [f"{format_percent(float(np.median(noise)), 1)}",
@@ -344,12 +381,15 @@ def _principal_plane_figure(plan: _Plan, comparisons: list[SolverComparison], at
     name = save_figure(figure, settings.output_dir, f"lut_vs_montecarlo_plane_{index}.png")
     return Figure(name, f"{atmosphere}: by day the tables (lines) follow the Monte Carlo "
                         "reference (circles, 2 standard errors) across the principal plane; "
-                        "with the sun 4-6 deg below the horizon they drift away from it.")
+                        "with the sun far below the horizon the reference's noise grows "
+                        "until it finds no light at all.")
 
 
 def _worst(comparisons: list[SolverComparison], percent: float = 50.0) -> float:
     """The largest `percent`-th percentile of |tables / Monte Carlo - 1| of any band."""
-    return max(float(np.max(c.percentile(percent))) for c in comparisons)
+    values = [float(np.nanmax(c.percentile(percent))) for c in comparisons
+              if np.any(np.isfinite(c.percentile(percent)))]
+    return max(values) if values else float("nan")
 
 
 def _notes(comparisons: list[SolverComparison]) -> list[str]:
@@ -359,11 +399,15 @@ def _notes(comparisons: list[SolverComparison]) -> list[str]:
         worst = _worst(twilight)
         notes.append(
             f"Twilight (sun below the horizon): median errors up to {format_percent(worst)}. "
-            "The tables store single scattering against the sun's zenith cosine on 32 cells "
-            "down to mu_s = -0.2 and interpolate across the terminator, where the lit part of "
-            "each view ray changes fastest (docs/physics/tables.md); the Monte Carlo noise is "
-            "also several times the daytime's, because most scattered light comes from high, "
-            "thin, still sunlit air that few paths reach.")
+            "Below the horizon the table solver ray-marches single scattering through the "
+            "sunlit part of each view ray and interpolates the orders >= 2 geometrically in "
+            "the sun's zenith cosine (docs/physics/tables.md, 'Twilight'). The Monte Carlo "
+            "noise is several times the daytime's, because most scattered light comes from "
+            "high, thin, still sunlit air that few paths reach; from sun zenith 100 deg on it "
+            "is 40-70 % and more and its mean is biased low (the rare paths that reach the "
+            "far sunlit air are missed), so the errors of those rows measure the reference "
+            "more than the tables: order 2 of the tables agrees with a brute-force double "
+            "integral within 10 % at 100 deg (tests/transport/test_transport_twilight.py).")
     day = [c for c in comparisons if c.sun_zenith_deg < 90.0]
     costa = [c for c in day if c.atmosphere == "mars-costa"]
     if costa:
