@@ -5,9 +5,8 @@ moon's topocentric positions and the rotation from J2000 to the observer's east-
 `render_sky_at(...)` then composes, in physical units (W m⁻² sr⁻¹ nm⁻¹):
 
 1. the sky lit by the sun, from its geometric (airless) direction, through civil, nautical and
-   astronomical twilight (the solver covers the sun down to `solver.profile` tables' lowest
-   sun; below that the sunlit sky is left out), scaled by (d_preset / d_date)² for the sun's
-   distance on that date;
+   astronomical twilight down to sun zenith 110° (`NIGHT_SUN_ZENITH_DEG`; below it the sunlit
+   sky is left out), scaled by (d_preset / d_date)² for the sun's distance on that date;
 2. the sky lit by the moon (Earth): the same solver with the moon's direction, times the moon's
    spectral irradiance over the sun's (`render.moon.moon_irradiance`); scattering is linear
    in the source, so one set of tables serves both lights;
@@ -83,6 +82,9 @@ ECLIPTIC_NORTH_POLE_J2000 = np.array([0.0, -math.sin(_OBLIQUITY_J2000_RAD),
 # Refraction: standard air at the ground for Earth (Meeus ch. 16: 1010 hPa, 10 °C); Mars' mean
 # surface pressure 6.1 hPa (NASA Mars fact sheet) at 210 K scales it to under 0.01°.
 _REFRACTION_AIR = {"earth": (1010.0, 10.0), "mars": (6.1, -63.0)}
+# Below this sun the sunlit sky is left out: at sun zenith 110° Earth's zenith sky is 3.3e-7 cd
+# m⁻² (the tables, `earth` preset), 0.2 % of the airglow's 1.6e-4; each 2° lower divides it by 7
+NIGHT_SUN_ZENITH_DEG = 110.0
 LOWEST_AIRGLOW_M = 85e3  # m; observers above the OH layer see no airglow overhead (left out)
 
 
@@ -231,10 +233,10 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
 
 
 def _sun_lights_the_sky(solver, sun_true: np.ndarray) -> bool:
-    """True while the sun is above the lowest sun the solver's tables hold (deep twilight);
-    below it the sunlit sky is far below the night sky and is left out."""
+    """True while the sun is higher than `NIGHT_SUN_ZENITH_DEG` and than the lowest sun the
+    solver's tables hold; below that the sunlit sky is left out."""
     lowest = getattr(getattr(solver, "tables", None), "min_cos_sun_zenith", -1.0)
-    return bool(sun_true[2] >= lowest)
+    return bool(sun_true[2] >= max(lowest, math.cos(math.radians(NIGHT_SUN_ZENITH_DEG))))
 
 
 def _transmittance(solver, viewpoint: Viewpoint, local_directions: np.ndarray,
