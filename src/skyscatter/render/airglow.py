@@ -68,30 +68,37 @@ def van_rhijn_factor(cos_zenith: ArrayLike, observer_radius_m: float,
     return 1.0 / np.sqrt(1.0 - (observer_radius_m / shell_radius_m) ** 2 * sin2)
 
 
+def _zenith_spectra(wavelengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(shell heights (n_h,) [m], zenith spectral radiance of each shell (n_h, n_wl)
+    [W m⁻² sr⁻¹ nm⁻¹]) on the grid: lines in their cells, the continuum over its range."""
+    edges = cell_edges(wavelengths)
+    widths = np.diff(edges)
+    heights = sorted({height for _, height, _ in AIRGLOW_LINES} | {_CONTINUUM_HEIGHT_M})
+    spectra = np.zeros((len(heights), wavelengths.size))
+    photon_energy = PLANCK * SPEED_OF_LIGHT / (wavelengths * 1e-9)  # J per photon per cell
+    low, high = _CONTINUUM_RANGE_NM
+    in_range = np.clip(np.minimum(edges[1:], high) - np.maximum(edges[:-1], low), 0.0, None)
+    spectra[heights.index(_CONTINUUM_HEIGHT_M)] += (
+        CONTINUUM_R_PER_NM * in_range / widths * _PHOTONS_PER_RAYLEIGH * photon_energy)
+    for wavelength, height, rayleighs in AIRGLOW_LINES:
+        cell = int(np.searchsorted(edges, wavelength)) - 1
+        if 0 <= cell < wavelengths.size:
+            spectra[heights.index(height), cell] += (
+                rayleighs * _PHOTONS_PER_RAYLEIGH * PLANCK * SPEED_OF_LIGHT
+                / (wavelength * 1e-9) / widths[cell])
+    return np.array(heights), spectra
+
+
 def airglow_radiance(cos_zenith: ArrayLike, wavelengths_nm: ArrayLike, observer_radius_m: float,
                      planet_radius_m: float) -> np.ndarray:
     """Airglow spectral radiance above the air below the layers, along view directions with
     cos(zenith) `cos_zenith` (shape S) from `observer_radius_m`; 0 for views below the
-    horizontal (the layers seen through the planet). Shape S + (n_wl,). [W m⁻² sr⁻¹ nm⁻¹]"""
+    horizontal (the layers seen through the planet). Shape S + (n_wl,): the van Rhijn factor
+    of each shell times its zenith spectrum, one matrix product. [W m⁻² sr⁻¹ nm⁻¹]"""
     wl = checked_grid(wavelengths_nm)
-    edges = cell_edges(wl)
-    widths = np.diff(edges)
+    heights, spectra = _zenith_spectra(wl)
     mu = np.asarray(cos_zenith, dtype=np.float64)
-    result = np.zeros(mu.shape + wl.shape)
-    up = mu > 0.0
-    photon_energy = PLANCK * SPEED_OF_LIGHT / (wl * 1e-9)  # J per photon at each cell
-    low, high = _CONTINUUM_RANGE_NM
-    in_range = np.clip(np.minimum(edges[1:], high) - np.maximum(edges[:-1], low), 0.0, None)
-    continuum = (CONTINUUM_R_PER_NM * in_range / widths * _PHOTONS_PER_RAYLEIGH
-                 * photon_energy)  # W m⁻² sr⁻¹ nm⁻¹ at the zenith
-    result[up] += np.outer(van_rhijn_factor(mu[up], observer_radius_m,
-                                            planet_radius_m + _CONTINUUM_HEIGHT_M), continuum)
-    for wavelength, height, rayleighs in AIRGLOW_LINES:
-        cell = int(np.searchsorted(edges, wavelength)) - 1
-        if not 0 <= cell < wl.size:
-            continue
-        zenith = (rayleighs * _PHOTONS_PER_RAYLEIGH * PLANCK * SPEED_OF_LIGHT
-                  / (wavelength * 1e-9) / widths[cell])
-        result[up, cell] += zenith * van_rhijn_factor(mu[up], observer_radius_m,
-                                                      planet_radius_m + height)
-    return result
+    brightening = van_rhijn_factor(mu[..., None], observer_radius_m,
+                                   planet_radius_m + heights)  # S + (n_h,)
+    brightening[mu <= 0.0] = 0.0
+    return brightening @ spectra

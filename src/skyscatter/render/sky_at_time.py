@@ -86,6 +86,7 @@ _REFRACTION_AIR = {"earth": (1010.0, 10.0), "mars": (6.1, -63.0)}
 # m⁻² (the tables, `earth` preset), 0.2 % of the airglow's 1.6e-4; each 2° lower divides it by 7
 NIGHT_SUN_ZENITH_DEG = 110.0
 LOWEST_AIRGLOW_M = 85e3  # m; observers above the OH layer see no airglow overhead (left out)
+_CHUNK_RAYS = 1 << 16  # rays per pass of the airglow
 
 
 @dataclass(frozen=True)
@@ -200,14 +201,21 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
             and observer_radius < profile.bottom_radius_m + LOWEST_AIRGLOW_M)
 
     def radiance_of(rays: np.ndarray) -> np.ndarray:
-        total = np.zeros((rays.shape[0], profile.n_wavelengths))
-        for index, (world_light, scale) in enumerate(lights):  # progress: the first light's
-            total += scale * diffuse_radiance(solver, position, rays, world_light, ground,
-                                              progress if index == 0 else None)
-        if glow:
-            total += airglow_radiance(rays @ position / observer_radius, wavelengths,
-                                      observer_radius, profile.bottom_radius_m) * (
-                _world_transmittance(solver, position, rays, ground))
+        total = np.zeros((rays.shape[0], profile.n_wavelengths)) if not lights else None
+        for index, (world_light, scale) in enumerate(lights):  # the solver chunks the rays
+            lit = diffuse_radiance(solver, position, rays, world_light, ground,
+                                   progress if index == 0 else None)  # count rays once
+            lit *= scale
+            if index == 0:
+                total = lit
+            else:
+                total += lit
+        for start in range(0, rays.shape[0] if glow else 0, _CHUNK_RAYS):  # small temporaries
+            chunk = rays[start:start + _CHUNK_RAYS]
+            airglow = airglow_radiance(chunk @ position / observer_radius, wavelengths,
+                                       observer_radius, profile.bottom_radius_m)
+            airglow *= _world_transmittance(solver, position, chunk, ground)
+            total[start:start + _CHUNK_RAYS] += airglow
         return total
 
     spectral = camera_image(directions, valid, profile.n_wavelengths, radiance_of, viewpoint)
@@ -255,8 +263,10 @@ def _world_transmittance(solver, position: np.ndarray, world: np.ndarray,
     blocked = (along < 0.0) & (position @ position - along**2 < radius**2)
     if ground is not None and ground.terrain is not None:
         blocked |= ground.terrain.shadowed(position, world)
+    if not np.any(blocked):  # a sky view: no masked copies
+        return solver.transmittance(position, world)
     result = np.zeros((world.shape[0], solver.profile.n_wavelengths))
-    if np.any(~blocked):
+    if not np.all(blocked):
         result[~blocked] = solver.transmittance(position, world[~blocked])
     return result
 
