@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from skyscatter.astro.mars_time import utc_from_mars_sol_date
 from skyscatter.astro.time import parse_time
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.gas import describe_gas
@@ -163,9 +164,12 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
 
 def make_observer(time: str | datetime.datetime, latitude_deg: float, longitude_deg: float,
                   elevation_m: float = 0.0) -> Observer:
-    """An `Observer` from an ISO 8601 time with a time zone (or an aware datetime), latitude
+    """An `Observer` from an ISO 8601 time with a time zone (or an aware datetime), or a Mars
+    Sol Date written "MSD 44795.9998" (Allison & McEwen 2000; `astro.mars_time`), latitude
     [deg, north +], longitude [deg, east +] and elevation above the ground [m]."""
-    if isinstance(time, str):
+    if isinstance(time, str) and time.strip().upper().startswith("MSD"):
+        when = utc_from_mars_sol_date(_mars_sol_date(time))
+    elif isinstance(time, str):
         when = parse_time(time)
     elif isinstance(time, datetime.datetime) and time.utcoffset() is not None:
         when = time.astimezone(datetime.UTC)
@@ -176,6 +180,18 @@ def make_observer(time: str | datetime.datetime, latitude_deg: float, longitude_
     _check_range("longitude", longitude_deg, -360.0, 360.0)
     _check_range("elevation_m", elevation_m, -500.0, 1e7)
     return Observer(when, float(latitude_deg), float(longitude_deg), float(elevation_m))
+
+
+def _mars_sol_date(text: str) -> float:
+    """The number of "MSD 44795.9998" (also "MSD=...", "msd:...")."""
+    number = text.strip()[3:].lstrip(" =:")
+    try:
+        value = float(number)
+    except ValueError:
+        raise InputError(f"time {text!r}: write a Mars Sol Date as 'MSD 44795.9998'",
+                         key="time", value=text) from None
+    _check_range("Mars Sol Date", value, 0.0, 1e6)
+    return value
 
 
 def sky_ephemeris(atmosphere: Atmosphere, observer: Observer) -> Ephemeris:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from skyscatter import api
+from skyscatter.errors import InputError
 from skyscatter.render.moon import moon_irradiance
 from skyscatter.render.sky_at_time import moon_light
 from skyscatter.spectrum.colour import spectral_to_xyz
@@ -182,3 +183,16 @@ def test_moonlit_sky_agrees_with_krisciunas_and_schaefer(earth):
         luminance = spectral_to_xyz(radiance * moon.irradiance / profile.toa_irradiance,
                                     wavelengths)[1]
         assert luminance == pytest.approx(expected, rel=tolerance), (view_zenith, rho)
+
+
+def test_a_mars_sol_date_places_the_sun_as_the_same_utc():
+    # Mars24's worked example A: 2000-01-06 00:00:00 UTC is MSD 44795.9998 (Allison & McEwen
+    # 2000; printed to 1e-4 sol = 8.9 s, in which the sun moves 0.04 deg at most). Viking
+    # Lander 1's site, 22.697 N, 48.222 W.
+    mars = api.load_atmosphere("mars-costa")
+    by_msd = api.sky_ephemeris(mars, api.make_observer("MSD 44795.9998", 22.697, -48.222))
+    by_utc = api.sky_ephemeris(mars, api.make_observer("2000-01-06T00:00Z", 22.697, -48.222))
+    assert abs((by_msd.observer.time_utc - by_utc.observer.time_utc).total_seconds()) < 9.0
+    assert by_msd.sun.altitude_deg == pytest.approx(by_utc.sun.altitude_deg, abs=0.04)
+    with pytest.raises(InputError, match="MSD 44795.9998"):
+        api.make_observer("MSD soon", 0.0, 0.0)
