@@ -109,6 +109,66 @@ def make_sun_sizes(folder: Path) -> None:
     montage(paths, IMAGES / "sun_earth_mars.png")
 
 
+def make_physics_plots() -> None:
+    """docs/physics/moon.md: our lunar phase curve against Allen's; docs/physics/tables.md:
+    the zenith sky through twilight against the airglow."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from skyscatter.render import moon
+    from skyscatter.render.airglow import airglow_radiance
+    from skyscatter.spectrum.colour import spectral_to_xyz
+    from skyscatter.spectrum.grid import wavelength_grid
+    from skyscatter.spectrum.magnitudes import v_magnitude_of_spectrum
+    from skyscatter.spectrum.star import Star
+
+    wavelengths = wavelength_grid(64)
+    sunlight = Star.sun().irradiance_toa(wavelengths)
+    angles = np.linspace(2.0, 150.0, 75)
+    ours = [float(v_magnitude_of_spectrum(wavelengths, moon.moon_irradiance(
+        moon._phase_geometry(a, True), wavelengths, sunlight, earthshine=False)))
+        for a in angles]
+    figure, axis = plt.subplots(figsize=(6, 3.6))
+    axis.plot(angles, moon.allen_phase_curve_v(angles), "k--", label="Allen (Cox 2000)")
+    axis.plot(angles, ours, label="skyscatter (Hapke-Lommel-Seeliger, maria)")
+    axis.invert_yaxis()
+    axis.set(xlabel="phase angle [deg]", ylabel="V magnitude at 384 400 km",
+             title="The moon's brightness with its phase")
+    axis.legend()
+    figure.tight_layout()
+    figure.savefig(IMAGES / "moon_phase_curve.png", dpi=110)
+    plt.close(figure)
+
+    earth = api.load_atmosphere("earth")
+    solver = api.load_solver(earth)
+    grid = solver.profile.wavelengths_nm
+    position = np.array([0.0, 0.0, solver.profile.bottom_radius_m + 1.0])
+    zeniths = np.arange(80.0, 112.1, 0.5)
+    views = {"zenith": api.sun_direction(0.0, 0.0),
+             "60 deg towards the sun": api.sun_direction(60.0, 0.0),
+             "60 deg away from the sun": api.sun_direction(60.0, 180.0)}
+    figure, axis = plt.subplots(figsize=(6, 3.8))
+    for label, view in views.items():
+        luminance = [spectral_to_xyz(solver.sky_radiance(position, view[None],
+                                                         api.sun_direction(z, 0.0))[0],
+                                     grid)[1] for z in zeniths]
+        axis.semilogy(zeniths, luminance, label=label)
+    glow = spectral_to_xyz(airglow_radiance(np.array([1.0]), grid, position[2],
+                                            solver.profile.bottom_radius_m)[0], grid)[1]
+    axis.axhline(glow, color="g", ls=":", label="airglow at the zenith")
+    for edge in (96.0, 102.0, 108.0):
+        axis.axvline(edge, color="0.6", lw=0.8)
+    axis.set(xlabel="sun zenith angle [deg]\n(grey: civil, nautical, astronomical twilight end)",
+             ylabel="luminance [cd m$^{-2}$]", ylim=(1e-8, 1e4),
+             title="Sky luminance through twilight (earth preset, tables)")
+    axis.legend(fontsize=8)
+    figure.tight_layout()
+    figure.savefig(IMAGES / "twilight_luminance.png", dpi=110)
+    plt.close(figure)
+
+
 def make_timelapse(folder: Path) -> None:
     video = IMAGES / "timelapse_berlin.gif"
     frames = folder / "timelapse_frames"
@@ -126,6 +186,7 @@ def make_timelapse(folder: Path) -> None:
 if __name__ == "__main__":
     for figure, arguments in FIGURES.items():
         render(figure, arguments)
+    make_physics_plots()
     with tempfile.TemporaryDirectory() as scratch:
         make_moon_figures(Path(scratch))
         make_sun_sizes(Path(scratch))
