@@ -416,3 +416,18 @@ def test_timelapse_writes_frames_and_a_video(capsys, tmp_path):
         # the exposure follows the dusk: a higher EV100 before sunset than after
         assert float(first.text["EV100"]) > float(last.text["EV100"])
     assert video.stat().st_size > 0 and "wrote" in err
+
+
+@pytest.mark.parametrize(("argv", "expected"), [
+    (["render", "earth", "--time", "2024-01-25T23:00Z", "--lat", "52", "--lon", "13",
+      "--magnitude-limit", "nan"], "magnitude limit nan"),
+    (["timelapse", "earth", "--start", "2024-01-25T20:00Z", "--end", "2024-01-25T21:00Z",
+      "--lat", "52", "--lon", "13", "--fps", "0"], "fps = 0.0"),
+])
+def test_bad_sky_options_are_refused_before_any_table_work(capsys, tmp_path, monkeypatch,
+                                                            argv, expected):
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(cache))
+    code, _, err = _run(capsys, [*argv, "-o", str(tmp_path / "x.gif")])
+    assert code == 2 and expected in _error_line(err)
+    assert not cache.exists()  # nothing computed or stored

@@ -60,7 +60,7 @@ from skyscatter.render.tonemap import (
     to_srgb8,
     tonemap,
 )
-from skyscatter.render.video_io import VideoWriter, video_format
+from skyscatter.render.video_io import VideoWriter
 from skyscatter.spectrum.colour import spectral_to_xyz, xyz_to_rgb
 from skyscatter.spectrum.grid import checked_grid, checked_wavelengths, wavelength_grid
 from skyscatter.transport.cache import TableCache
@@ -279,7 +279,7 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     if len(times) < 1:
         raise InputError("a time-lapse needs at least one time", key="times", value=times)
     check_image_options(operator, colour_space)
-    video_format(video_path)
+    VideoWriter(video_path, fps)  # checks the format and the rate before any work
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
     engine = load_solver(atmosphere, wavelengths_nm, solver, options)
     objects = objects or SkyObjects()

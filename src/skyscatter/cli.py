@@ -444,10 +444,11 @@ def _render(args: argparse.Namespace) -> None:
     else:
         camera = _camera(args)
     ground = _ground(args, radius)
+    objects = _sky_objects(args)  # checked before the tables are computed
     with _solver_options(args, atmosphere) as options, progress(
             int(camera.valid_mask().sum()), "rendering", unit="ray") as bar:
         if observer is not None:
-            image = api.render_at(atmosphere, camera, observer, _sky_objects(args),
+            image = api.render_at(atmosphere, camera, observer, objects,
                                   args.wavelengths, args.solver, options, bar.update,
                                   orbit_altitude_m=altitude if orbit else None, ground=ground)
         else:
@@ -526,11 +527,12 @@ def _timelapse(args: argparse.Namespace) -> None:
     api.sky_ephemeris(atmosphere, _observer(args, args.start))  # checks before the tables
     camera = _camera(args)
     frames_dir = args.frames_dir or args.output.with_name(f"{args.output.stem}_frames")
+    objects = _sky_objects(args)
     with _solver_options(args, atmosphere) as options, progress(count, "time-lapse",
                                                                 unit="frame") as bar:
         result = api.timelapse(
             atmosphere, camera, times, args.lat, args.lon, args.output, frames_dir,
-            args.altitude, args.fps, _sky_objects(args), args.wavelengths,
+            args.altitude, args.fps, objects, args.wavelengths,
             args.solver, options, args.exposure_compensation, args.tonemap, args.colour_space,
             args.adaptation_minutes * 60.0, on_frame=lambda *_: bar.update(1))
     print(f"wrote {result.video} and {len(result.frames)} frames in {frames_dir} (EV100 "

@@ -30,6 +30,7 @@ import dataclasses
 import datetime
 import functools
 import math
+import numbers
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -117,6 +118,13 @@ class SkyObjects:
     airglow: bool = True
     magnitude_limit: float | None = None
     scintillation: np.random.Generator | None = None
+
+    def __post_init__(self) -> None:
+        limit = self.magnitude_limit
+        if limit is not None and not (isinstance(limit, numbers.Real)
+                                      and not isinstance(limit, bool) and math.isfinite(limit)):
+            raise InputError(f"magnitude limit {limit!r} must be a finite V magnitude",
+                             key="magnitude_limit", value=limit, allowed="finite numbers")
 
 
 @dataclass(frozen=True)
