@@ -169,6 +169,20 @@ def make_physics_plots() -> None:
     plt.close(figure)
 
 
+def make_solar_eclipse(folder: Path) -> None:
+    """The partial phases of the 2024-04-08 eclipse from Dallas, a 1.5° view on the sun, fixed
+    exposure."""
+    earth = api.load_atmosphere("earth")
+    paths = []
+    for time in ("2024-04-08T17:45Z", "2024-04-08T18:15Z", "2024-04-08T18:38Z"):
+        paths.append(render(f"solar_{time[11:16].replace(':', '')}.png", [
+            "earth", "--time", time, "--lat", "32.7767", "--lon", "-96.7970",
+            *aim(earth, time, 32.7767, -96.7970, "sun"), "--fov", "1.5", "--size", "160",
+            "--aspect", "1", "--no-stars", "--exposure", "17", "--tonemap", "reinhard"],
+            folder))
+    montage(paths, IMAGES / "solar_eclipse_2024.png")
+
+
 def make_timelapse(folder: Path) -> None:
     video = IMAGES / "timelapse_berlin.gif"
     frames = folder / "timelapse_frames"
@@ -190,4 +204,5 @@ if __name__ == "__main__":
     with tempfile.TemporaryDirectory() as scratch:
         make_moon_figures(Path(scratch))
         make_sun_sizes(Path(scratch))
+        make_solar_eclipse(Path(scratch))
         make_timelapse(Path(scratch))

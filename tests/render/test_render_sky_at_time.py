@@ -196,3 +196,26 @@ def test_a_mars_sol_date_places_the_sun_as_the_same_utc():
     assert by_msd.sun.altitude_deg == pytest.approx(by_utc.sun.altitude_deg, abs=0.04)
     with pytest.raises(InputError, match="MSD 44795.9998"):
         api.make_observer("MSD soon", 0.0, 0.0)
+
+
+def test_the_moon_hides_the_sun_in_the_2024_solar_eclipse():
+    # 2024-04-08. Dallas (32.78 N, 96.80 W): totality 18:40:43-18:44:35 UTC (NASA, Espenak's
+    # eclipse pages); New York City: greatest obscuration 89.6 % near 19:25 UTC (NASA /
+    # timeanddate.com). Our sun and moon disks (ephemeris, true angular sizes) overlap as a
+    # uniform disk: 1 % allows for the limb darkening left out and the 1-minute sampling.
+    from skyscatter.render.scene import disk_visible_fraction
+
+    earth = api.load_atmosphere("earth")
+
+    def visible(time: str, latitude: float, longitude: float) -> float:
+        sky = api.sky_ephemeris(earth, api.make_observer(time, latitude, longitude))
+        sun = math.asin(6.957e8 / sky.sun.distance_m)
+        moon = math.asin(1737.4e3 / sky.moon.distance_m)
+        return disk_visible_fraction(sky.sun.direction(), sun, sky.moon.direction(), moon)
+
+    assert visible("2024-04-08T18:42:40Z", 32.7767, -96.7970) == 0.0
+    assert 0.0 < visible("2024-04-08T18:39:30Z", 32.7767, -96.7970) < 0.02
+    assert 0.0 < visible("2024-04-08T18:46:00Z", 32.7767, -96.7970) < 0.05
+    deepest = min(visible(f"2024-04-08T19:{minute:02d}:00Z", 40.7128, -74.0060)
+                  for minute in range(15, 36))
+    assert 1.0 - deepest == pytest.approx(0.896, abs=0.01)

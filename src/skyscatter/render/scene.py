@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skyscatter.render.camera import Camera
+from skyscatter.render.lunar_eclipse import circle_overlap_area
 from skyscatter.render.surfaces import Ground, surface_radiance
 from skyscatter.spectrum.colour import spectral_to_xyz, white_balance, xyz_to_rgb
 from skyscatter.spectrum.star import Star
@@ -26,6 +27,7 @@ __all__ = [
     "Viewpoint",
     "add_sun_disk",
     "deposit_small_disk",
+    "disk_visible_fraction",
     "camera_image",
     "diffuse_radiance",
     "ground_viewpoint",
@@ -188,17 +190,35 @@ def deposit_small_disk(spectral: np.ndarray, camera: Camera, valid: np.ndarray,
     return True
 
 
+def disk_visible_fraction(direction: np.ndarray, radius_rad: float,
+                          occluder_direction: np.ndarray, occluder_radius_rad: float) -> float:
+    """Fraction of a uniform disk (angular radius `radius_rad`, centre `direction`) not hidden
+    by a nearer disk: 1 - overlap / (π r²), with the exact circle-overlap area
+    (`lunar_eclipse.circle_overlap_area`) in the small-angle plane of the sky. [-]"""
+    separation = float(np.arccos(np.clip(np.dot(direction, occluder_direction), -1.0, 1.0)))
+    overlap = float(circle_overlap_area(radius_rad, occluder_radius_rad, separation))
+    return max(0.0, 1.0 - overlap / (np.pi * radius_rad**2))
+
+
 def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
                  valid: np.ndarray, sun_dir: np.ndarray, star: Star,
-                 wavelengths_nm: np.ndarray, transmittance: np.ndarray) -> None:
-    """Add the transmitted sun disk to `spectral` (h, w, n_wl) in place."""
-    if not np.any(transmittance > 0.0) or deposit_small_disk(
+                 wavelengths_nm: np.ndarray, transmittance: np.ndarray,
+                 occluder: tuple[np.ndarray, float] | None = None) -> None:
+    """Add the transmitted sun disk to `spectral` (h, w, n_wl) in place. `occluder`
+    (direction, angular radius [rad]), e.g. the moon in a solar eclipse, hides the part of
+    the disk behind it (a sub-pixel disk is dimmed by `disk_visible_fraction`, limb darkening
+    left out there)."""
+    visible = 1.0 if occluder is None else disk_visible_fraction(
+        sun_dir, star.angular_radius_rad, *occluder)
+    if not np.any(transmittance > 0.0) or visible <= 0.0 or deposit_small_disk(
             spectral, camera, valid, sun_dir, star.solid_angle_sr,
-            lambda: star.irradiance_toa(wavelengths_nm) * transmittance):
+            lambda: star.irradiance_toa(wavelengths_nm) * transmittance * visible):
         return
     sin_alpha = np.sin(star.angular_radius_rad)
     cos_angle = np.clip(directions @ sun_dir, -1.0, 1.0)
     inside = valid & (cos_angle > np.cos(star.angular_radius_rad))
+    if occluder is not None:
+        inside &= directions @ occluder[0] <= np.cos(occluder[1])
     if not np.any(inside):
         return
     sin_ratio = np.sqrt(1.0 - cos_angle[inside] ** 2) / sin_alpha

@@ -58,6 +58,7 @@ from skyscatter.render.scene import (
     add_sun_disk,
     camera_image,
     diffuse_radiance,
+    disk_visible_fraction,
     sky_image,
 )
 from skyscatter.render.stars import (
@@ -195,14 +196,17 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     distance_scale = (star.distance_m / sky.sun.distance_m) ** 2
     sun_true = sky.sun.direction()
     lights = []
-    if _sun_lights_the_sky(solver, sun_true):
-        lights.append((viewpoint.direction_to_world(sun_true), distance_scale))
     moon = None
     if objects.moon and sky.moon is not None and sky.moon.altitude_deg > -5.0:
         moon = moon_light(sky, sun_today, wavelengths, eclipse_optics)
-        if np.any(moon.irradiance > 0.0):
-            lights.append((viewpoint.direction_to_world(sky.moon.direction()),
-                           moon.irradiance / profile.toa_irradiance))
+    sun_visible = 1.0 if moon is None else disk_visible_fraction(  # solar eclipses
+        sun_true, sun_today.angular_radius_rad, sky.moon.direction(),
+        moon.geometry.angular_radius_rad)
+    if _sun_lights_the_sky(solver, sun_true) and sun_visible > 0.0:
+        lights.append((viewpoint.direction_to_world(sun_true), distance_scale * sun_visible))
+    if moon is not None and np.any(moon.irradiance > 0.0):
+        lights.append((viewpoint.direction_to_world(sky.moon.direction()),
+                       moon.irradiance / profile.toa_irradiance))
 
     observer_radius = float(np.linalg.norm(position))
     glow = (objects.airglow and sky.body == "earth"
@@ -229,10 +233,11 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     spectral = camera_image(directions, valid, profile.n_wavelengths, radiance_of, viewpoint)
     pressure, temperature = _REFRACTION_AIR[sky.body]
     sun_seen = refract(sun_true, pressure, temperature)
+    moon_seen = None if moon is None else refract(sky.moon.direction(), pressure, temperature)
     add_sun_disk(spectral, camera, directions, valid, sun_seen, sun_today, wavelengths,
-                 _transmittance(solver, viewpoint, sun_seen[None], ground)[0])
+                 _transmittance(solver, viewpoint, sun_seen[None], ground)[0],
+                 None if moon is None else (moon_seen, moon.geometry.angular_radius_rad))
     if moon is not None:
-        moon_seen = refract(sky.moon.direction(), pressure, temperature)
         seen = dataclasses.replace(moon.geometry, moon_direction=moon_seen)
         add_moon_disk(spectral, camera, directions, valid, seen, wavelengths,
                       moon.solar_irradiance,
