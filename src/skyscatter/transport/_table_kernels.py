@@ -1172,29 +1172,52 @@ def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_rad
 
 
 @njit(cache=True)
+def aerial_scratch(n_t, n_wl, n_c, n_s):
+    """Scratch arrays of `_aerial_point` and `_aerial_lit_single` for n_t tables (n_s
+    constituents that scatter and the orders >= 2) of n_wl wavelengths and n_c profile
+    constituents: (weights, pair_weights, pair_values, at_point, scratch, slices, samples,
+    observer, here, sun, dens, exact)."""
+    weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
+    return (weights, pair_weights, pair_values, np.empty(n_wl), np.empty(n_wl),
+            np.empty((2, n_wl)), np.empty(EXACT_SINGLE_SAMPLES + 8), np.empty(n_wl),
+            np.empty(n_wl), np.empty(n_wl), np.empty(n_c), np.empty((n_s, n_wl)))
+
+
+@njit(cache=True)
 def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radius, mu_s_min,
                   scattering, shape, phase_table, transmittance, weights, pair_weights,
-                  pair_values, at_point, scratch, inscatter_out, transmittance_out):
+                  pair_values, at_point, scratch, slices, inscatter_out, transmittance_out):
     """Light scattered towards the observer o between o and the point p, into inscatter_out
     (n_wl,) [W m^-2 sr^-1 nm^-1], and the transmittance of that segment into
     transmittance_out (n_wl,): S(x, v) - T(x, p) S(p, v) with both lookups in the half of the
     mu axis of the ray at x (Bruneton 2017, `GetSkyRadianceToPoint`, without light shafts).
     Observers in space start at the top boundary; the part of a segment outside the
-    atmosphere, or beyond the ground, adds nothing. The other arrays are scratch."""
+    atmosphere, or beyond the ground, adds nothing. The other arrays are scratch
+    (`aerial_scratch`).
+
+    Returns the segment (r, mu, mu_s, nu, d, hits_ground) at x and the share `marched` of its
+    single scattering left out of the table difference, `exact_single_weight` of the lower
+    sun of its two ends (from space the top of the atmosphere may be sunlit while the point is
+    in twilight); the caller adds that share with `_aerial_lit_single`, as `sky_radiance_rays`
+    does for whole rays. With marched > 0 both lookups of the orders >= 2 get
+    `geometric_mu_s_correction`, so the difference is taken between geometrically interpolated
+    values; by day (marched = 0) the result is the table difference alone."""
     n_r, n_mu, n_mu_s, n_nu = shape
     n_wl = inscatter_out.size
+    n_s = phase_table.shape[0]
+    n_t = n_s + 1
     for w in range(n_wl):
         inscatter_out[w] = 0.0
         transmittance_out[w] = 1.0
     dx, dy, dz = px - ox, py - oy, pz - oz
     d = math.sqrt(dx * dx + dy * dy + dz * dz)
     if not d > 0.0:
-        return
+        return 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0
     dx, dy, dz = dx / d, dy / d, dz / d
     x, y, z, travelled, inside = _enter_atmosphere(ox, oy, oz, dx, dy, dz, top_radius)
     d -= travelled
     if not inside or d <= 0.0:
-        return
+        return 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0
     r = math.sqrt(x * x + y * y + z * z)
     mu = (x * dx + y * dy + z * dz) / r
     mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
@@ -1210,73 +1233,116 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radi
     mu_s_p = min(max((r * mu_s + d * nu) / r_p, -1.0), 1.0)
     r_p = min(max(r_p, bottom_radius), top_radius)
     phase_values(phase_table, nu, weights)
+    marched = exact_single_weight(min(mu_s, mu_s_p))
+    if marched > 0.0:
+        for k in range(n_s * n_wl):
+            weights[k] *= 1.0 - marched
     at_point[:] = 0.0
     i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
         r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu, n_mu_s,
         n_nu)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
                       i_nu, a_nu, pair_weights, pair_values, inscatter_out)
+    if marched > 0.0:
+        geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu,
+                                  i_s, a_s, i_nu, a_nu, marched, slices, inscatter_out)
     i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
         r_p, mu_p, mu_s_p, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
         n_mu_s, n_nu)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
                       i_nu, a_nu, pair_weights, pair_values, at_point)
+    if marched > 0.0:
+        geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu,
+                                  i_s, a_s, i_nu, a_nu, marched, slices, at_point)
     transmittance_along(r, mu, d, hits_ground, bottom_radius, top_radius, transmittance,
                         transmittance_out, scratch)
     for w in range(n_wl):
         inscatter_out[w] = max(inscatter_out[w] - transmittance_out[w] * at_point[w], 0.0)
+    return r, mu, mu_s, nu, d, hits_ground, marched
+
+
+@njit(cache=True)
+def _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, bottom_radius, top_radius,
+                       phase_table, transmittance, sun_angular_radius, h_step, density,
+                       scatterers, single_factor, weights, samples, observer, here, sun, dens,
+                       exact, inscatter_out):
+    """inscatter_out[w] += marched sum_s p_s(nu) E_sun beta_s `lit_single_scattering` over the
+    segment [0, d] of the ray (r, mu) (its umbra interval clipped to it), the twilight share
+    of single scattering that `_aerial_point` left out; profile densities `density` on levels
+    h_step apart, constituents `scatterers`, single_factor = E_sun beta_s (n_s, n_wl). The
+    other arrays are scratch (`aerial_scratch`)."""
+    n_wl = inscatter_out.size
+    lit_single_scattering(r, mu, mu_s, nu, d, hits_ground, bottom_radius, top_radius,
+                          sun_angular_radius, EXACT_SINGLE_SAMPLES, h_step, density, scatterers,
+                          transmittance, samples, observer, here, sun, dens, exact)
+    phase_values(phase_table, nu, weights)
+    for s in range(phase_table.shape[0]):
+        for w in range(n_wl):
+            inscatter_out[w] += (marched * weights[s * n_wl + w] * single_factor[s, w]
+                                 * exact[s, w])
 
 
 @njit(parallel=True, cache=True)
 def aerial_perspective_points(origins, points, sun_direction, bottom_radius, top_radius,
                               mu_s_min, scattering, shape, phase_table, transmittance,
+                              sun_angular_radius, h_step, density, scatterers, single_factor,
                               inscatter_out, transmittance_out):
-    """`_aerial_point` from each origin ((1, 3) or (n, 3)) to each point (n, 3), into
-    inscatter_out and transmittance_out (n, n_wl)."""
+    """`_aerial_point` (and in twilight `_aerial_lit_single`) from each origin ((1, 3) or
+    (n, 3)) to each point (n, 3), into inscatter_out and transmittance_out (n, n_wl)."""
     n_points = points.shape[0]
     n_wl = inscatter_out.shape[1]
-    n_t = phase_table.shape[0] + 1
+    n_s = phase_table.shape[0]
     single_origin = origins.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
-        at_point = np.empty(n_wl)
-        scratch = np.empty(n_wl)
+        (weights, pair_weights, pair_values, at_point, scratch, slices, samples, observer, here,
+         t_sun, dens, exact) = aerial_scratch(n_s + 1, n_wl, density.shape[0], n_s)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
             o = 0 if single_origin else i
-            _aerial_point(origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0],
-                          points[i, 1], points[i, 2], sun_direction, bottom_radius, top_radius,
-                          mu_s_min, scattering, shape, phase_table, transmittance, weights,
-                          pair_weights, pair_values, at_point, scratch, inscatter_out[i],
-                          transmittance_out[i])
+            r, mu, mu_s, nu, d, hits_ground, marched = _aerial_point(
+                origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0], points[i, 1],
+                points[i, 2], sun_direction, bottom_radius, top_radius, mu_s_min, scattering,
+                shape, phase_table, transmittance, weights, pair_weights, pair_values,
+                at_point, scratch, slices, inscatter_out[i], transmittance_out[i])
+            if marched > 0.0:
+                _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, bottom_radius,
+                                   top_radius, phase_table, transmittance, sun_angular_radius,
+                                   h_step, density, scatterers, single_factor, weights, samples,
+                                   observer, here, t_sun, dens, exact, inscatter_out[i])
 
 
 @njit(parallel=True, cache=True)
 def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction, bottom_radius,
                             top_radius, mu_s_min, scattering, shape, phase_table, transmittance,
-                            irradiance, sun_irradiance, sun_angular_radius, out):
+                            irradiance, sun_irradiance, sun_angular_radius, h_step, density,
+                            scatterers, single_factor, out):
     """Radiance (n, n_wl) reaching `origin` (3,) from Lambertian surfaces at `points` (n, 3)
     facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the sun
     where `lit` (n,) (not in a terrain shadow):
-    L_in + T albedo / pi (E_sun [lit] + E_sky), `_aerial_point` and `_surface_irradiance`
-    in one pass."""
+    L_in + T albedo / pi (E_sun [lit] + E_sky), `_aerial_point` (with `_aerial_lit_single`)
+    and `_surface_irradiance` in one pass."""
     n_points = points.shape[0]
     n_wl = out.shape[1]
-    n_t = phase_table.shape[0] + 1
+    n_s = phase_table.shape[0]
     one_albedo = albedo.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
-        at_point = np.empty(n_wl)
-        scratch = np.empty(n_wl)
+        (weights, pair_weights, pair_values, at_point, scratch, slices, samples, observer, here,
+         t_sun, dens, exact) = aerial_scratch(n_s + 1, n_wl, density.shape[0], n_s)
         t_view = np.empty(n_wl)
         direct = np.empty(n_wl)
         diffuse = np.empty(n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
-            _aerial_point(origin[0], origin[1], origin[2], points[i, 0], points[i, 1],
-                          points[i, 2], sun_direction, bottom_radius, top_radius, mu_s_min,
-                          scattering, shape, phase_table, transmittance, weights, pair_weights,
-                          pair_values, at_point, scratch, out[i], t_view)
+            r, mu, mu_s, nu, d, hits_ground, marched = _aerial_point(
+                origin[0], origin[1], origin[2], points[i, 0], points[i, 1], points[i, 2],
+                sun_direction, bottom_radius, top_radius, mu_s_min, scattering, shape,
+                phase_table, transmittance, weights, pair_weights, pair_values, at_point,
+                scratch, slices, out[i], t_view)
+            if marched > 0.0:
+                _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, bottom_radius,
+                                   top_radius, phase_table, transmittance, sun_angular_radius,
+                                   h_step, density, scatterers, single_factor, weights, samples,
+                                   observer, here, t_sun, dens, exact, out[i])
             _surface_irradiance(points[i], normals[i], sun_direction, bottom_radius,
                                 top_radius, transmittance, irradiance, sun_irradiance,
                                 sun_angular_radius, direct, diffuse)

@@ -151,7 +151,12 @@ class LutSolver:
         [m], (3,) or broadcastable) and `points` (..., 3) [m] in the atmosphere or on the
         ground: the radiance the air between them scatters towards the observer
         [W m^-2 sr^-1 nm^-1] and the fraction of the points' own radiance that reaches it [-],
-        each (..., n_wl). An object at p with radiance L_p is seen as T L_p + inscattered."""
+        each (..., n_wl). An object at p with radiance L_p is seen as T L_p + inscattered.
+
+        Single scattering is the difference of two table lookups (Bruneton 2017) by day and,
+        as in `sky_radiance`, ray-marched through the sunlit part of the segment once the sun
+        at either of its ends nears the horizon (`_table_kernels.exact_single_weight`), with
+        the orders >= 2 interpolated geometrically in the sun's zenith cosine."""
         origins, targets, shape = _rays(position, points)
         sun = _sun(sun_direction)
         p, t = self.profile, self.tables
@@ -159,8 +164,9 @@ class LutSolver:
         transmittance = np.empty_like(inscattered)
         _table_kernels.aerial_perspective_points(
             origins, targets, sun, t.bottom_radius_m, t.top_radius_m, t.min_cos_sun_zenith,
-            self._scattering, self._shape, t.phase, t.transmittance, inscattered,
-            transmittance)
+            self._scattering, self._shape, t.phase, t.transmittance,
+            float(p.sun_angular_radius_rad), self._h_step, self._density, self._scatterers,
+            self._single_factor, inscattered, transmittance)
         return (inscattered.reshape(shape + (p.n_wavelengths,)),
                 transmittance.reshape(shape + (p.n_wavelengths,)))
 
@@ -186,7 +192,8 @@ class LutSolver:
             _writable(np.asarray(position, dtype=np.float64).reshape(3)), targets, facing,
             sunlit, reflectance, _sun(sun_direction), t.bottom_radius_m, t.top_radius_m,
             t.min_cos_sun_zenith, self._scattering, self._shape, t.phase, t.transmittance,
-            t.irradiance, self._sun_irradiance, float(p.sun_angular_radius_rad), out)
+            t.irradiance, self._sun_irradiance, float(p.sun_angular_radius_rad), self._h_step,
+            self._density, self._scatterers, self._single_factor, out)
         return out
 
     def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike,
