@@ -219,3 +219,30 @@ def test_spectrum_with_wrong_length_is_refused():
 def test_negative_wavelength_is_refused():
     with pytest.raises(InputError, match=r"wavelengths_nm must be positive and finite.*-1.0"):
         cmf_weights([-1.0, 500.0])
+
+
+def test_shipped_colour_tables_equal_colour_science():
+    # data/colour_cie.npz is a copy of colour-science's datasets (scripts/make_data/
+    # colour_tables.py); the copy must be exact, and our normalised primary matrix (SMPTE RP
+    # 177) must equal colour-science's for every shipped RGB space.
+    from skyscatter.spectrum import colour as ours
+
+    tables = ours._tables()
+    cmfs = colour.colorimetry.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    np.testing.assert_array_equal(tables["cmf_xyz_bar"], np.asarray(cmfs.values).T)
+    np.testing.assert_array_equal(tables["cmf_wavelengths_nm"], cmfs.wavelengths)
+    d65 = colour.SDS_ILLUMINANTS["D65"]
+    np.testing.assert_array_equal(ours.illuminant_spectrum("D65", d65.wavelengths), d65.values)
+    for name, primaries, white in zip(tables["rgb_names"], tables["rgb_primaries_xy"],
+                                      tables["rgb_white_xy"], strict=True):
+        space = colour.RGB_COLOURSPACES[ours.RGB_SPACES[str(name)]]
+        np.testing.assert_array_equal(primaries, space.primaries)
+        np.testing.assert_allclose(ours.normalised_primary_matrix(primaries, white),
+                                   colour.models.normalised_primary_matrix(space.primaries,
+                                                                           space.whitepoint),
+                                   rtol=1e-12, atol=1e-15)
+    for name, matrix in zip(tables["adaptation_names"], tables["adaptation_matrices"],
+                            strict=True):
+        expected = colour.adaptation.CHROMATIC_ADAPTATION_TRANSFORMS[
+            ours.CHROMATIC_ADAPTATION_METHODS[str(name)]]
+        np.testing.assert_array_equal(matrix, expected)

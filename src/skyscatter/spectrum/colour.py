@@ -1,7 +1,7 @@
 """Colorimetry: spectra on a wavelength grid -> CIE XYZ -> RGB, white balance, transfer curves.
 
-- XYZ: CIE 1931 2° colour-matching functions (CIE 015:2018, as tabulated at 1 nm, 360–830 nm, in
-  colour-science `MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]`) integrated exactly over each
+- XYZ: CIE 1931 2° colour-matching functions (CIE 015:2018, as tabulated at 1 nm, 360–830 nm, by
+  colour-science; shipped in `data/colour_cie.npz`) integrated exactly over each
   grid cell (`grid.cell_edges`), times K_m = 683.002 lm W⁻¹. A spectrum on the grid is read as
   piecewise constant over its cells, so the weights are exact for it; XYZ is absolute (Y in cd m⁻²
   for radiance in W m⁻² sr⁻¹ nm⁻¹, in lx for irradiance in W m⁻² nm⁻¹).
@@ -13,10 +13,14 @@
   source, CIE xy chromaticity, correlated colour temperature (McCamy 1992), and the sRGB transfer
   function (IEC 61966-2-1:1999).
 
-colour-science is imported lazily (≈ 1 s and matplotlib); the results are cached per grid.
+The tables (colour-matching functions, illuminants, adaptation matrices, RGB primaries) come
+from colour-science's datasets, copied into `data/colour_cie.npz` by
+`scripts/make_data/colour_tables.py` (data/PROVENANCE.md), so rendering does not import
+colour-science (1-2 s); results are cached per grid.
 
 Public names: `LUMINOUS_EFFICACY_LM_PER_W`, `RGB_SPACES`, `CHROMATIC_ADAPTATION_METHODS`,
 `cmf_weights`, `spectral_to_xyz`, `luminance`, `xyz_to_rgb`, `rgb_to_xyz`, `white_point_xyz`,
+`normalised_primary_matrix`, `illuminant_spectrum`,
 `chromatic_adaptation`, `white_balance`, `encode_srgb_transfer`, `decode_srgb_transfer`,
 `xy_chromaticity`, `cct_mccamy_1992`.
 """
@@ -24,6 +28,7 @@ Public names: `LUMINOUS_EFFICACY_LM_PER_W`, `RGB_SPACES`, `CHROMATIC_ADAPTATION_
 from __future__ import annotations
 
 from functools import lru_cache
+from importlib import resources
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -41,6 +46,7 @@ __all__ = [
     "decode_srgb_transfer",
     "encode_srgb_transfer",
     "illuminant_spectrum",
+    "normalised_primary_matrix",
     "luminance",
     "rgb_to_xyz",
     "spectral_to_xyz",
@@ -54,7 +60,7 @@ __all__ = [
 # SI candela definition, 683 lm W⁻¹ at 540 THz exactly).
 LUMINOUS_EFFICACY_LM_PER_W = 683.002
 
-_OBSERVER = "CIE 1931 2 Degree Standard Observer"
+COLOUR_DATA_FILE = "colour_cie.npz"  # in skyscatter/data; see data/PROVENANCE.md
 
 # our name -> colour-science RGB_COLOURSPACES name
 RGB_SPACES = {
@@ -79,22 +85,19 @@ _SRGB_LINEAR_LIMIT = 0.0031308  # IEC 61966-2-1:1999, breakpoint of the linear s
 _SRGB_ENCODED_LIMIT = 0.04045  # same breakpoint, encoded side
 
 
-def _colour():
-    import warnings
-
-    with warnings.catch_warnings():  # we use no plotting: its missing-matplotlib notice is noise
-        warnings.filterwarnings("ignore", message='"Matplotlib" related API features')
-        import colour  # lazy: a ~1 s import
-
-    return colour
+@lru_cache(maxsize=1)
+def _tables() -> dict[str, np.ndarray]:
+    """The arrays of `data/colour_cie.npz` (module docstring), read once."""
+    path = resources.files("skyscatter").joinpath("data", COLOUR_DATA_FILE)
+    with path.open("rb") as file, np.load(file, allow_pickle=False) as data:
+        return {name: data[name] for name in data.files}
 
 
 @lru_cache(maxsize=1)
 def _cie1931_table() -> tuple[np.ndarray, np.ndarray]:
     """CIE 1931 2° x̄, ȳ, z̄ at 1 nm, 360–830 nm: (wavelength (471,), values (3, 471))."""
-    cmfs = _colour().colorimetry.MSDS_CMFS[_OBSERVER]
-    return (np.asarray(cmfs.wavelengths, dtype=np.float64),
-            np.ascontiguousarray(np.asarray(cmfs.values, dtype=np.float64).T))
+    tables = _tables()
+    return tables["cmf_wavelengths_nm"], tables["cmf_xyz_bar"]
 
 
 @lru_cache(maxsize=64)
@@ -188,18 +191,21 @@ def _lookup(table: dict[str, str], name: str, what: str) -> str:
     return table[key]
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=1)
 def _illuminant_names() -> dict[str, str]:
-    return {name.lower(): name for name in _colour().CCS_ILLUMINANTS[_OBSERVER]}
+    return {str(name).lower(): str(name) for name in _tables()["illuminant_names"]}
 
 
 def illuminant_spectrum(name: str, wavelengths_nm: ArrayLike) -> np.ndarray:
-    """Relative spectral power of a CIE illuminant (colour-science `SDS_ILLUMINANTS`, e.g.
-    "D65", "A"; CIE 015:2018) at `wavelengths_nm`, linear between its tabulated values. [-]"""
-    sds = _colour().SDS_ILLUMINANTS
-    sd = sds[_lookup({k.lower(): k for k in sds}, name, "illuminant")]
+    """Relative spectral power of the CIE illuminant D65, D50 or A (CIE 015:2018, as tabulated
+    by colour-science `SDS_ILLUMINANTS`) at `wavelengths_nm`, linear between its tabulated
+    values. [-]"""
+    tables = _tables()
+    shipped = {key[4:].lower(): key[4:] for key in tables
+               if key.startswith("spd_") and not key.endswith("_wavelengths_nm")}
+    key = _lookup(shipped, name, "illuminant")
     return np.interp(np.asarray(wavelengths_nm, dtype=np.float64),
-                     np.asarray(sd.wavelengths), np.asarray(sd.values))
+                     tables[f"spd_{key}_wavelengths_nm"], tables[f"spd_{key}"])
 
 
 def white_point_xyz(white: str | ArrayLike) -> np.ndarray:
@@ -220,7 +226,8 @@ def white_point_xyz(white: str | ArrayLike) -> np.ndarray:
     """
     if isinstance(white, str):
         name = _lookup(_illuminant_names(), white, "white")
-        x, y = _colour().CCS_ILLUMINANTS[_OBSERVER][name]
+        tables = _tables()
+        x, y = tables["illuminant_xy"][list(tables["illuminant_names"]).index(name)]
         return np.array([x / y, 1.0, (1.0 - x - y) / y])
     xyz = _checked_xyz(white, "white")
     bad = ~(xyz[..., 1] > 0.0)
@@ -233,8 +240,10 @@ def white_point_xyz(white: str | ArrayLike) -> np.ndarray:
 
 @lru_cache(maxsize=16)
 def _cone_matrix(method: str) -> np.ndarray:
-    name = _lookup(CHROMATIC_ADAPTATION_METHODS, method, "chromatic adaptation method")
-    m = np.array(_colour().adaptation.CHROMATIC_ADAPTATION_TRANSFORMS[name], dtype=np.float64)
+    _lookup(CHROMATIC_ADAPTATION_METHODS, method, "chromatic adaptation method")
+    tables = _tables()
+    index = list(tables["adaptation_names"]).index(str(method).lower())
+    m = np.array(tables["adaptation_matrices"][index], dtype=np.float64)
     m.flags.writeable = False
     return m
 
@@ -305,15 +314,44 @@ def white_balance(xyz: ArrayLike, light_spectrum: ArrayLike, wavelengths_nm: Arr
     return chromatic_adaptation(xyz, source, target_white, method)
 
 
+def normalised_primary_matrix(primaries_xy: ArrayLike, white_xy: ArrayLike) -> np.ndarray:
+    """RGB -> XYZ matrix of an RGB space from its primaries' and white's xy chromaticities.
+
+        P = [X_r X_g X_b; 1 1 1; Z_r Z_g Z_b] (each primary at Y = 1),  S = P⁻¹ W,
+        NPM = P diag(S)
+
+    with W the white's XYZ at Y = 1, so RGB = (1, 1, 1) is the white (SMPTE RP 177-1993, eqs.
+    3.1-3.4).
+
+    Parameters
+    ----------
+    primaries_xy : array_like, shape (3, 2)
+        xy of the red, green and blue primaries. [-]
+    white_xy : array_like, shape (2,)
+        xy of the white. [-]
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        NPM: XYZ = NPM @ RGB. [-]
+    """
+    xy = np.asarray(primaries_xy, dtype=np.float64)
+    x, y = xy[:, 0], xy[:, 1]
+    p = np.stack([x / y, np.ones(3), (1.0 - x - y) / y])
+    wx, wy = np.asarray(white_xy, dtype=np.float64)
+    white = np.array([wx / wy, 1.0, (1.0 - wx - wy) / wy])
+    return p * np.linalg.solve(p, white)
+
+
 @lru_cache(maxsize=16)
 def _xyz_to_rgb_matrix(space: str) -> np.ndarray:
-    colour = _colour()
-    rgb_space = colour.RGB_COLOURSPACES[_lookup(RGB_SPACES, space, "colour space")]
-    rgb_to_xyz_m = colour.models.normalised_primary_matrix(rgb_space.primaries,
-                                                           rgb_space.whitepoint)
-    matrix = np.linalg.inv(rgb_to_xyz_m)
+    _lookup(RGB_SPACES, space, "colour space")
+    tables = _tables()
+    index = list(tables["rgb_names"]).index(str(space).lower())
+    primaries, white = tables["rgb_primaries_xy"][index], tables["rgb_white_xy"][index]
+    matrix = np.linalg.inv(normalised_primary_matrix(primaries, white))
     d65 = white_point_xyz("D65")
-    x, y = rgb_space.whitepoint
+    x, y = white
     space_white = np.array([x / y, 1.0, (1.0 - x - y) / y])
     if not np.allclose(space_white, d65, rtol=0.0, atol=1e-12):
         m = _cone_matrix("bradford")
