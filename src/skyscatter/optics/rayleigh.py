@@ -25,7 +25,11 @@ from numpy.typing import ArrayLike
 
 from skyscatter.errors import InputError
 from skyscatter.optics.phase import PenndorfPhase, PhaseFunction, RayleighPhase
-from skyscatter.optics.refractive_index import GASES, gas_refractivity
+from skyscatter.optics.refractive_index import (
+    GASES,
+    gas_refractivity,
+    inverse_square_micrometres,
+)
 from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = [
@@ -90,7 +94,7 @@ def king_factor_n2_bates_1984(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         King factor F. [-]
     """
-    inv2 = 1.0 / (np.asarray(wavelengths_nm, dtype=np.float64) * 1.0e-3) ** 2
+    inv2 = inverse_square_micrometres(wavelengths_nm)
     return 1.034 + 3.17e-4 * inv2
 
 
@@ -111,7 +115,7 @@ def king_factor_o2_bates_1984(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         King factor F. [-]
     """
-    inv2 = 1.0 / (np.asarray(wavelengths_nm, dtype=np.float64) * 1.0e-3) ** 2
+    inv2 = inverse_square_micrometres(wavelengths_nm)
     return 1.096 + 1.385e-3 * inv2 + 1.448e-4 * inv2 * inv2
 
 

@@ -45,6 +45,7 @@ __all__ = [
     "NUMBER_DENSITY_293K_M3",
     "REFRACTIVITY_CH4_KAYE_LABY",
     "gas_refractivity",
+    "inverse_square_micrometres",
     "refractivity_air_bodhaine_1999",
     "refractivity_air_peck_reeder_1972",
     "refractivity_ar_peck_fisher_1964",
@@ -67,7 +68,7 @@ NUMBER_DENSITY_293K_M3 = 101325.0 / (BOLTZMANN * 293.15)
 REFRACTIVITY_CH4_KAYE_LABY = 4.44e-4
 
 
-def _inverse_square_micrometres(wavelengths_nm: ArrayLike) -> np.ndarray:
+def inverse_square_micrometres(wavelengths_nm: ArrayLike) -> np.ndarray:
     """sigma^2 = (1 / lambda[µm])^2 [µm^-2]; rejects non-positive or non-finite wavelengths."""
     wl = np.asarray(wavelengths_nm, dtype=np.float64)
     if not np.all(np.isfinite(wl)) or np.any(wl <= 0.0):
@@ -94,7 +95,7 @@ def refractivity_air_peck_reeder_1972(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         n - 1. [-]
     """
-    s2 = _inverse_square_micrometres(wavelengths_nm)
+    s2 = inverse_square_micrometres(wavelengths_nm)
     return 1.0e-8 * (8060.51 + 2480990.0 / (132.274 - s2) + 17455.7 / (39.32957 - s2))
 
 
@@ -148,7 +149,7 @@ def refractivity_co2_bideau_mehu_1973(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         n - 1. [-]
     """
-    s2 = _inverse_square_micrometres(wavelengths_nm)
+    s2 = inverse_square_micrometres(wavelengths_nm)
     return (6.99100e-2 / (166.175 - s2) + 1.44720e-3 / (79.609 - s2)
             + 6.42941e-5 / (56.3064 - s2) + 5.21306e-5 / (46.0196 - s2)
             + 1.46847e-6 / (0.0584738 - s2))
@@ -175,7 +176,7 @@ def refractivity_n2_peck_khanna_1966(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         n - 1. [-]
     """
-    nu2 = _inverse_square_micrometres(wavelengths_nm) * 1.0e8  # cm^-2
+    nu2 = inverse_square_micrometres(wavelengths_nm) * 1.0e8  # cm^-2
     visible = 1.0e-8 * (6498.2 + 307.43305e12 / (14.4e9 - nu2))
     ultraviolet = 1.0e-8 * (5677.465 + 318.81874e12 / (14.4e9 - nu2))
     return np.where(nu2 <= 21360.0**2, visible, ultraviolet)
@@ -199,7 +200,7 @@ def refractivity_o2_zhang_2008(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         n - 1. [-]
     """
-    s2 = _inverse_square_micrometres(wavelengths_nm)
+    s2 = inverse_square_micrometres(wavelengths_nm)
     return 1.181494e-4 + 9.708931e-3 / (75.4 - s2)
 
 
@@ -220,7 +221,7 @@ def refractivity_ar_peck_fisher_1964(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         n - 1. [-]
     """
-    s2 = _inverse_square_micrometres(wavelengths_nm)
+    s2 = inverse_square_micrometres(wavelengths_nm)
     return 6.432135e-5 + 2.8606021e-2 / (144.0 - s2)
 
 
@@ -241,7 +242,7 @@ def refractivity_h2_peck_huang_1977(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         n - 1. [-]
     """
-    s2 = _inverse_square_micrometres(wavelengths_nm)
+    s2 = inverse_square_micrometres(wavelengths_nm)
     return 0.0148956 / (180.7 - s2) + 0.0049037 / (92.0 - s2)
 
 
@@ -262,7 +263,7 @@ def refractivity_he_mansfield_peck_1969(wavelengths_nm: ArrayLike) -> np.ndarray
     ndarray, shape S
         n - 1. [-]
     """
-    s2 = _inverse_square_micrometres(wavelengths_nm)
+    s2 = inverse_square_micrometres(wavelengths_nm)
     return 0.01470091 / (423.98 - s2)
 
 
@@ -285,7 +286,7 @@ def refractivity_ch4_kaye_laby(wavelengths_nm: ArrayLike) -> np.ndarray:
     ndarray, shape S
         n - 1. [-]
     """
-    s2 = _inverse_square_micrometres(wavelengths_nm)
+    s2 = inverse_square_micrometres(wavelengths_nm)
     return np.full(s2.shape, REFRACTIVITY_CH4_KAYE_LABY)
 
 
