@@ -10,12 +10,14 @@ import numpy as np
 import pytest
 
 from skyscatter import api
+from skyscatter.astro.moon_phase import MOON_RADIUS_M
 from skyscatter.errors import InputError
 from skyscatter.render.moon import moon_irradiance
 from skyscatter.render.sky_at_time import moon_light
 from skyscatter.spectrum.colour import spectral_to_xyz
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.spectrum.magnitudes import v_magnitude_of_spectrum
+from skyscatter.spectrum.star import SOLAR_RADIUS_M
 
 BERLIN = (52.52, 13.40)
 HONOLULU = (21.31, -157.86)
@@ -209,8 +211,8 @@ def test_the_moon_hides_the_sun_in_the_2024_solar_eclipse():
 
     def visible(time: str, latitude: float, longitude: float) -> float:
         sky = api.sky_ephemeris(earth, api.make_observer(time, latitude, longitude))
-        sun = math.asin(6.957e8 / sky.sun.distance_m)
-        moon = math.asin(1737.4e3 / sky.moon.distance_m)
+        sun = math.asin(SOLAR_RADIUS_M / sky.sun.distance_m)
+        moon = math.asin(MOON_RADIUS_M / sky.moon.distance_m)
         return disk_visible_fraction(sky.sun.direction(), sun, sky.moon.direction(), moon)
 
     assert visible("2024-04-08T18:42:40Z", 32.7767, -96.7970) == 0.0

@@ -613,7 +613,8 @@ def add_moon_disk(spectral: np.ndarray, camera, directions: np.ndarray, valid: n
                   geometry: MoonGeometry, wavelengths_nm: ArrayLike,
                   solar_irradiance_at_moon: ArrayLike, transmittance: ArrayLike,
                   earthshine: bool = True,
-                  eclipse: Callable[[np.ndarray], np.ndarray] | None = None) -> None:
+                  eclipse: Callable[[np.ndarray], np.ndarray] | None = None,
+                  irradiance: np.ndarray | None = None) -> None:
     """Add the transmitted lunar disk to `spectral` (h, w, n_wl) in place.
 
     Like `scene.add_sun_disk`: when the disk's solid angle is below `scene.SPLAT_PIXELS` (4) times
@@ -637,12 +638,16 @@ def add_moon_disk(spectral: np.ndarray, camera, directions: np.ndarray, valid: n
         As `moon_disk_radiance`.
     transmittance : array_like, shape (n_wl,)
         Atmospheric transmittance from the observer towards the Moon. [-]
+    irradiance : ndarray, shape (n_wl,), optional
+        `moon_irradiance` of the same arguments when the caller has it already (it is the
+        moonlight of the sky too); computed here otherwise. [W m⁻² nm⁻¹]
     """
     trans = np.asarray(transmittance, dtype=np.float64)
     if not np.any(trans > 0.0) or deposit_small_disk(
             spectral, camera, valid, geometry.moon_direction, geometry.solid_angle_sr,
-            lambda: moon_irradiance(geometry, wavelengths_nm, solar_irradiance_at_moon,
-                                    earthshine, eclipse) * trans):
+            lambda: (moon_irradiance(geometry, wavelengths_nm, solar_irradiance_at_moon,
+                                     earthshine, eclipse)
+                     if irradiance is None else irradiance) * trans):
         return
     cos_angle = directions @ geometry.moon_direction
     inside = valid & (cos_angle > math.cos(geometry.angular_radius_rad))

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -28,6 +29,7 @@ __all__ = [
     "add_sun_disk",
     "deposit_small_disk",
     "disk_visible_fraction",
+    "cached_pixel_solid_angles",
     "camera_image",
     "diffuse_radiance",
     "ground_viewpoint",
@@ -168,6 +170,15 @@ def sky_image(spectral: np.ndarray, directions: np.ndarray, valid: np.ndarray,
                     from_space)
 
 
+@lru_cache(maxsize=4)
+def cached_pixel_solid_angles(camera: Camera) -> np.ndarray:
+    """`camera.pixel_solid_angles()` (h, w) [sr], read-only, kept for the last few (frozen,
+    hashable) cameras: the sun, the moon and the stars of every frame share one."""
+    omega = camera.pixel_solid_angles()
+    omega.flags.writeable = False
+    return omega
+
+
 def deposit_small_disk(spectral: np.ndarray, camera: Camera, valid: np.ndarray,
                        direction: np.ndarray, disk_solid_angle_sr: float,
                        irradiance: Callable[[], np.ndarray]) -> bool:
@@ -182,7 +193,7 @@ def deposit_small_disk(spectral: np.ndarray, camera: Camera, valid: np.ndarray,
     i, j = int(np.floor(row)), int(np.floor(column))
     if not (0 <= i < spectral.shape[0] and 0 <= j < spectral.shape[1]):
         return False  # centre outside the image: the visible part is drawn per pixel
-    pixel = camera.pixel_solid_angles()[i, j]
+    pixel = cached_pixel_solid_angles(camera)[i, j]
     if pixel * SPLAT_PIXELS <= disk_solid_angle_sr:
         return False
     if valid[i, j]:

@@ -242,7 +242,7 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
         add_moon_disk(spectral, camera, directions, valid, seen, wavelengths,
                       moon.solar_irradiance,
                       _transmittance(solver, viewpoint, moon_seen[None], ground)[0],
-                      eclipse=moon.eclipse)
+                      eclipse=moon.eclipse, irradiance=moon.irradiance)
     if objects.stars:
         _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky, objects,
                              wavelengths, ground, pressure, temperature)

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike
 from skyscatter.astro.star_catalogue import load_star_catalogue
 from skyscatter.errors import InputError
 from skyscatter.render.camera import Camera, EquirectangularCamera
+from skyscatter.render.scene import cached_pixel_solid_angles
 from skyscatter.spectrum.magnitudes import (
     V_ZERO_POINT_FLUX,
     colour_temperature_from_b_minus_v,
@@ -257,7 +258,7 @@ def add_stars(spectral: np.ndarray, camera: Camera, valid: np.ndarray,
                                          (n, n_wl))[stars]
     if scintillation is not None:
         flux *= np.broadcast_to(np.asarray(scintillation, dtype=np.float64), (n,))[stars, None]
-    omega = _solid_angles(camera).ravel()
+    omega = cached_pixel_solid_angles(camera).ravel()
     flat = flat.ravel()
     share = weights.ravel() / np.where(weights.ravel() > 0.0, omega[flat], 1.0)
     # Sum the (4m, n_wl) contributions per pixel: sort by pixel, add runs, scatter once.
@@ -268,14 +269,6 @@ def add_stars(spectral: np.ndarray, camera: Camera, valid: np.ndarray,
     image = spectral.reshape(-1, n_wl)  # a view: spectral is C-contiguous
     image[flat[starts]] += np.add.reduceat(contributions, starts, axis=0)
     return int(stars.size)
-
-
-@functools.lru_cache(maxsize=4)
-def _solid_angles(camera: Camera) -> np.ndarray:
-    """`camera.pixel_solid_angles()`, kept for the last few (frozen, hashable) cameras."""
-    omega = camera.pixel_solid_angles()
-    omega.flags.writeable = False
-    return omega
 
 
 @functools.cache
