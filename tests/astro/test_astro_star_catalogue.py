@@ -3,7 +3,6 @@
 
 import datetime as dt
 import math
-import time
 
 import numpy as np
 import pytest
@@ -54,6 +53,13 @@ def test_sirius_v_magnitude(catalogue):
     # Bright Star Catalogue V = -1.46 (Sirius' Hp is off the V scale, so this checks the BSC5
     # override path of the loader; the colour conversion is checked below).
     assert catalogue.v_magnitude[catalogue.index_of(32349)] == pytest.approx(-1.46, abs=0.03)
+    # and independently of the override's own number: PyEphem's Hipparcos-based V, -1.44
+    import ephem
+
+    sirius = ephem.star("Sirius")
+    sirius.compute("2000/1/1")
+    assert catalogue.v_magnitude[catalogue.index_of(32349)] == pytest.approx(sirius.mag,
+                                                                              abs=0.03)
 
 
 def test_vega_v_magnitude_from_hp_and_bessell_2000(catalogue):
@@ -138,11 +144,10 @@ def test_magnitude_limit_selects(catalogue):
         catalogue.index_of(1_000_000)
 
 
-def test_parse_is_fast_and_disk_cache_round_trips(tmp_path):
-    # Target < 0.5 s (brief); measured 0.15 s parse, 0.03 s from the .npz cache.
-    start = time.perf_counter()
+def test_parse_and_disk_cache_round_trips(tmp_path):
+    # Timings (0.15 s parse, 0.03 s from the .npz cache) are measured by
+    # benchmarks/bench_stars.py, not asserted here (STYLE: no timings in tests).
     parsed = star_catalogue._parse_hip2(star_catalogue._catalogue_path())
-    assert time.perf_counter() - start < 1.0  # 2x margin over the target for a busy machine
     first = load_star_catalogue(cache_directory=tmp_path)
     assert (tmp_path / "hipparcos_hip2.npz").exists()
     star_catalogue._full_catalogue.cache_clear()

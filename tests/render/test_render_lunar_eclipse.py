@@ -3,7 +3,6 @@ overlap of the solar disk, the point-source focusing law, and an exponential atm
 umbra compared with observed eclipse brightness."""
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -170,16 +169,14 @@ def test_refraction_brightens_the_umbra_towards_its_edge_smoothly():
     assert c[inner].max() < 0.05 and c[-1] == pytest.approx(1.0)
 
 
-def test_4000_points_run_fast_enough():
-    # Performance guard (not a benchmark): 4000 Moon pixels, default ~560 altitude cells.
-    # Measured 35-70 ms on a shared 2-core machine; the bound is generous for CI.
+def test_4000_scattered_points_give_finite_factors():
+    # 4000 moon pixels with the default ~560 altitude cells: finite and of the right shape.
+    # (35-70 ms on 2 cores; timings are benchmarked, not asserted: STYLE.)
     rng = np.random.default_rng(3)
     theta = rng.uniform(0.0, 0.02, 4000)
     points = points_at(theta) + rng.normal(size=(4000, 3)) * 1e6
-    start = time.perf_counter()
     c = le.eclipse_factor(points, SUN, rayleigh_transmittance, deflection, earth_radius_m=R)
     assert c.shape == (4000, WL.size) and np.all(np.isfinite(c))
-    assert time.perf_counter() - start < 3.0
 
 
 def test_bad_inputs_raise_input_error():
