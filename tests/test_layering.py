@@ -18,6 +18,7 @@ ALLOWED = {
     "transport": {"atmosphere", "optics", "spectrum"},
     "astro": set(),
     "render": {"transport", "astro", "spectrum"},
+    "viewer": {"render", "transport", "atmosphere", "spectrum"},
 }
 
 

@@ -68,6 +68,8 @@ from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import SolverOptions, make_solver
+from skyscatter.viewer.server import LOOPBACK, ViewerServer, make_server
+from skyscatter.viewer.table_service import TableService
 
 __all__ = [
     "AlbedoMap",
@@ -97,6 +99,7 @@ __all__ = [
     "sky_radiance_rows",
     "solver_options",
     "sun_direction",
+    "viewer_server",
     "viewpoint_at",
 ]
 
@@ -447,3 +450,28 @@ def _check_range(name: str, value: float, low: float, high: float) -> None:
     if not np.isfinite(value) or not low <= value <= high:
         raise InputError(f"{name} = {value!r} must lie in [{low:g}, {high:g}]", key=name,
                          value=value, allowed=f"[{low:g}, {high:g}]")
+
+
+def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0,
+                  cache_dir: str | Path | None = None, use_cache: bool = True,
+                  log: Callable[[str], None] | None = None) -> ViewerServer:
+    """The real-time viewer's web server (`viewer.server`), not yet serving: `config` (a
+    preset name or TOML file) is the atmosphere shown first, besides the presets; the full
+    tables come from and go to the table cache (`cache_dir`, default
+    `default_cache_directory()`) unless `use_cache` is False. `log` gets the requests and
+    where tables came from. Call `viewer.server.serve_forever(server, open_browser)`."""
+    cache = TableCache(cache_dir) if use_cache else None
+    service = TableService(config, cache, log)
+
+    def sun_at(atmosphere: Atmosphere, time: str, latitude_deg: float,
+               longitude_deg: float) -> tuple[float, float, str]:
+        observer = make_observer(time, latitude_deg, longitude_deg)
+        sun = sky_ephemeris(atmosphere, observer).sun
+        return 90.0 - sun.altitude_deg, sun.azimuth_deg, observer.time_utc.isoformat()
+
+    return make_server(service, sun_at, host, port, log)
+
+
+def is_loopback(host: str) -> bool:
+    """True for the loopback names and addresses the viewer binds by default."""
+    return host in LOOPBACK or host.startswith("127.")

@@ -367,6 +367,29 @@ def build_parser() -> argparse.ArgumentParser:
     _add_cache_arguments(precompute)
     precompute.set_defaults(run=_precompute)
 
+    view = commands.add_parser(
+        "view", help="the real-time viewer in a web browser (WebGL2)",
+        description="Start the interactive viewer: a local web server that sends the "
+        "precomputed tables to a page which ray-casts them on the GPU every frame. Look "
+        "around, fly up to orbit, move the sun by hand or from a date and place, change the "
+        "aerosol, dust, ozone or ground albedo (the tables are recomputed: a preview in about "
+        "a second, then the full tables). Binds 127.0.0.1 unless --host says otherwise. "
+        "Ctrl-C stops it.")
+    view.add_argument("atmosphere", metavar="PRESET_OR_CONFIG", nargs="?", default="earth",
+                      help="the atmosphere shown first: a preset name (see `skyscatter "
+                      "presets`) or a TOML file (default earth); the page offers the presets "
+                      "too")
+    view.add_argument("--port", type=int, default=0,
+                      help="port to listen on (default 0: any free port)")
+    view.add_argument("--host", default="127.0.0.1",
+                      help="address to listen on (default 127.0.0.1, this computer only; "
+                      "another address makes the viewer reachable from the network)")
+    view.add_argument("--no-browser", action="store_true",
+                      help="only serve; do not open the page in a browser")
+    view.add_argument("--verbose", action="store_true", help="log every request")
+    _add_cache_arguments(view)
+    view.set_defaults(run=_view)
+
     validate = commands.add_parser(
         "validate", help="run the validation suite and write a report with plots",
         description="Compare skyscatter with independent references - the Monte Carlo "
@@ -648,6 +671,23 @@ def _precompute(args: argparse.Namespace) -> None:
     print(f"{args.atmosphere}: {tables.orders} orders, {tables.wavelengths_nm.size} "
           f"wavelengths, {tables.nbytes / 2**20:.0f} MiB of tables, "
           f"{time.perf_counter() - start:.1f} s", file=sys.stderr)
+
+
+def _view(args: argparse.Namespace) -> None:
+    from skyscatter import api
+    from skyscatter.viewer.server import serve_forever
+
+    def log(message: str) -> None:
+        print(f"skyscatter: {message}", file=sys.stderr, flush=True)
+
+    server = api.viewer_server(args.atmosphere, args.host, args.port, args.cache_dir,
+                               not args.no_cache, log if args.verbose else None)
+    if not api.is_loopback(args.host):
+        print(f"skyscatter: warning: listening on {args.host}, not only on this computer: "
+              "anyone who can reach it can use the viewer and make it compute tables",
+              file=sys.stderr)
+    print(f"skyscatter viewer: {server.url}  (Ctrl-C stops it)", flush=True)
+    serve_forever(server, open_browser=not args.no_browser)
 
 
 def _validate(args: argparse.Namespace) -> int:

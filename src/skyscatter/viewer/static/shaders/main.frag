@@ -1,0 +1,64 @@
+// The viewer's frame: one camera ray per pixel, the sky (and ground) from the tables, the sun
+// disk (all in CIE XYZ), linear sRGB, exposure and tone mapping (render/scene.py's render_sky + api.save_image's PNG path).
+
+uniform vec3 u_camera_position;  // planet-centred [m]
+uniform vec3 u_sun_direction;    // world, unit
+uniform float u_exposure;        // exposure_scale(EV100, compensation)
+uniform int u_operator;
+uniform int u_output;            // 0: display colour; 1: (luminance [cd m^-2], looks up?) for the meter
+uniform vec3 u_sun_disk[SUN_DISK_SAMPLES];  // XYZ disk radiance at cos(limb) = 0 .. 1
+uniform float u_sun_solid_angle; // [sr]
+
+out vec4 frag_colour;
+
+// Limb-darkened disk radiance at cos(limb) (twin of Star.disk_radiance, linear between samples)
+vec3 sun_disk_radiance(float cos_limb) {
+    float f = clamp(cos_limb, 0.0, 1.0) * float(SUN_DISK_SAMPLES - 1);
+    int i = min(int(f), SUN_DISK_SAMPLES - 2);
+    return mix(u_sun_disk[i], u_sun_disk[i + 1], f - float(i));
+}
+
+// The sun disk seen along the local direction `dir` of pixel `frag` (twin of add_sun_disk):
+// a disk smaller than SPLAT_PIXELS pixels puts its whole irradiance into the pixel holding its
+// centre; a larger one is drawn limb-darkened pixel by pixel
+vec3 sun_disk(vec2 frag, vec3 dir, vec3 sun_local, vec3 transmittance) {
+    vec3 centre = direction_to_pixel(sun_local);
+    if (centre.z == 0.0) return vec3(0.0);
+    vec2 sun_pixel = floor(centre.xy);
+    vec2 col_row = vec2(frag.x, u_resolution.y - frag.y);
+    float omega = pixel_solid_angle(image_offsets(vec2(sun_pixel.x + 0.5,
+                                                       u_resolution.y - sun_pixel.y - 0.5)));
+    bool inside_image = all(greaterThanEqual(sun_pixel, vec2(0.0)))
+                        && all(lessThan(sun_pixel, u_resolution));
+    if (inside_image && omega * SPLAT_PIXELS > u_sun_solid_angle) {
+        if (all(equal(floor(col_row), sun_pixel))) {
+            return u_sun_irradiance * transmittance / omega;
+        }
+        return vec3(0.0);
+    }
+    float cos_angle = clamp(dot(dir, sun_local), -1.0, 1.0);
+    if (cos_angle <= cos(u_sun_angular_radius)) return vec3(0.0);
+    float sin_ratio = sqrt(1.0 - cos_angle * cos_angle) / sin(u_sun_angular_radius);
+    return sun_disk_radiance(sqrt(clamp(1.0 - sin_ratio * sin_ratio, 0.0, 1.0))) * transmittance;
+}
+
+void main() {
+    vec4 local = camera_direction(gl_FragCoord.xy);
+    if (local.w == 0.0) {
+        frag_colour = vec4(0.0);
+        return;
+    }
+    vec3 dir = u_local_to_world * local.xyz;
+    vec3 radiance = sky_radiance(u_camera_position, dir, u_sun_direction);
+    vec3 transmittance = sun_transmittance(u_camera_position, u_sun_direction);
+    if (any(greaterThan(transmittance, vec3(0.0)))) {
+        vec3 sun_local = transpose(u_local_to_world) * u_sun_direction;
+        radiance += sun_disk(gl_FragCoord.xy, local.xyz, sun_local, transmittance);
+    }
+    if (u_output == 1) {
+        frag_colour = vec4(radiance.y, local.z > 0.0 ? 1.0 : 0.0, 0.0, 1.0);
+        return;
+    }
+    vec3 display = tonemap(XYZ_TO_SRGB * radiance, u_operator, u_exposure);
+    frag_colour = vec4(encode_srgb_transfer(display), 1.0);
+}

@@ -1,0 +1,97 @@
+// Table parameterisations of the viewer: the GLSL twin of transport/table_parameterisation.py
+// (same function names, same formulas; its module docstring documents them). Compared with the
+// Python versions on a grid by tests/viewer/test_glsl_mapping.py in headless Chromium.
+// rho^2 = r^2 - R_b^2 is written (r - R_b)(r + R_b): the same number, without float32
+// cancellation near the ground.
+
+// twin of texture_coord_from_unit_range
+float texture_coord_from_unit_range(float x, float n) {
+    return 0.5 / n + x * (1.0 - 1.0 / n);
+}
+
+// twin of distance_to_top_boundary
+float distance_to_top_boundary(float r, float mu, float top_radius) {
+    float discriminant = r * r * (mu * mu - 1.0) + top_radius * top_radius;
+    return max(-r * mu + sqrt(max(discriminant, 0.0)), 0.0);
+}
+
+// twin of distance_to_bottom_boundary
+float distance_to_bottom_boundary(float r, float mu, float bottom_radius) {
+    float discriminant = r * r * (mu * mu - 1.0) + bottom_radius * bottom_radius;
+    return max(-r * mu - sqrt(max(discriminant, 0.0)), 0.0);
+}
+
+// twin of ray_intersects_ground
+bool ray_intersects_ground(float r, float mu, float bottom_radius) {
+    return mu < 0.0 && r * r * (mu * mu - 1.0) + bottom_radius * bottom_radius >= 0.0;
+}
+
+float horizon_distance(float r, float bottom_radius) {
+    return sqrt(max((r - bottom_radius) * (r + bottom_radius), 0.0));
+}
+
+// twin of transmittance_x_from_r_mu: (x_mu, x_r)
+vec2 transmittance_x_from_r_mu(float r, float mu, float bottom_radius, float top_radius) {
+    float big_h = horizon_distance(top_radius, bottom_radius);
+    float rho = horizon_distance(r, bottom_radius);
+    float x_r = clamp(rho / big_h, 0.0, 1.0);
+    float d_min = top_radius - r;
+    float d_max = rho + big_h;
+    if (d_max <= d_min) {
+        return vec2(0.0, x_r);
+    }
+    float d = distance_to_top_boundary(r, mu, top_radius);
+    return vec2(clamp((d - d_min) / (d_max - d_min), 0.0, 1.0), x_r);
+}
+
+// twin of scattering_u_r
+float scattering_u_r(float r, float bottom_radius, float top_radius, float n_r) {
+    float big_h = horizon_distance(top_radius, bottom_radius);
+    float rho = horizon_distance(r, bottom_radius);
+    return texture_coord_from_unit_range(min(rho / big_h, 1.0), n_r);
+}
+
+// twin of scattering_u_mu
+float scattering_u_mu(float r, float mu, bool ray_hits_ground, float bottom_radius,
+                      float top_radius, float n_mu) {
+    float big_h = horizon_distance(top_radius, bottom_radius);
+    float rho = horizon_distance(r, bottom_radius);
+    float r_mu = r * mu;
+    float discriminant = r_mu * r_mu - (r - bottom_radius) * (r + bottom_radius);
+    float half_n = floor(n_mu / 2.0);
+    if (ray_hits_ground) {
+        float d = -r_mu - sqrt(max(discriminant, 0.0));
+        float d_min = r - bottom_radius;
+        float d_max = rho;
+        float x = d_max == d_min ? 0.0 : (d - d_min) / (d_max - d_min);
+        return 0.5 - 0.5 * texture_coord_from_unit_range(clamp(x, 0.0, 1.0), half_n);
+    }
+    float d = -r_mu + sqrt(max(discriminant + big_h * big_h, 0.0));
+    float d_min = top_radius - r;
+    float d_max = rho + big_h;
+    float x = (d - d_min) / (d_max - d_min);
+    return 0.5 + 0.5 * texture_coord_from_unit_range(clamp(x, 0.0, 1.0), half_n);
+}
+
+// twin of scattering_u_mu_s (with mu_s_mapping_constants inlined)
+float scattering_u_mu_s(float mu_s, float bottom_radius, float top_radius, float mu_s_min,
+                        float n_mu_s) {
+    float d_min = top_radius - bottom_radius;
+    float d_max = horizon_distance(top_radius, bottom_radius);
+    float big_a = (distance_to_top_boundary(bottom_radius, mu_s_min, top_radius) - d_min)
+                  / (d_max - d_min);
+    float d = distance_to_top_boundary(bottom_radius, mu_s, top_radius);
+    float a = (d - d_min) / (d_max - d_min);
+    return texture_coord_from_unit_range(max(1.0 - a / big_a, 0.0) / (1.0 + a), n_mu_s);
+}
+
+// twin of scattering_u_nu
+float scattering_u_nu(float nu) {
+    return 1.0 - sqrt(acos(clamp(nu, -1.0, 1.0)) / PI);
+}
+
+// twin of irradiance_x_from_r_mu_s: (x_mu_s, x_r)
+vec2 irradiance_x_from_r_mu_s(float r, float mu_s, float bottom_radius, float top_radius) {
+    float x_r = (r - bottom_radius) / (top_radius - bottom_radius);
+    return vec2(clamp(0.5 * (mu_s + 1.0), 0.0, 1.0), clamp(x_r, 0.0, 1.0));
+}

@@ -1,0 +1,301 @@
+// The skyscatter viewer: ray-casts the precomputed tables in a WebGL2 fragment shader every
+// frame (shaders/*.glsl, the GLSL twins of the Python renderer), asks the server for new
+// tables when a physical parameter changes (a preview first, then the full tables), and
+// places the sun by hand or from a date, time and place.
+import {decodeTables, deleteTables, fetchLayout, uploadTables} from "./tables.js";
+import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
+import {cameraBasis, localFrame, sunDirection, toWorld} from "./geometry.js";
+
+const SHADERS = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
+                 "shaders/sky.glsl", "shaders/tonemap.glsl", "shaders/main.frag"];
+const PREFIX = "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler3D;\n";
+const VERTEX = `#version 300 es
+in vec2 position;
+void main() { gl_Position = vec4(position, 0.0, 1.0); }`;
+const METER_SIZE = [64, 36];  // the auto-exposure meter renders the view this small
+const DEG = Math.PI / 180;
+
+function compile(gl, type, source) {
+  const shader = gl.createShader(type);
+  gl.shaderSource(shader, source);
+  gl.compileShader(shader);
+  if (!gl.getShaderParameter(shader, gl.COMPILE_STATUS)) {
+    throw new Error(`shader does not compile: ${gl.getShaderInfoLog(shader)}`);
+  }
+  return shader;
+}
+
+async function buildProgram(gl) {
+  const sources = await Promise.all(SHADERS.map(async (name) => (await fetch(`static/${name}`)).text()));
+  const program = gl.createProgram();
+  gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, VERTEX));
+  gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, PREFIX + sources.join("\n")));
+  gl.bindAttribLocation(program, 0, "position");
+  gl.linkProgram(program);
+  if (!gl.getProgramParameter(program, gl.LINK_STATUS)) {
+    throw new Error(`shader does not link: ${gl.getProgramInfoLog(program)}`);
+  }
+  return program;
+}
+
+class Viewer {
+  constructor(canvas, layout, program, state) {
+    this.canvas = canvas;
+    this.gl = canvas.getContext("webgl2");
+    this.layout = layout;
+    this.program = program;
+    this.state = state;
+    this.tables = null;
+    this.frameTimes = [];
+    this.locations = new Map();
+    const gl = this.gl;
+    const buffer = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+    gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 3, -1, -1, 3]), gl.STATIC_DRAW);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
+    this.timer = gl.getExtension("EXT_disjoint_timer_query_webgl2");
+    this.query = null;
+    this.gpuMs = null;
+  }
+
+  uniform(name) {
+    if (!this.locations.has(name)) this.locations.set(name, this.gl.getUniformLocation(this.program, name));
+    return this.locations.get(name);
+  }
+
+  setTables(decoded) {
+    deleteTables(this.gl, this.tables);
+    this.tables = uploadTables(this.gl, decoded);
+  }
+
+  // The camera and sun uniforms of the current state for a w x h image
+  viewUniforms(width, height) {
+    const s = this.state;
+    const radius = this.tables.header.bottom_radius_m;
+    const frame = localFrame(s.lat * DEG, s.lon * DEG);
+    const position = frame[2].map((v) => v * (radius + s.altitude_m));
+    const siteFrame = localFrame(s.site_lat * DEG, s.site_lon * DEG);
+    const sun = toWorld(siteFrame, sunDirection(s.sun_zenith, s.sun_azimuth));
+    const [right, up, forward] = cameraBasis(s.heading * DEG, s.pitch * DEG, s.roll * DEG);
+    const tanV = Math.tan(s.fov * DEG / 2);
+    const projection = this.layout.projections.indexOf(s.projection);
+    return {
+      u_resolution: [width, height],
+      u_projection: projection,
+      u_half_extent: [tanV * width / height, tanV],
+      u_camera_basis: [...right, ...up, ...forward],
+      u_fisheye_theta_max: s.fisheye_fov * DEG / 2,
+      u_local_to_world: [...frame[0], ...frame[1], ...frame[2]],
+      u_camera_position: position,
+      u_sun_direction: sun,
+      u_exposure: Math.pow(2, s.compensation) / (this.layout.exposure.saturation_factor * Math.pow(2, s.ev100)),
+      u_operator: this.layout.operators.indexOf(s.operator),
+    };
+  }
+
+  setUniforms(values) {
+    const gl = this.gl;
+    const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows"]);
+    for (const [name, value] of Object.entries(values)) {
+      const location = this.uniform(name);
+      if (location === null) continue;
+      if (ints.has(name)) gl.uniform1i(location, value);
+      else if (name === "u_camera_basis" || name === "u_local_to_world") gl.uniformMatrix3fv(location, false, value);
+      else if (name === "u_scattering_scales") gl.uniform1fv(location, value);
+      else if (name === "u_sun_disk") gl.uniform3fv(location, value);
+      else if (!Array.isArray(value)) gl.uniform1f(location, value);
+      else if (value.length === 2) gl.uniform2fv(location, value);
+      else if (value.length === 3) gl.uniform3fv(location, value);
+      else if (value.length === 4) gl.uniform4fv(location, value);
+    }
+  }
+
+  bindTextures() {
+    const gl = this.gl;
+    const units = [["u_transmittance", gl.TEXTURE_2D, "transmittance"], ["u_irradiance", gl.TEXTURE_2D, "irradiance"],
+                   ["u_scattering", gl.TEXTURE_3D, "scattering"], ["u_phase", gl.TEXTURE_2D, "phase"]];
+    units.forEach(([name, target, key], unit) => {
+      gl.activeTexture(gl.TEXTURE0 + unit);
+      gl.bindTexture(target, this.tables.textures[key]);
+      gl.uniform1i(this.uniform(name), unit);
+    });
+  }
+
+  // Draws the current state into the canvas (or the bound framebuffer of size w x h)
+  draw(width, height) {
+    const gl = this.gl;
+    gl.useProgram(this.program);
+    gl.viewport(0, 0, width, height);
+    this.bindTextures();
+    this.setUniforms(this.tables.uniforms);
+    this.setUniforms(this.viewUniforms(width, height));
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+  }
+
+  resize() {
+    const s = this.state;
+    const width = s.width || Math.round(this.canvas.clientWidth * (window.devicePixelRatio || 1));
+    const height = s.height || Math.round(this.canvas.clientHeight * (window.devicePixelRatio || 1));
+    if (this.canvas.width !== width || this.canvas.height !== height) {
+      this.canvas.width = width;
+      this.canvas.height = height;
+    }
+  }
+
+  frame() {
+    if (!this.tables) return;
+    this.resize();
+    const gl = this.gl;
+    const measuring = this.timer && !this.query;
+    if (measuring) {
+      this.query = gl.createQuery();
+      gl.beginQuery(this.timer.TIME_ELAPSED_EXT, this.query);
+    }
+    this.draw(this.canvas.width, this.canvas.height);
+    if (measuring) gl.endQuery(this.timer.TIME_ELAPSED_EXT);
+    if (this.query && gl.getQueryParameter(this.query, gl.QUERY_RESULT_AVAILABLE)) {
+      if (!gl.getParameter(this.timer.GPU_DISJOINT_EXT)) {
+        this.gpuMs = gl.getQueryParameter(this.query, gl.QUERY_RESULT) / 1e6;
+      }
+      gl.deleteQuery(this.query);
+      this.query = null;
+    }
+  }
+
+  // EV100 a meter would choose for the current view (twin of api.save_image's metering):
+  // incident light from space, else the geometric mean of the sky pixels' luminance
+  meter() {
+    const gl = this.gl;
+    const header = this.tables.header;
+    const exposure = this.layout.exposure;
+    if (this.state.altitude_m > header.top_radius_m - header.bottom_radius_m) {
+      const lux = header.sun_irradiance_xyz[1];
+      return Math.log2(lux * exposure.iso_speed / exposure.incident_calibration_c);
+    }
+    const [w, h] = METER_SIZE;
+    if (!this.meterTarget) {
+      const texture = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, texture);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, w, h, 0, gl.RGBA, gl.FLOAT, null);
+      const framebuffer = gl.createFramebuffer();
+      gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, texture, 0);
+      this.meterTarget = {texture, framebuffer, pixels: new Float32Array(w * h * 4)};
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, this.meterTarget.framebuffer);
+    gl.useProgram(this.program);
+    gl.uniform1i(this.uniform("u_output"), 1);
+    this.draw(w, h);
+    gl.uniform1i(this.uniform("u_output"), 0);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, this.meterTarget.pixels);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    let sum = 0, count = 0, litSum = 0, litCount = 0;
+    const p = this.meterTarget.pixels;
+    for (let i = 0; i < w * h; ++i) {
+      const luminance = p[4 * i];
+      if (!(luminance > 0)) continue;
+      litSum += Math.log(luminance); litCount += 1;
+      if (p[4 * i + 1] > 0.5) { sum += Math.log(luminance); count += 1; }
+    }
+    const mean = count ? sum / count : litCount ? litSum / litCount : null;
+    if (mean === null) return null;
+    return Math.log2(Math.exp(mean) * exposure.iso_speed / exposure.meter_calibration_k);
+  }
+
+  // Milliseconds per frame over n frames drawn back to back, each waited for (readPixels)
+  benchmark(n) {
+    const gl = this.gl;
+    const pixel = new Uint8Array(4);
+    this.frame();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    const start = performance.now();
+    for (let i = 0; i < n; ++i) {
+      this.draw(this.canvas.width, this.canvas.height);
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    }
+    return (performance.now() - start) / n;
+  }
+}
+
+async function loadTables(viewer, query, onProgress) {
+  const done = {value: false};
+  const poll = async () => {
+    while (!done.value) {
+      try {
+        const progress = await (await fetch("api/progress")).json();
+        if (!done.value) onProgress(progress);
+      } catch (error) { /* the server is busy answering; try again */ }
+      await new Promise((resolve) => setTimeout(resolve, 200));
+    }
+  };
+  poll();
+  try {
+    const response = await fetch(`api/tables?${query}`);
+    if (!response.ok) {
+      const message = (await response.json().catch(() => ({error: response.statusText}))).error;
+      const error = new Error(message);
+      error.status = response.status;
+      throw error;
+    }
+    return decodeTables(await response.arrayBuffer(), viewer.layout);
+  } finally {
+    done.value = true;
+  }
+}
+
+async function main() {
+  const canvas = document.getElementById("sky");
+  const gl = canvas.getContext("webgl2", {antialias: false, alpha: false, preserveDrawingBuffer: true});
+  if (!gl) {
+    showError("This browser has no WebGL2; the viewer needs it (any current Chrome, Firefox, Safari or Edge).");
+    return;
+  }
+  const [layout, program, description] = await Promise.all([
+    fetchLayout(), buildProgram(gl), fetch("api/atmospheres").then((r) => r.json())]);
+  const state = readUrlState(description);
+  const viewer = new Viewer(canvas, layout, program, state);
+  let request = 0;
+  const reload = async () => {
+    const mine = ++request;
+    const params = new URLSearchParams({atmosphere: state.atmosphere});
+    if (state.albedo !== null) params.set("albedo", state.albedo);
+    for (const [name, value] of Object.entries(state.amounts)) params.set(`amount_${name}`, value);
+    const started = performance.now();
+    const qualities = state.quality === "full" ? ["preview", "full"] : [state.quality];
+    for (const quality of qualities) {
+      params.set("quality", quality);
+      try {
+        const decoded = await loadTables(viewer, params.toString(), showProgress);
+        if (mine !== request) return;
+        viewer.setTables(decoded);
+        viewer.frame();
+        viewer.gl.finish();
+        state.last_change_ms = performance.now() - started;
+        showStatus(`${decoded.header.label}: ${decoded.header.n_wavelengths} wavelengths, ` +
+                   `${decoded.header.orders} orders, image ${state.last_change_ms.toFixed(0)} ms after the change`);
+        document.body.dataset.tables = quality;
+      } catch (error) {
+        if (mine !== request) return;
+        if (error.status === 409) return;  // superseded by a newer request
+        showError(error.message);
+        return;
+      } finally {
+        showProgress({busy: false});
+      }
+    }
+  };
+  window.skyscatter = {viewer, state, reload, benchmark: (n) => viewer.benchmark(n)};
+  bindControls(viewer, description, reload);
+  const loop = (time) => {
+    viewer.frame();
+    viewer.frameTimes.push(time);
+    if (viewer.frameTimes.length > 60) viewer.frameTimes.shift();
+    requestAnimationFrame(loop);
+  };
+  await reload();
+  document.body.dataset.ready = "1";
+  requestAnimationFrame(loop);
+}
+
+main().catch((error) => showError(error.message));
