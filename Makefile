@@ -4,7 +4,11 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint bench clean
+# Debian's chromium for the viewer's browser tests (root, or sudo when not root)
+SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+APT    := $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get
+
+.PHONY: run test lint bench clean chromium
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -15,13 +19,19 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(BIN)/python scripts/render_defaults.py out
 
-test: $(STAMP)
+chromium:
+	@command -v chromium >/dev/null 2>&1 || { echo "installing chromium (apt) for the viewer tests"; \
+	  $(APT) install -y -qq chromium >/dev/null 2>&1 || \
+	  { $(APT) update -qq && $(APT) install -y -qq chromium >/dev/null; }; }
+
+test: $(STAMP) chromium
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q
+	SKYSCATTER_REQUIRE_BROWSER=1 $(BIN)/python -m pytest -q
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_single_scattering.py
 	$(BIN)/python benchmarks/bench_tables.py
+	$(BIN)/python benchmarks/bench_viewer.py
 
 clean:
 	rm -rf $(VENV) out

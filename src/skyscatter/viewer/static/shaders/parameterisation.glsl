@@ -1,8 +1,8 @@
 // Table parameterisations of the viewer: the GLSL twin of transport/table_parameterisation.py
 // (same function names, same formulas; its module docstring documents them). Compared with the
 // Python versions on a grid by tests/viewer/test_glsl_mapping.py in headless Chromium.
-// rho^2 = r^2 - R_b^2 is written (r - R_b)(r + R_b): the same number, without float32
-// cancellation near the ground.
+// r^2 - R^2 is written (r - R)(r + R) throughout: the same number, without the float32
+// cancellation of two squares of ~4e13 m^2 (which made distances to the ground metres off).
 
 // twin of texture_coord_from_unit_range
 float texture_coord_from_unit_range(float x, float n) {
@@ -11,19 +11,19 @@ float texture_coord_from_unit_range(float x, float n) {
 
 // twin of distance_to_top_boundary
 float distance_to_top_boundary(float r, float mu, float top_radius) {
-    float discriminant = r * r * (mu * mu - 1.0) + top_radius * top_radius;
+    float discriminant = r * r * mu * mu - (r - top_radius) * (r + top_radius);
     return max(-r * mu + sqrt(max(discriminant, 0.0)), 0.0);
 }
 
 // twin of distance_to_bottom_boundary
 float distance_to_bottom_boundary(float r, float mu, float bottom_radius) {
-    float discriminant = r * r * (mu * mu - 1.0) + bottom_radius * bottom_radius;
+    float discriminant = r * r * mu * mu - (r - bottom_radius) * (r + bottom_radius);
     return max(-r * mu - sqrt(max(discriminant, 0.0)), 0.0);
 }
 
 // twin of ray_intersects_ground
 bool ray_intersects_ground(float r, float mu, float bottom_radius) {
-    return mu < 0.0 && r * r * (mu * mu - 1.0) + bottom_radius * bottom_radius >= 0.0;
+    return mu < 0.0 && r * r * mu * mu - (r - bottom_radius) * (r + bottom_radius) >= 0.0;
 }
 
 float horizon_distance(float r, float bottom_radius) {

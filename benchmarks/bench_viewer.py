@@ -1,0 +1,94 @@
+"""Benchmark: the real-time viewer in headless Chromium (issue 7's measurements).
+
+1. Frame time at 1920 x 1080 (and a 1080 x 1080 fisheye): the page draws N frames back to
+   back, each waited for with a 1-pixel readPixels (`window.skyscatter.benchmark`), with the
+   preview tables and with the full `earth` tables (16 wavelengths, default sizes, 8 orders;
+   from the table cache, computed first when missing: about a minute on 2 cores). In headless
+   Chromium WebGL2 runs on SwiftShader, the CPU: these numbers are for the record, not a GPU's.
+2. Time from a parameter change to the new image: the page changes the aerosol amount (or the
+   ground albedo) and waits until the server has computed the preview tables, the page has
+   fetched, decoded and uploaded them and drawn a frame (`state.last_change_ms`, measured in
+   the page from the change to gl.finish after the draw). Goal: under 3 s for Earth.
+3. Table message sizes and the server's peak resident memory.
+
+Run: PYTHONPATH=src python benchmarks/bench_viewer.py [--frames 5] [--chromium PATH]
+(needs Debian's chromium and `pip install playwright`; `make test` installs both.)
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import shutil
+import threading
+import time
+
+from skyscatter import api
+
+FLAGS = ["--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+         "--disable-gpu-vsync", "--force-color-profile=srgb"]
+VIEW = "sun_zenith=60&sun_azimuth=200&heading=180&pitch=10&fov=60&altitude_m=2&ev100=13"
+
+
+def main() -> None:
+    from playwright.sync_api import sync_playwright
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=5)
+    parser.add_argument("--chromium", default=shutil.which("chromium"))
+    parser.add_argument("--skip-full", action="store_true",
+                        help="only the preview tables (no full Earth tables)")
+    args = parser.parse_args()
+    server = api.viewer_server("earth")
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    print(f"server {server.url}; chromium {args.chromium}")
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=args.chromium, args=FLAGS)
+        page = browser.new_page(viewport={"width": 1920, "height": 1080})
+        page.set_default_timeout(900_000)
+        renderer = None
+        qualities = ["preview"] if args.skip_full else ["preview", "full"]
+        for quality in qualities:
+            for label, size in (("perspective 1920x1080", "width=1920&height=1080"),
+                                ("fisheye 1080x1080",
+                                 "width=1080&height=1080&projection=fisheye")):
+                start = time.perf_counter()
+                page.goto(f"{server.url}?controls=0&quality={quality}&{size}&{VIEW}")
+                page.wait_for_function(f"document.body.dataset.tables === '{quality}'")
+                loaded = time.perf_counter() - start
+                if renderer is None:
+                    renderer = page.evaluate(
+                        "(() => { const gl = window.skyscatter.viewer.gl; "
+                        "const e = gl.getExtension('WEBGL_debug_renderer_info'); "
+                        "return e ? gl.getParameter(e.UNMASKED_RENDERER_WEBGL) : "
+                        "gl.getParameter(gl.RENDERER); })()")
+                    print(f"WebGL renderer: {renderer}")
+                ms = page.evaluate(f"window.skyscatter.benchmark({args.frames})")
+                header = page.evaluate("window.skyscatter.viewer.tables.header")
+                print(f"{quality:8s} {label:22s}: {ms:8.1f} ms per frame "
+                      f"({header['n_wavelengths']} wavelengths, scattering "
+                      f"{header['scattering_shape']}), page ready in {loaded:.1f} s")
+        page.goto(f"{server.url}?controls=0&quality=preview&width=1920&height=1080&{VIEW}")
+        page.wait_for_function("document.body.dataset.ready === '1'")
+        changes = [("aerosol", "state.amounts.aerosol = 2.0"),
+                   ("aerosol", "state.amounts.aerosol = 0.5"),
+                   ("ozone", "state.amounts.ozone = 1.5"),
+                   ("albedo", "state.albedo = 0.3")]
+        for name, statement in changes:
+            ms = page.evaluate("async () => { const state = window.skyscatter.state; "
+                               f"{statement}; await window.skyscatter.reload(); "
+                               "return state.last_change_ms; }")
+            print(f"parameter change ({name:7s} {statement.split('= ')[1]}) -> new image "
+                  f"(1920x1080, preview tables): {ms / 1000:.2f} s")
+        browser.close()
+    for quality in ("preview",) if args.skip_full else ("preview", "full"):
+        service = server.service
+        message = service.tables(service.parse({"atmosphere": "earth", "quality": quality}))
+        print(f"table message, earth {quality}: {len(message) / 2**20:.1f} MiB")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak resident memory of the server process: {peak:.0f} MiB")
+    server.shutdown()
+
+
+if __name__ == "__main__":
+    main()
