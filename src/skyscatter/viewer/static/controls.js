@@ -285,16 +285,14 @@ export function bindControls(viewer, description, reload) {
   let frames = 0;
   setInterval(() => {
     const times = viewer.frameTimes;
-    if (times.length > 1) {
-      const ms = (times[times.length - 1] - times[0]) / (times.length - 1);
-      const gpu = viewer.gpuMs === null ? "" : `, GPU ${viewer.gpuMs.toFixed(2)} ms`;
-      byId("frame-time").textContent = `${ms.toFixed(1)} ms per frame (${(1000 / ms).toFixed(0)} fps)${gpu}, ` +
-        `${viewer.canvas.width}×${viewer.canvas.height}`;
-    }
+    const gpu = viewer.gpuMs === null ? "" : `GPU ${viewer.gpuMs.toFixed(2)} ms per frame; `;
+    const ms = times.length ? times.reduce((a, b) => a + b, 0) / times.length : null;
+    const rate = ms === null ? "redraws when the view changes" : `${ms.toFixed(1)} ms between frames (${(1000 / ms).toFixed(0)} fps)`;
+    byId("frame-time").textContent = `${gpu}${rate}; ${viewer.canvas.width}×${viewer.canvas.height}`;
     if (state.auto_exposure && viewer.tables && frames++ % 2 === 0) {
       const metered = viewer.meter();
       if (metered !== null) { state.ev100 = metered; ev.value = metered; }
     }
-    byId("ev-readout").textContent = `EV100 ${state.ev100.toFixed(2)}`;
+    byId("ev-readout").textContent = state.ev100.toFixed(2);
   }, 250);
 }

@@ -55,6 +55,7 @@ class Viewer {
     gl.enableVertexAttribArray(0);
     gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
     this.timer = gl.getExtension("EXT_disjoint_timer_query_webgl2");
+    this.floatTargets = gl.getExtension("EXT_color_buffer_float") !== null;  // for the meter
     this.query = null;
     this.gpuMs = null;
   }
@@ -67,6 +68,7 @@ class Viewer {
   setTables(decoded) {
     deleteTables(this.gl, this.tables);
     this.tables = uploadTables(this.gl, decoded);
+    this.tablesVersion = (this.tablesVersion || 0) + 1;
   }
 
   // The camera and sun uniforms of the current state for a w x h image
@@ -143,9 +145,13 @@ class Viewer {
     }
   }
 
+  // Draws a frame when the view changed since the last one (an idle page costs nothing)
   frame() {
-    if (!this.tables) return;
+    if (!this.tables) return false;
     this.resize();
+    const signature = JSON.stringify([this.state, this.tablesVersion, this.canvas.width, this.canvas.height]);
+    if (signature === this.drawn) return false;
+    this.drawn = signature;
     const gl = this.gl;
     const measuring = this.timer && !this.query;
     if (measuring) {
@@ -154,6 +160,12 @@ class Viewer {
     }
     this.draw(this.canvas.width, this.canvas.height);
     if (measuring) gl.endQuery(this.timer.TIME_ELAPSED_EXT);
+    return true;
+  }
+
+  // GPU time of the last measured frame [ms] (EXT_disjoint_timer_query_webgl2), or null
+  pollTimer() {
+    const gl = this.gl;
     if (this.query && gl.getQueryParameter(this.query, gl.QUERY_RESULT_AVAILABLE)) {
       if (!gl.getParameter(this.timer.GPU_DISJOINT_EXT)) {
         this.gpuMs = gl.getQueryParameter(this.query, gl.QUERY_RESULT) / 1e6;
@@ -161,6 +173,7 @@ class Viewer {
       gl.deleteQuery(this.query);
       this.query = null;
     }
+    return this.gpuMs;
   }
 
   // EV100 a meter would choose for the current view (twin of api.save_image's metering):
@@ -174,6 +187,7 @@ class Viewer {
       return Math.log2(lux * exposure.iso_speed / exposure.incident_calibration_c);
     }
     const [w, h] = METER_SIZE;
+    if (!this.floatTargets) return null;  // no float render targets: exposure by hand
     if (!this.meterTarget) {
       const texture = gl.createTexture();
       gl.bindTexture(gl.TEXTURE_2D, texture);
@@ -207,7 +221,7 @@ class Viewer {
   benchmark(n) {
     const gl = this.gl;
     const pixel = new Uint8Array(4);
-    this.frame();
+    this.draw(this.canvas.width, this.canvas.height);
     gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
     const start = performance.now();
     for (let i = 0; i < n; ++i) {
@@ -268,12 +282,15 @@ async function main() {
       try {
         const decoded = await loadTables(viewer, params.toString(), showProgress);
         if (mine !== request) return;
+        const received = performance.now();
         viewer.setTables(decoded);
         viewer.frame();
         viewer.gl.finish();
-        state.last_change_ms = performance.now() - started;
+        const shown = performance.now();
+        viewer.lastChange = {total_ms: shown - started, tables_ms: received - started, draw_ms: shown - received};
         showStatus(`${decoded.header.label}: ${decoded.header.n_wavelengths} wavelengths, ` +
-                   `${decoded.header.orders} orders, image ${state.last_change_ms.toFixed(0)} ms after the change`);
+                   `${decoded.header.orders} orders; image ${(shown - started).toFixed(0)} ms after the change ` +
+                   `(tables ${(received - started).toFixed(0)} ms, upload and draw ${(shown - received).toFixed(0)} ms)`);
         document.body.dataset.tables = quality;
       } catch (error) {
         if (mine !== request) return;
@@ -287,10 +304,19 @@ async function main() {
   };
   window.skyscatter = {viewer, state, reload, benchmark: (n) => viewer.benchmark(n)};
   bindControls(viewer, description, reload);
+  // Frame times: the intervals between animation frames that drew (while the view moves)
+  let previous = null;
   const loop = (time) => {
-    viewer.frame();
-    viewer.frameTimes.push(time);
-    if (viewer.frameTimes.length > 60) viewer.frameTimes.shift();
+    if (viewer.frame()) {
+      if (previous !== null && time - previous < 2000) {
+        viewer.frameTimes.push(time - previous);
+        if (viewer.frameTimes.length > 30) viewer.frameTimes.shift();
+      }
+      previous = time;
+    } else {
+      previous = null;
+    }
+    viewer.pollTimer();
     requestAnimationFrame(loop);
   };
   await reload();
