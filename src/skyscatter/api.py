@@ -17,6 +17,7 @@ The whole sky at a date and place (sun, moon, stars; Earth and Mars presets):
 from __future__ import annotations
 
 import datetime
+import ipaddress
 import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -46,8 +47,10 @@ from skyscatter.render.sky_at_time import (
     Ephemeris,
     Observer,
     SkyObjects,
+    apparent_directions,
     ephemeris,
     render_sky_at,
+    star_field,
 )
 from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
@@ -68,7 +71,7 @@ from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import SolverOptions, make_solver
-from skyscatter.viewer.server import LOOPBACK, ViewerServer, make_server
+from skyscatter.viewer.server import ViewerServer, make_server
 from skyscatter.viewer.table_service import TableService
 
 __all__ = [
@@ -452,6 +455,12 @@ def _check_range(name: str, value: float, low: float, high: float) -> None:
                          value=value, allowed=f"[{low:g}, {high:g}]")
 
 
+# Stars the viewer draws (brighter than V 6.5: about 9100, half of them up at a time) and the
+# wavelength bins of their colour (those of `render`)
+VIEWER_MAGNITUDE_LIMIT = 6.5
+VIEWER_STAR_GRID = wavelength_grid(16)
+
+
 def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0,
                   cache_dir: str | Path | None = None, use_cache: bool = True,
                   log: Callable[[str], None] | None = None) -> ViewerServer:
@@ -463,15 +472,28 @@ def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", por
     cache = TableCache(cache_dir) if use_cache else None
     service = TableService(config, cache, log)
 
-    def sun_at(atmosphere: Atmosphere, time: str, latitude_deg: float,
-               longitude_deg: float) -> tuple[float, float, str]:
+    def sky_at(atmosphere: Atmosphere, time: str, latitude_deg: float,
+               longitude_deg: float) -> dict:
         observer = make_observer(time, latitude_deg, longitude_deg)
-        sun = sky_ephemeris(atmosphere, observer).sun
-        return 90.0 - sun.altitude_deg, sun.azimuth_deg, observer.time_utc.isoformat()
+        sky = sky_ephemeris(atmosphere, observer)
+        directions, irradiance = star_field(sky, VIEWER_MAGNITUDE_LIMIT, VIEWER_STAR_GRID)
+        xyz = spectral_to_xyz(irradiance, VIEWER_STAR_GRID)
+        east, north, up = apparent_directions(sky, sky.sun.direction())
+        return {"sun_zenith_deg": float(np.degrees(np.arccos(np.clip(up, -1.0, 1.0)))),
+                "sun_azimuth_deg": float(np.degrees(np.arctan2(east, north)) % 360.0),
+                "time_utc": observer.time_utc.isoformat(),
+                "stars": {"count": int(directions.shape[0]),
+                          "directions_enu": np.round(directions, 7).reshape(-1).tolist(),
+                          "irradiance_xyz": [float(f"{v:.5g}") for v in xyz.reshape(-1)]}}
 
-    return make_server(service, sun_at, host, port, log)
+    return make_server(service, sky_at, host, port, log)
 
 
 def is_loopback(host: str) -> bool:
-    """True for the loopback names and addresses the viewer binds by default."""
-    return host in LOOPBACK or host.startswith("127.")
+    """True for "localhost" and the loopback addresses (127.0.0.0/8, ::1)."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False

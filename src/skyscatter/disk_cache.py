@@ -11,11 +11,14 @@ so a reader never sees half a file.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import hashlib
 import json
 import os
 import tempfile
 import zipfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -23,14 +26,33 @@ import numpy as np
 
 from skyscatter.errors import InputError
 
-__all__ = ["TableCache", "default_cache_directory"]
+__all__ = ["TableCache", "cache_directory_override", "default_cache_directory"]
 
 _METADATA = "__metadata__"
 _CHECKSUM = "__checksum__"
 
 
+# The cache root of the code running in this thread/context, when a caller fixed it
+# (`cache_directory_override`): the viewer keeps everything, Mie tables included, in its own
+_OVERRIDE: contextvars.ContextVar[Path | None] = contextvars.ContextVar("cache_root",
+                                                                         default=None)
+
+
+@contextlib.contextmanager
+def cache_directory_override(directory: str | Path) -> Iterator[None]:
+    """Within the block (this thread), `default_cache_directory()` is `directory`."""
+    token = _OVERRIDE.set(Path(directory))
+    try:
+        yield
+    finally:
+        _OVERRIDE.reset(token)
+
+
 def default_cache_directory() -> Path:
-    """$SKYSCATTER_CACHE_DIR, else $XDG_CACHE_HOME/skyscatter, else ~/.cache/skyscatter."""
+    """The override of `cache_directory_override`, else $SKYSCATTER_CACHE_DIR, else
+    $XDG_CACHE_HOME/skyscatter, else ~/.cache/skyscatter."""
+    if _OVERRIDE.get() is not None:
+        return _OVERRIDE.get()
     if os.environ.get("SKYSCATTER_CACHE_DIR"):
         return Path(os.environ["SKYSCATTER_CACHE_DIR"])
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"

@@ -13,6 +13,7 @@ from PIL import Image
 
 from skyscatter import api
 from skyscatter.render.scene import render_sky, sun_direction
+from skyscatter.render.sky_at_time import render_sky_at
 from skyscatter.transport import table_parameterisation as tp
 from skyscatter.transport.lut_solver import LutSolver
 
@@ -86,6 +87,29 @@ def test_screenshot_matches_cpu_renderer(name, page, viewer_url, tmp_path):
     assert psnr_db(gpu, cpu) >= MIN_PSNR_DB
     assert cpu.std() > 5.0  # the view shows something: not a flat frame
     assert not page.errors
+
+
+def test_night_stars_match_cpu_renderer(page, viewer_url, tmp_path):
+    """A moonless night over Berlin with the stars brighter than V 6.5 (the page asks /api/sky
+    for them): the same stars, at the same pixels, with the same flux as `render_sky_at`
+    (moon and airglow off there, which the viewer does not draw)."""
+    time, lat, lon, size, ev100 = "2024-01-10T22:00Z", 52.5, 13.4, 256, -6.0
+    service = viewer_url.service
+    atmosphere, profile, tables = service.spectral_tables(
+        service.parse({"atmosphere": "earth", "quality": "preview"}))
+    observer = api.make_observer(time, lat, lon)
+    image = render_sky_at(LutSolver(profile, tables=tables), api.FisheyeCamera(size),
+                          api.viewpoint_at(0.0, profile.bottom_radius_m), atmosphere.planet.star,
+                          api.sky_ephemeris(atmosphere, observer),
+                          api.SkyObjects(moon=False, airglow=False, magnitude_limit=6.5))
+    api.save_image(image, tmp_path / "night.png", ev100=ev100)
+    cpu = np.asarray(Image.open(tmp_path / "night.png").convert("RGB"))
+    gpu = open_view(page, viewer_url, {"projection": "fisheye", "altitude_m": 0, "lat": lat,
+                                       "lon": lon, "time": time}, width=size, height=size,
+                    ev100=ev100, compensation=1)
+    assert page.evaluate("window.skyscatter.viewer.stars.count") > 4000
+    assert np.count_nonzero(cpu.max(axis=-1) > 40) > 100  # stars were drawn
+    assert psnr_db(gpu, cpu) >= MIN_PSNR_DB
 
 
 def test_parameter_change_recomputes_and_matches(page, viewer_url, tmp_path):

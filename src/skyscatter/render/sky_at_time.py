@@ -72,7 +72,7 @@ from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, st
 from skyscatter.spectrum.star import Star
 
 __all__ = ["BODIES", "EclipseOptics", "Ephemeris", "MoonLight", "Observer", "SkyObjects",
-           "ephemeris", "moon_light", "render_sky_at"]
+           "apparent_directions", "ephemeris", "moon_light", "render_sky_at", "star_field"]
 
 BODIES = ("earth", "mars")
 # Mean obliquity of the ecliptic at J2000, 84381.406" (IAU 2006, Hilton et al. 2006, Celest.
@@ -245,7 +245,7 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
                       eclipse=moon.eclipse, irradiance=moon.irradiance)
     if objects.stars:
         _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky, objects,
-                             wavelengths, ground, pressure, temperature)
+                             wavelengths, ground)
     if objects.milky_way:
         add_star_background(spectral, valid, directions, sky.to_horizon, wavelengths,
                             lambda rays: _transmittance(solver, viewpoint, rays, ground),
@@ -337,20 +337,34 @@ def _eclipse(sky: Ephemeris, optics: EclipseOptics | None, wavelengths: np.ndarr
     return eclipse
 
 
-def _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky: Ephemeris,
-                         objects: SkyObjects, wavelengths, ground, pressure, temperature):
-    catalogue = load_star_catalogue(objects.magnitude_limit)
-    local = catalogue.directions_at(sky.observer.time_utc) @ sky.to_horizon.T
-    seen = refract(local, pressure, temperature)
+def apparent_directions(sky: Ephemeris, local_directions: np.ndarray) -> np.ndarray:
+    """True east-north-up directions (..., 3) as seen through the planet's air: refracted with
+    its standard surface air (`astro.earth_sky.refract`), as the sun, moon and stars are drawn."""
+    return refract(local_directions, *_REFRACTION_AIR[sky.body])
+
+
+def star_field(sky: Ephemeris, magnitude_limit: float | None,
+               wavelengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The catalogue's stars above the horizon: refracted unit directions (n, 3) in the
+    observer's east-north-up frame and spectral irradiance above the air (n, n_wl)
+    [W m^-2 nm^-1], for `sky`'s time and place."""
+    catalogue = load_star_catalogue(magnitude_limit)
+    seen = apparent_directions(sky, catalogue.directions_at(sky.observer.time_utc)
+                               @ sky.to_horizon.T)
     up = np.flatnonzero(seen[:, 2] > 0.0)
-    irradiance = _star_irradiance(objects.magnitude_limit, tuple(wavelengths))[up]
-    transmittance = _transmittance(solver, viewpoint, seen[up], ground)
+    return seen[up], _star_irradiance(magnitude_limit, tuple(wavelengths))[up]
+
+
+def _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky: Ephemeris,
+                         objects: SkyObjects, wavelengths, ground):
+    seen, irradiance = star_field(sky, objects.magnitude_limit, wavelengths)
+    transmittance = _transmittance(solver, viewpoint, seen, ground)
     twinkle = None
     if objects.scintillation is not None:
-        airmass = airmass_kasten_young_1989(np.degrees(np.arccos(seen[up, 2])))
+        airmass = airmass_kasten_young_1989(np.degrees(np.arccos(seen[:, 2])))
         twinkle = scintillation_factors(airmass, objects.scintillation,
                                         altitude_m=sky.observer.elevation_m)
-    add_stars(spectral, camera, valid, seen[up], irradiance, transmittance, twinkle)
+    add_stars(spectral, camera, valid, seen, irradiance, transmittance, twinkle)
 
 
 @functools.lru_cache(maxsize=4)

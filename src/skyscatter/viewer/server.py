@@ -12,7 +12,8 @@ Routes (GET and HEAD only; anything else 405):
                         many wait
   /api/progress         the table computation under way
   /api/sky?atmosphere&time&lat&lon
-                        the sun's zenith and azimuth [deg] at that place and time (astro/)
+                        the sun's zenith and azimuth [deg] at that place and time and the
+                        stars above the horizon (directions, XYZ irradiance above the air)
 
 Limits: request lines over MAX_URL bytes get 414, requests with a body 413, more than
 MAX_FIELDS query fields or a repeated field 400. Every error is a JSON {"error": message}
@@ -35,16 +36,16 @@ from skyscatter.atmosphere.model import Atmosphere
 from skyscatter.errors import InputError, SkyscatterError
 from skyscatter.viewer.table_service import BusyError, SupersededError, TableService
 
-__all__ = ["LOOPBACK", "STATIC_DIR", "SunAt", "ViewerServer", "make_server", "serve_forever",
+__all__ = ["STATIC_DIR", "SkyAt", "ViewerServer", "make_server", "serve_forever",
            "static_files"]
 
-# (atmosphere, ISO time, latitude [deg], longitude [deg]) -> (sun zenith, sun azimuth [deg],
-# the time in UTC as ISO text); given by the caller (`api.viewer_server`), which owns the
-# ephemeris; InputError for a bad time or place
-SunAt = Callable[[Atmosphere, str, float, float], tuple[float, float, str]]
+# (atmosphere, ISO time, latitude [deg], longitude [deg]) -> the JSON answer of /api/sky:
+# {sun_zenith_deg, sun_azimuth_deg, time_utc, stars: {count, directions_enu, irradiance_xyz}};
+# given by the caller (`api.viewer_server`), which owns the ephemeris; InputError for a bad
+# time or place
+SkyAt = Callable[[Atmosphere, str, float, float], dict]
 
 STATIC_DIR = Path(__file__).parent / "static"
-LOOPBACK = ("127.0.0.1", "::1", "localhost")
 MAX_URL = 4096  # bytes of the request line
 MAX_FIELDS = 40  # query fields
 _TYPES = {".js": "text/javascript", ".glsl": "text/plain", ".frag": "text/plain",
@@ -67,10 +68,10 @@ class ViewerServer(ThreadingHTTPServer):
 
     daemon_threads = True
 
-    def __init__(self, address: tuple[str, int], service: TableService, sun_at: SunAt,
+    def __init__(self, address: tuple[str, int], service: TableService, sky_at: SkyAt,
                  log: Callable[[str], None] | None = None) -> None:
         self.service = service
-        self.sun_at = sun_at
+        self.sky_at = sky_at
         self.files = static_files()
         self.log = log
         super().__init__(address, Handler)
@@ -82,7 +83,7 @@ class ViewerServer(ThreadingHTTPServer):
         return f"http://{host}:{port}/"
 
 
-def make_server(service: TableService, sun_at: SunAt, host: str = "127.0.0.1", port: int = 0,
+def make_server(service: TableService, sky_at: SkyAt, host: str = "127.0.0.1", port: int = 0,
                 log: Callable[[str], None] | None = None) -> ViewerServer:
     """A ViewerServer bound to (host, port) (port 0: a free one); InputError when the port
     cannot be had."""
@@ -90,7 +91,7 @@ def make_server(service: TableService, sun_at: SunAt, host: str = "127.0.0.1", p
         raise InputError(f"--port {port!r} must be an integer in [0, 65535] (0: any free port)",
                          key="port", value=port)
     try:
-        return ViewerServer((host, port), service, sun_at, log)
+        return ViewerServer((host, port), service, sky_at, log)
     except OSError as error:
         raise InputError(f"cannot listen on {host}:{port}: {error.strerror}; pick another "
                          "--port (or 0 for any free one)", key="port", value=port) from None
@@ -112,6 +113,7 @@ class Handler(BaseHTTPRequestHandler):
     server: ViewerServer
     server_version = "skyscatter-viewer"
     protocol_version = "HTTP/1.1"
+    timeout = 30  # seconds a client may take to send its request (slow clients hold a thread)
 
     def log_message(self, format: str, *args) -> None:  # noqa: A002 (the base class's name)
         if self.server.log is not None:
@@ -125,6 +127,15 @@ class Handler(BaseHTTPRequestHandler):
                         f"request line longer than {MAX_URL} bytes")
             return False
         return super().parse_request()
+
+    def send_error(self, code: int, message: str | None = None,
+                   explain: str | None = None) -> None:
+        """http.server's own errors (malformed request lines, too many headers, unknown
+        methods) as JSON too, and the connection closed."""
+        self.close_connection = True
+        if not getattr(self, "request_version", None) or not getattr(self, "command", None):
+            self.request_version, self.command = "HTTP/1.1", "GET"
+        self._error(code, message or HTTPStatus(code).phrase)
 
     def _send(self, status: int, body: bytes, content_type: str, extra: dict | None = None) -> None:
         self.send_response(status)
@@ -145,6 +156,7 @@ class Handler(BaseHTTPRequestHandler):
         self._json(status, {"error": message})
 
     def _refuse_method(self) -> None:
+        self.close_connection = True  # its body is not read: it must not become a request
         self._send(HTTPStatus.METHOD_NOT_ALLOWED, json.dumps(
             {"error": f"{self.command} is not allowed; the viewer only answers GET"}).encode(),
             "application/json", {"Allow": "GET, HEAD"})
@@ -168,7 +180,8 @@ class Handler(BaseHTTPRequestHandler):
             return
         query = dict(fields)
         if len(query) != len(fields):
-            self._error(HTTPStatus.BAD_REQUEST, "a query parameter is given twice")
+            twice = sorted({key for key, _ in fields if sum(k == key for k, _ in fields) > 1})
+            self._error(HTTPStatus.BAD_REQUEST, f"query parameter {twice[0]!r} is given twice")
             return
         route = parts.path
         try:
@@ -222,5 +235,4 @@ class Handler(BaseHTTPRequestHandler):
         except ValueError:
             raise InputError(f"lat = {query['lat']!r} and lon = {query['lon']!r} must be "
                              "numbers [deg]", key="lat") from None
-        zenith, azimuth, time_utc = self.server.sun_at(atmosphere, query["time"], lat, lon)
-        return {"sun_zenith_deg": zenith, "sun_azimuth_deg": azimuth, "time_utc": time_utc}
+        return self.server.sky_at(atmosphere, query["time"], lat, lon)

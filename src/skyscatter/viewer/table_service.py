@@ -14,13 +14,19 @@ the gas itself: `atmosphere.variants.scaled_constituent`), the ground albedo and
 A newer table request cancels a computation still running for an older one (its progress
 callback raises `SupersededError`), so a user dragging a slider waits for the last value only; at
 most MAX_WAITING requests wait for the lock, more get `BusyError` (HTTP 429). Nothing is written
-except through the table cache (its directory).
+outside the service's cache directory: the full tables go through the table cache, and the Mie
+tables that loading a dusty or hazy atmosphere computes go to its mie/ folder
+(`disk_cache.cache_directory_override`; without a table cache, a temporary directory removed
+with the service).
 """
 
 from __future__ import annotations
 
 import math
+import shutil
+import tempfile
 import threading
+import weakref
 from collections import OrderedDict
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
@@ -29,6 +35,7 @@ from pathlib import Path
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.model import Atmosphere, OpticalProfile, SpectralParameter
 from skyscatter.atmosphere.variants import scaled_constituent
+from skyscatter.disk_cache import cache_directory_override
 from skyscatter.errors import InputError
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.transport.cache import TableCache
@@ -84,12 +91,18 @@ class TableService:
     def __init__(self, config: str | Path | None = None, cache: TableCache | None = None,
                  log: Callable[[str], None] | None = None) -> None:
         self.cache = cache
+        if cache is not None:
+            self.directory = Path(cache.directory)
+        else:
+            self.directory = Path(tempfile.mkdtemp(prefix="skyscatter-viewer-"))
+            weakref.finalize(self, shutil.rmtree, self.directory, True)
         self._log = log or (lambda message: None)
         self._atmospheres: dict[str, Atmosphere] = {}
         self._descriptions = dict(list_presets())
         self.default = "earth"
         if config is not None:
-            atmosphere = load_atmosphere(config)
+            with cache_directory_override(self.directory):
+                atmosphere = load_atmosphere(config)
             name = Path(str(config)).stem if Path(str(config)).suffix else str(config)
             self._atmospheres[name] = atmosphere
             self._descriptions.setdefault(name, atmosphere.description)
@@ -108,7 +121,8 @@ class TableService:
                              f"{', '.join(sorted(self._descriptions))}", key="atmosphere",
                              value=name, allowed=", ".join(sorted(self._descriptions)))
         if name not in self._atmospheres:
-            self._atmospheres[name] = load_atmosphere(name)
+            with cache_directory_override(self.directory):
+                self._atmospheres[name] = load_atmosphere(name)
         return self._atmospheres[name]
 
     def describe(self) -> dict:
@@ -196,7 +210,8 @@ class TableService:
         renderer needs to draw the same picture."""
         atmosphere = self._atmosphere_of(request)
         n_wavelengths, size = QUALITIES[request.quality]
-        profile = atmosphere.optical_profile(wavelength_grid(n_wavelengths))
+        with cache_directory_override(self.directory):
+            profile = atmosphere.optical_profile(wavelength_grid(n_wavelengths))
         resolution = TableResolution() if size == 1.0 else TableResolution().scaled(size)
         cache = self.cache if request.quality == "full" else None
         tables = cached_tables(profile, resolution, atmosphere.scattering_orders, cache=cache,

@@ -110,7 +110,7 @@ function placeSun(state, dir) {
   state.sun_azimuth = (Math.atan2(e, n) / DEG + 360) % 360;
 }
 
-export function bindControls(viewer, description, reload) {
+export function bindControls(viewer, description, reload, sky) {
   const state = viewer.state;
   const panel = document.getElementById("panel");
   panel.hidden = !state.controls;
@@ -168,17 +168,13 @@ export function bindControls(viewer, description, reload) {
   byId("site-lat").value = state.site_lat;
   byId("site-lon").value = state.site_lon;
   const sunFromDate = async () => {
-    const params = new URLSearchParams({atmosphere: state.atmosphere, time: time.value,
-                                        lat: byId("site-lat").value, lon: byId("site-lon").value});
-    const response = await fetch(`api/sky?${params}`);
-    const answer = await response.json();
-    if (!response.ok) { showError(answer.error); return false; }
+    try {
+      await sky(time.value, byId("site-lat").value, byId("site-lon").value);
+    } catch (error) {
+      showError(error.message);
+      return false;
+    }
     showError("");
-    state.site_lat = Number(byId("site-lat").value);
-    state.site_lon = Number(byId("site-lon").value);
-    if (state.mode === "ground") { state.lat = state.site_lat; state.lon = state.site_lon; }
-    state.sun_zenith = answer.sun_zenith_deg;
-    state.sun_azimuth = answer.sun_azimuth_deg;
     showSun();
     return true;
   };

@@ -6,12 +6,17 @@ import {decodeTables, deleteTables, fetchLayout, uploadTables} from "./tables.js
 import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
 import {cameraBasis, localFrame, sunDirection, toWorld} from "./geometry.js";
 
-const SHADERS = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
-                 "shaders/sky.glsl", "shaders/tonemap.glsl", "shaders/main.frag"];
+const LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
+                 "shaders/sky.glsl", "shaders/tonemap.glsl"];
+// Programs: [vertex sources, fragment sources] (files under static/; "" = the full-screen triangle)
+const PROGRAMS = {
+  sky: [[""], [...LIBRARY, "shaders/main.frag"]],
+  stars: [[...LIBRARY.slice(0, 4), "shaders/stars.vert"],
+          ["generated/constants.glsl", "shaders/camera.glsl", "shaders/stars.frag"]],
+  composite: [[""], ["generated/constants.glsl", "shaders/tonemap.glsl", "shaders/composite.frag"]],
+};
 const PREFIX = "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler3D;\n";
-const VERTEX = `#version 300 es
-in vec2 position;
-void main() { gl_Position = vec4(position, 0.0, 1.0); }`;
+const FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n";
 const METER_SIZE = [64, 36];  // the auto-exposure meter renders the view this small
 const DEG = Math.PI / 180;
 
@@ -25,44 +30,74 @@ function compile(gl, type, source) {
   return shader;
 }
 
-async function buildProgram(gl) {
-  const sources = await Promise.all(SHADERS.map(async (name) => (await fetch(`static/${name}`)).text()));
-  const program = gl.createProgram();
-  gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, VERTEX));
-  gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, PREFIX + sources.join("\n")));
-  gl.bindAttribLocation(program, 0, "position");
-  gl.linkProgram(program);
-  if (!gl.getProgramParameter(program, gl.LINK_STATUS)) {
-    throw new Error(`shader does not link: ${gl.getProgramInfoLog(program)}`);
+async function buildPrograms(gl) {
+  const names = new Set(Object.values(PROGRAMS).flat(2).filter((name) => name));
+  const texts = {"": FULL_SCREEN};
+  await Promise.all([...names].map(async (name) => { texts[name] = await (await fetch(`static/${name}`)).text(); }));
+  const programs = {};
+  for (const [key, [vertex, fragment]] of Object.entries(PROGRAMS)) {
+    const program = gl.createProgram();
+    gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, PREFIX + vertex.map((n) => texts[n]).join("\n")));
+    gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, PREFIX + fragment.map((n) => texts[n]).join("\n")));
+    gl.bindAttribLocation(program, 0, key === "stars" ? "a_direction" : "position");
+    if (key === "stars") gl.bindAttribLocation(program, 1, "a_irradiance");
+    gl.linkProgram(program);
+    if (!gl.getProgramParameter(program, gl.LINK_STATUS)) {
+      throw new Error(`shader ${key} does not link: ${gl.getProgramInfoLog(program)}`);
+    }
+    programs[key] = program;
   }
-  return program;
+  return programs;
 }
 
 class Viewer {
-  constructor(canvas, layout, program, state) {
+  constructor(canvas, layout, programs, state) {
     this.canvas = canvas;
     this.gl = canvas.getContext("webgl2");
     this.layout = layout;
-    this.program = program;
+    this.programs = programs;
     this.state = state;
     this.tables = null;
+    this.stars = null;
     this.frameTimes = [];
     this.locations = new Map();
     const gl = this.gl;
-    const buffer = gl.createBuffer();
-    gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+    this.fullScreen = gl.createVertexArray();
+    gl.bindVertexArray(this.fullScreen);
+    gl.bindBuffer(gl.ARRAY_BUFFER, gl.createBuffer());
     gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 3, -1, -1, 3]), gl.STATIC_DRAW);
     gl.enableVertexAttribArray(0);
     gl.vertexAttribPointer(0, 2, gl.FLOAT, false, 0, 0);
+    gl.bindVertexArray(null);
     this.timer = gl.getExtension("EXT_disjoint_timer_query_webgl2");
-    this.floatTargets = gl.getExtension("EXT_color_buffer_float") !== null;  // for the meter
+    // Float render targets: the exposed frame (sky + stars) and the meter; without them the
+    // sky is tone-mapped in one pass and the stars are left out
+    this.floatTargets = gl.getExtension("EXT_color_buffer_float") !== null;
     this.query = null;
     this.gpuMs = null;
   }
 
-  uniform(name) {
-    if (!this.locations.has(name)) this.locations.set(name, this.gl.getUniformLocation(this.program, name));
-    return this.locations.get(name);
+  uniform(program, name) {
+    const key = `${program}:${name}`;
+    if (!this.locations.has(key)) this.locations.set(key, this.gl.getUniformLocation(this.programs[program], name));
+    return this.locations.get(key);
+  }
+
+  // Stars from /api/sky: {count, directions_enu, irradiance_xyz} in the site's frame
+  setStars(stars) {
+    const gl = this.gl;
+    if (this.stars) gl.deleteVertexArray(this.stars.vao);
+    const vao = gl.createVertexArray();
+    gl.bindVertexArray(vao);
+    [[0, stars.directions_enu], [1, stars.irradiance_xyz]].forEach(([index, values]) => {
+      gl.bindBuffer(gl.ARRAY_BUFFER, gl.createBuffer());
+      gl.bufferData(gl.ARRAY_BUFFER, new Float32Array(values), gl.STATIC_DRAW);
+      gl.enableVertexAttribArray(index);
+      gl.vertexAttribPointer(index, 3, gl.FLOAT, false, 0, 0);
+    });
+    gl.bindVertexArray(null);
+    this.stars = {vao, count: stars.count};
+    this.starsVersion = (this.starsVersion || 0) + 1;
   }
 
   setTables(decoded) {
@@ -89,6 +124,7 @@ class Viewer {
       u_camera_basis: [...right, ...up, ...forward],
       u_fisheye_theta_max: s.fisheye_fov * DEG / 2,
       u_local_to_world: [...frame[0], ...frame[1], ...frame[2]],
+      u_site_to_world: [...siteFrame[0], ...siteFrame[1], ...siteFrame[2]],
       u_camera_position: position,
       u_sun_direction: sun,
       u_exposure: Math.pow(2, s.compensation) / (this.layout.exposure.saturation_factor * Math.pow(2, s.ev100)),
@@ -96,14 +132,15 @@ class Viewer {
     };
   }
 
-  setUniforms(values) {
+  setUniforms(program, values) {
     const gl = this.gl;
-    const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows"]);
+    const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows", "u_output"]);
+    const matrices = new Set(["u_camera_basis", "u_local_to_world", "u_site_to_world"]);
     for (const [name, value] of Object.entries(values)) {
-      const location = this.uniform(name);
+      const location = this.uniform(program, name);
       if (location === null) continue;
       if (ints.has(name)) gl.uniform1i(location, value);
-      else if (name === "u_camera_basis" || name === "u_local_to_world") gl.uniformMatrix3fv(location, false, value);
+      else if (matrices.has(name)) gl.uniformMatrix3fv(location, false, value);
       else if (name === "u_scattering_scales") gl.uniform1fv(location, value);
       else if (name === "u_sun_disk") gl.uniform3fv(location, value);
       else if (!Array.isArray(value)) gl.uniform1f(location, value);
@@ -113,25 +150,75 @@ class Viewer {
     }
   }
 
-  bindTextures() {
+  bindTables(program) {
     const gl = this.gl;
     const units = [["u_transmittance", gl.TEXTURE_2D, "transmittance"], ["u_irradiance", gl.TEXTURE_2D, "irradiance"],
                    ["u_scattering", gl.TEXTURE_3D, "scattering"], ["u_phase", gl.TEXTURE_2D, "phase"]];
     units.forEach(([name, target, key], unit) => {
       gl.activeTexture(gl.TEXTURE0 + unit);
       gl.bindTexture(target, this.tables.textures[key]);
-      gl.uniform1i(this.uniform(name), unit);
+      gl.uniform1i(this.uniform(program, name), unit);
     });
+    this.setUniforms(program, this.tables.uniforms);
   }
 
-  // Draws the current state into the canvas (or the bound framebuffer of size w x h)
+  // The sky pass into the bound framebuffer (w x h): output "display", "meter" or "exposed"
+  drawSky(width, height, output) {
+    const gl = this.gl;
+    gl.useProgram(this.programs.sky);
+    gl.viewport(0, 0, width, height);
+    this.bindTables("sky");
+    this.setUniforms("sky", {...this.viewUniforms(width, height), u_output: this.layout.outputs.indexOf(output)});
+    gl.bindVertexArray(this.fullScreen);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+  }
+
+  // A float render target of w x h (RGBA16F: blendable with EXT_color_buffer_float)
+  target(name, width, height, format) {
+    const gl = this.gl;
+    const old = this[name];
+    if (old && old.width === width && old.height === height) return old;
+    if (old) { gl.deleteTexture(old.texture); gl.deleteFramebuffer(old.framebuffer); }
+    const texture = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, texture);
+    gl.texImage2D(gl.TEXTURE_2D, 0, format, width, height, 0, gl.RGBA, gl.FLOAT, null);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    const framebuffer = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, texture, 0);
+    this[name] = {texture, framebuffer, width, height};
+    return this[name];
+  }
+
+  // The whole frame into the canvas: sky and sun (exposed, float), stars added, tone-mapped
   draw(width, height) {
     const gl = this.gl;
-    gl.useProgram(this.program);
+    if (!this.floatTargets) {
+      this.drawSky(width, height, "display");
+      return;
+    }
+    const frame = this.target("frameTarget", width, height, gl.RGBA16F);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, frame.framebuffer);
+    this.drawSky(width, height, "exposed");
+    if (this.stars && this.stars.count) {
+      gl.useProgram(this.programs.stars);
+      this.bindTables("stars");
+      this.setUniforms("stars", this.viewUniforms(width, height));
+      gl.enable(gl.BLEND);
+      gl.blendFunc(gl.ONE, gl.ONE);
+      gl.bindVertexArray(this.stars.vao);
+      gl.drawArrays(gl.POINTS, 0, this.stars.count);
+      gl.disable(gl.BLEND);
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.useProgram(this.programs.composite);
     gl.viewport(0, 0, width, height);
-    this.bindTextures();
-    this.setUniforms(this.tables.uniforms);
-    this.setUniforms(this.viewUniforms(width, height));
+    gl.activeTexture(gl.TEXTURE0);
+    gl.bindTexture(gl.TEXTURE_2D, frame.texture);
+    gl.uniform1i(this.uniform("composite", "u_frame"), 0);
+    gl.uniform1i(this.uniform("composite", "u_operator"), this.layout.operators.indexOf(this.state.operator));
+    gl.bindVertexArray(this.fullScreen);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
 
@@ -149,7 +236,8 @@ class Viewer {
   frame() {
     if (!this.tables) return false;
     this.resize();
-    const signature = JSON.stringify([this.state, this.tablesVersion, this.canvas.width, this.canvas.height]);
+    const signature = JSON.stringify([this.state, this.tablesVersion, this.starsVersion,
+                                      this.canvas.width, this.canvas.height]);
     if (signature === this.drawn) return false;
     this.drawn = signature;
     const gl = this.gl;
@@ -188,24 +276,13 @@ class Viewer {
     }
     const [w, h] = METER_SIZE;
     if (!this.floatTargets) return null;  // no float render targets: exposure by hand
-    if (!this.meterTarget) {
-      const texture = gl.createTexture();
-      gl.bindTexture(gl.TEXTURE_2D, texture);
-      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, w, h, 0, gl.RGBA, gl.FLOAT, null);
-      const framebuffer = gl.createFramebuffer();
-      gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
-      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, texture, 0);
-      this.meterTarget = {texture, framebuffer, pixels: new Float32Array(w * h * 4)};
-    }
-    gl.bindFramebuffer(gl.FRAMEBUFFER, this.meterTarget.framebuffer);
-    gl.useProgram(this.program);
-    gl.uniform1i(this.uniform("u_output"), 1);
-    this.draw(w, h);
-    gl.uniform1i(this.uniform("u_output"), 0);
-    gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, this.meterTarget.pixels);
+    const meter = this.target("meterTarget", w, h, gl.RGBA32F);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, meter.framebuffer);
+    this.drawSky(w, h, "meter");
+    const p = new Float32Array(w * h * 4);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, p);
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
     let sum = 0, count = 0, litSum = 0, litCount = 0;
-    const p = this.meterTarget.pixels;
     for (let i = 0; i < w * h; ++i) {
       const luminance = p[4 * i];
       if (!(luminance > 0)) continue;
@@ -258,6 +335,24 @@ async function loadTables(viewer, query, onProgress) {
   }
 }
 
+// The sun and the stars for a time and place from the server's ephemeris; the site moves
+// there (and a ground camera with it). Throws with the server's message for a bad input.
+async function applySky(viewer, time, lat, lon) {
+  const state = viewer.state;
+  const params = new URLSearchParams({atmosphere: state.atmosphere, time, lat, lon});
+  const response = await fetch(`api/sky?${params}`);
+  const answer = await response.json();
+  if (!response.ok) throw new Error(answer.error);
+  state.site_lat = Number(lat);
+  state.site_lon = Number(lon);
+  if (state.mode === "ground") { state.lat = state.site_lat; state.lon = state.site_lon; }
+  state.sun_zenith = answer.sun_zenith_deg;
+  state.sun_azimuth = answer.sun_azimuth_deg;
+  state.time = time;
+  viewer.setStars(answer.stars);
+  return answer;
+}
+
 async function main() {
   const canvas = document.getElementById("sky");
   const gl = canvas.getContext("webgl2", {antialias: false, alpha: false, preserveDrawingBuffer: true});
@@ -265,10 +360,10 @@ async function main() {
     showError("This browser has no WebGL2; the viewer needs it (any current Chrome, Firefox, Safari or Edge).");
     return;
   }
-  const [layout, program, description] = await Promise.all([
-    fetchLayout(), buildProgram(gl), fetch("api/atmospheres").then((r) => r.json())]);
+  const [layout, programs, description] = await Promise.all([
+    fetchLayout(), buildPrograms(gl), fetch("api/atmospheres").then((r) => r.json())]);
   const state = readUrlState(description);
-  const viewer = new Viewer(canvas, layout, program, state);
+  const viewer = new Viewer(canvas, layout, programs, state);
   let request = 0;
   const reload = async () => {
     const mine = ++request;
@@ -302,8 +397,9 @@ async function main() {
       }
     }
   };
-  window.skyscatter = {viewer, state, reload, benchmark: (n) => viewer.benchmark(n)};
-  bindControls(viewer, description, reload);
+  const sky = (time, lat, lon) => applySky(viewer, time, lat, lon);
+  window.skyscatter = {viewer, state, reload, sky, benchmark: (n) => viewer.benchmark(n)};
+  bindControls(viewer, description, reload, sky);
   // Frame times: the intervals between animation frames that drew (while the view moves)
   let previous = null;
   const loop = (time) => {
@@ -320,6 +416,10 @@ async function main() {
     requestAnimationFrame(loop);
   };
   await reload();
+  if (state.time) {
+    try { await sky(state.time, state.site_lat, state.site_lon); } catch (error) { showError(error.message); }
+    viewer.frame();
+  }
   document.body.dataset.ready = "1";
   requestAnimationFrame(loop);
 }

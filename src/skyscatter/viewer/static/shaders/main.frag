@@ -5,7 +5,7 @@ uniform vec3 u_camera_position;  // planet-centred [m]
 uniform vec3 u_sun_direction;    // world, unit
 uniform float u_exposure;        // exposure_scale(EV100, compensation)
 uniform int u_operator;
-uniform int u_output;            // 0: display colour; 1: (luminance [cd m^-2], looks up?) for the meter
+uniform int u_output;            // OUTPUT_DISPLAY, OUTPUT_METER or OUTPUT_EXPOSED
 uniform vec3 u_sun_disk[SUN_DISK_SAMPLES];  // XYZ disk radiance at cos(limb) = 0 .. 1
 uniform float u_sun_solid_angle; // [sr]
 
@@ -44,7 +44,7 @@ vec3 sun_disk(vec2 frag, vec3 dir, vec3 sun_local, vec3 transmittance) {
 
 void main() {
     vec4 local = camera_direction(gl_FragCoord.xy);
-    if (local.w == 0.0) {
+    if (local.w == 0.0) {  // outside the fisheye circle; alpha 0 marks it for the composite
         frag_colour = vec4(0.0);
         return;
     }
@@ -55,8 +55,12 @@ void main() {
         vec3 sun_local = transpose(u_local_to_world) * u_sun_direction;
         radiance += sun_disk(gl_FragCoord.xy, local.xyz, sun_local, transmittance);
     }
-    if (u_output == 1) {
+    if (u_output == OUTPUT_METER) {  // luminance [cd m^-2] and whether the pixel looks up
         frag_colour = vec4(radiance.y, local.z > 0.0 ? 1.0 : 0.0, 0.0, 1.0);
+        return;
+    }
+    if (u_output == OUTPUT_EXPOSED) {  // exposed linear sRGB into the float frame (+ stars)
+        frag_colour = vec4(clamp(XYZ_TO_SRGB * radiance * u_exposure, -HALF_MAX, HALF_MAX), 1.0);
         return;
     }
     vec3 display = tonemap(XYZ_TO_SRGB * radiance, u_operator, u_exposure);

@@ -1,0 +1,577 @@
+"""The viewer's web server as a contract: what `skyscatter.viewer.server`'s docstring and HTTP
+promise about binding, static files, bad parameters, methods, sizes, concurrent table requests,
+writes and the sun's position.
+
+Each test starts its own server on a free loopback port (`server` fixture) and talks to it with
+http.client, or with a raw socket where the exact request line matters (http.client would send
+what it is given too, but a socket leaves no doubt). No test asks for the real full-quality
+tables (about 45 s): the table tests use `quality=preview`, a cheap QUALITIES table, or a
+monkeypatched `TableService.spectral_tables`.
+"""
+
+from __future__ import annotations
+
+import http.client
+import json
+import math
+import os
+import re
+import socket
+import threading
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from skyscatter import api
+from skyscatter.cli import main
+from skyscatter.errors import InputError
+from skyscatter.viewer import server as server_module
+from skyscatter.viewer import table_service
+from skyscatter.viewer.server import MAX_FIELDS, MAX_URL, STATIC_DIR, make_server, static_files
+from skyscatter.viewer.table_service import TableService
+
+PACKAGE_DIR = Path(server_module.__file__).resolve().parents[1]  # src/skyscatter
+SERVER_SOURCE = Path(server_module.__file__).read_bytes()
+# text that only server.py holds, and text of every /etc/passwd
+LEAK_MARKERS = [b"BaseHTTPRequestHandler", b"def _refuse_method", b"root:x:0:0", b"/bin/sh"]
+BERLIN_NOON = "/api/sky?time=2024-06-21T12:00Z&lat=52.52&lon=13.40"
+
+
+@pytest.fixture
+def server(tmp_path):
+    """A running viewer server for `earth`, its table cache in tmp_path/cache."""
+    viewer = api.viewer_server("earth", cache_dir=tmp_path / "cache")
+    thread = threading.Thread(target=viewer.serve_forever, kwargs={"poll_interval": 0.02},
+                              daemon=True)  # shutdown() waits up to one poll interval
+    thread.start()
+    yield viewer
+    viewer.shutdown()
+    viewer.server_close()
+    thread.join(timeout=10)
+
+
+def request(server, path: str, method: str = "GET", body: bytes | None = None,
+            headers: dict | None = None, timeout: float = 60.0):
+    """(status, headers, body) of one request through http.client."""
+    connection = http.client.HTTPConnection("127.0.0.1", server.server_address[1],
+                                            timeout=timeout)
+    try:
+        connection.request(method, path, body=body, headers=headers or {})
+        response = connection.getresponse()
+        return response.status, response.headers, response.read()
+    finally:
+        connection.close()
+
+
+def raw_exchange(server, data: bytes, timeout: float = 20.0) -> bytes:
+    """Everything the server sends back for the raw bytes `data`, until it closes."""
+    chunks = []
+    with socket.create_connection(("127.0.0.1", server.server_address[1]),
+                                  timeout=timeout) as sock:
+        sock.sendall(data)
+        try:
+            while chunk := sock.recv(65536):
+                chunks.append(chunk)
+        except ConnectionResetError:  # closed with our unread bytes still queued
+            pass
+    return b"".join(chunks)
+
+
+def raw_get(server, target: str | bytes, method: bytes = b"GET") -> bytes:
+    """The raw answer to `METHOD target HTTP/1.1`, the target sent byte for byte."""
+    target = target.encode() if isinstance(target, str) else target
+    return raw_exchange(server, method + b" " + target +
+                        b" HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n")
+
+
+def parse_response(data: bytes) -> tuple[int, dict[str, str], bytes]:
+    """(status, headers with lower-case names, body) of the first response in `data`."""
+    head, _, rest = data.partition(b"\r\n\r\n")
+    lines = head.decode("latin-1").split("\r\n")
+    match = re.fullmatch(r"HTTP/1\.[01] (\d{3})( .*)?", lines[0])
+    assert match, f"no HTTP status line: {data[:200]!r}"
+    headers = {}
+    for line in lines[1:]:
+        name, _, value = line.partition(":")
+        headers[name.strip().lower()] = value.strip()
+    return int(match.group(1)), headers, rest[:int(headers.get("content-length", len(rest)))]
+
+
+def count_responses(data: bytes) -> int:
+    return len(re.findall(rb"(?:^|\r\n\r\n|})HTTP/1\.[01] \d{3} ", data))
+
+
+def json_error(status_headers_body) -> str:
+    """The message of a JSON error answer, checking that it is one."""
+    _, headers, body = status_headers_body
+    assert headers["content-type"].startswith("application/json")
+    value = json.loads(body)
+    assert set(value) == {"error"} and isinstance(value["error"], str) and value["error"]
+    return value["error"]
+
+
+def wait_for(condition, seconds: float = 20.0) -> None:
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, "timed out waiting"
+        time.sleep(0.01)
+
+
+def snapshot(directory: Path, skip: str | None = None) -> dict[str, tuple[int, int]]:
+    """relative path -> (size, mtime_ns) of every file under `directory` ({} if missing)."""
+    if not directory.exists():
+        return {}
+    return {path.relative_to(directory).as_posix(): (path.stat().st_size,
+                                                     path.stat().st_mtime_ns)
+            for path in directory.rglob("*")
+            if path.is_file() and not (skip and skip in path.parts)}
+
+
+# 1. Binding ------------------------------------------------------------------------------------
+
+def test_binds_loopback_on_a_free_port_by_default():
+    viewer = api.viewer_server()
+    try:
+        host, port = viewer.server_address[:2]
+        assert host == "127.0.0.1"
+        assert 0 < port <= 65535
+        assert viewer.url == f"http://127.0.0.1:{port}/"
+    finally:
+        viewer.server_close()
+    viewer = make_server(TableService(), lambda *args: (0.0, 0.0, ""))
+    try:
+        assert viewer.server_address[0] == "127.0.0.1" and viewer.server_address[1] > 0
+    finally:
+        viewer.server_close()
+
+
+def test_port_in_use_is_an_input_error_naming_the_port():
+    with socket.socket() as blocker:
+        blocker.bind(("127.0.0.1", 0))
+        blocker.listen()
+        port = blocker.getsockname()[1]
+        with pytest.raises(InputError, match=str(port)) as caught:
+            api.viewer_server(port=port)
+        assert caught.value.key == "port"
+
+
+@pytest.mark.parametrize("port", [-1, 65536, 70000, "8080", 1.5])
+def test_bad_port_is_an_input_error_naming_the_port(port):
+    with pytest.raises(InputError, match=re.escape(repr(port))) as caught:
+        make_server(TableService(), lambda *args: (0.0, 0.0, ""), port=port)
+    assert caught.value.key == "port"
+    assert "port" in str(caught.value)
+
+
+@pytest.fixture
+def fake_serve_forever(monkeypatch):
+    """`serve_forever` returning at once (it closes the server, as the real one does)."""
+    calls = []
+
+    def serve_forever(server, open_browser):
+        calls.append((server.server_address[:2], open_browser))
+        server.server_close()
+
+    monkeypatch.setattr(server_module, "serve_forever", serve_forever)
+    return calls
+
+
+def test_cli_view_off_loopback_warns(fake_serve_forever, capsys, tmp_path):
+    code = main(["view", "--host", "0.0.0.0", "--no-browser", "--cache-dir", str(tmp_path)])
+    out, err = capsys.readouterr()
+    assert code == 0
+    [((host, port), open_browser)] = fake_serve_forever
+    assert (host, open_browser) == ("0.0.0.0", False) and port > 0
+    assert f"skyscatter viewer: http://0.0.0.0:{port}/" in out
+    assert "warning" in err and "0.0.0.0" in err and "anyone" in err
+
+
+def test_cli_view_on_loopback_does_not_warn(fake_serve_forever, capsys, tmp_path):
+    code = main(["view", "--no-browser", "--cache-dir", str(tmp_path)])
+    out, err = capsys.readouterr()
+    assert code == 0
+    [((host, port), open_browser)] = fake_serve_forever
+    assert (host, open_browser) == ("127.0.0.1", False) and port > 0
+    assert re.search(rf"^skyscatter viewer: http://127\.0\.0\.1:{port}/ ", out, re.M)
+    assert "warning" not in err
+
+
+def test_cli_view_bad_port_exits_2_naming_it(fake_serve_forever, capsys):
+    code = main(["view", "--no-browser", "--port", "70000"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "70000" in err and "Traceback" not in err
+    assert not fake_serve_forever
+
+
+@pytest.mark.parametrize("host", ["127.0.0.1", "127.0.0.2", "::1", "localhost"])
+def test_is_loopback(host):
+    assert api.is_loopback(host)
+
+
+@pytest.mark.parametrize("host", ["0.0.0.0", "::", "", "192.168.1.2", "example.org"])
+def test_is_not_loopback(host):
+    assert not api.is_loopback(host)
+
+
+# 2. Static files -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize(("path", "file", "content_type"), [
+    ("/", "index.html", "text/html"),
+    ("/static/viewer.js", "viewer.js", "text/javascript"),
+    ("/static/shaders/sky.glsl", "shaders/sky.glsl", "text/plain"),
+    ("/static/generated/lut_layout.json", "generated/lut_layout.json", "application/json"),
+])
+def test_static_files_are_served(server, path, file, content_type):
+    status, headers, body = request(server, path)
+    assert status == 200
+    assert headers["Content-Type"].split(";")[0].strip() == content_type
+    assert body == (STATIC_DIR / file).read_bytes()
+    assert headers["X-Content-Type-Options"] == "nosniff"
+    if path.endswith(".json"):
+        json.loads(body)
+
+
+def test_head_sends_headers_without_body(server):
+    answer = raw_get(server, "/static/viewer.js", method=b"HEAD")
+    status, headers, body = parse_response(answer)
+    assert status == 200
+    assert int(headers["content-length"]) == len((STATIC_DIR / "viewer.js").read_bytes())
+    assert body == b""
+
+
+TRAVERSALS = [
+    "/static/../server.py", "/static/..%2fserver.py", "/static/%2e%2e/server.py",
+    "/static/%2e%2e%2fserver.py", "/static/.%2e/server.py", "/static/..%5cserver.py",
+    "/static/..\\server.py", "/static//etc/passwd", "/static/../../../../etc/passwd",
+    "/static/%2e%2e/%2e%2e/%2e%2e/%2e%2e/etc/passwd", "/static/shaders/../../server.py",
+    "/static/viewer.js/../../server.py", "/static/./../server.py",
+    "/static/" + str(Path(server_module.__file__).resolve()), "/static/" + "/etc/passwd",
+    "/etc/passwd", "//etc/passwd", "/../server.py", "/static/", "/static/shaders",
+    "http://127.0.0.1/static/../server.py", "http://127.0.0.1/etc/passwd",
+    "/static/%00../server.py", "/static/shaders%2f..%2f..%2fserver.py",
+]
+
+
+@pytest.mark.parametrize("target", TRAVERSALS)
+def test_path_traversal_is_404_and_leaks_nothing(server, target):
+    answer = raw_get(server, target)
+    status, _, body = parse_response(answer)
+    assert status == 404
+    json_error(parse_response(answer))
+    for marker in LEAK_MARKERS:
+        assert marker not in answer
+    assert SERVER_SOURCE[:200] not in answer
+
+
+def test_static_files_skips_symlinks(tmp_path):
+    root = tmp_path / "static"
+    (root / "sub").mkdir(parents=True)
+    (root / "page.js").write_text("page")
+    (root / "sub" / "nested.glsl").write_text("nested")
+    outside = tmp_path / "secret"
+    outside.mkdir()
+    (outside / "key.txt").write_text("secret")
+    (root / "link.txt").symlink_to(outside / "key.txt")
+    (root / "linkdir").symlink_to(outside, target_is_directory=True)
+    (root / "dangling").symlink_to(tmp_path / "nothing")
+    files = static_files(root)
+    assert set(files) == {"page.js", "sub/nested.glsl"}
+    assert all(path.resolve().is_relative_to(root.resolve()) for path in files.values())
+
+
+def test_served_files_are_the_static_directory_only(server):
+    assert set(server.files) == set(static_files(STATIC_DIR))
+    assert all(path.resolve().is_relative_to(STATIC_DIR.resolve())
+               for path in server.files.values())
+
+
+# 3. Bad parameters -----------------------------------------------------------------------------
+
+TOO_MANY = "&".join(f"amount_air={i}" if i == 0 else f"field{i}=1" for i in range(MAX_FIELDS + 1))
+BAD_TABLE_QUERIES = [
+    ("albedo=3", "albedo"), ("albedo=nan", "albedo"), ("albedo=abc", "albedo"),
+    ("albedo=inf", "albedo"), ("albedo=", "albedo"),
+    ("atmosphere=nonexistent", "atmosphere"), ("quality=ultra", "quality"),
+    ("amount_air=-1", "amount_air"), ("amount_air=21", "amount_air"),
+    ("amount_nosuch=1", "amount_nosuch"), ("bogus=1", "bogus"),
+    (TOO_MANY, str(MAX_FIELDS)),
+]
+
+
+@pytest.mark.parametrize(("query", "named"), BAD_TABLE_QUERIES,
+                         ids=[q[:30] for q, _ in BAD_TABLE_QUERIES])
+def test_bad_table_parameter_is_400_naming_it(server, query, named):
+    answer = request(server, f"/api/tables?{query}")
+    assert answer[0] == 400
+    assert named in json_error(answer)
+
+
+def test_repeated_parameter_is_400(server):
+    answer = request(server, "/api/tables?albedo=0.1&albedo=0.2")
+    assert answer[0] == 400
+    assert "twice" in json_error(answer)
+
+
+def test_repeated_parameter_message_names_it(server):
+    assert "albedo" in json_error(request(server, "/api/tables?albedo=0.1&albedo=0.2"))
+
+
+BAD_SKY_QUERIES = [
+    ("lat=52.5&lon=13.4", "time"),
+    ("time=2024-06-21T12:00&lat=52.5&lon=13.4", "time zone"),
+    ("time=2024-06-21T12:00Z&lat=95&lon=13.4", "latitude"),
+    ("time=2024-06-21T12:00Z&lat=nan&lon=13.4", "latitude"),
+    ("time=2024-06-21T12:00Z&lat=52.5&lon=inf", "longitude"),
+    ("time=2024-06-21T12:00Z&lat=north&lon=13.4", "lat"),
+    ("time=yesterday&lat=52.5&lon=13.4", "time"),
+    ("time=2024-06-21T12:00Z&lat=52.5&lon=13.4&zoom=2", "zoom"),
+    ("time=2024-06-21T12:00Z&lat=52.5&lon=13.4&atmosphere=nonexistent", "atmosphere"),
+    ("time=2024-06-21T12:00Z&lat=52.5&lon=13.4&atmosphere=exo-hazy", "ephemeris"),
+]
+
+
+@pytest.mark.parametrize(("query", "named"), BAD_SKY_QUERIES,
+                         ids=[n for _, n in BAD_SKY_QUERIES])
+def test_bad_sky_parameter_is_400_with_a_message(server, query, named):
+    answer = request(server, f"/api/sky?{query}")
+    assert answer[0] == 400
+    assert named in json_error(answer)
+
+
+def test_server_keeps_running_after_bad_requests(server):
+    """Bad requests on one kept-alive connection, then the atmospheres on a new one."""
+    connection = http.client.HTTPConnection("127.0.0.1", server.server_address[1], timeout=60)
+    try:
+        for query, _ in BAD_TABLE_QUERIES:
+            connection.request("GET", f"/api/tables?{query}")
+            response = connection.getresponse()
+            response.read()
+            assert response.status == 400
+        for query, _ in BAD_SKY_QUERIES:
+            connection.request("GET", f"/api/sky?{query}")
+            response = connection.getresponse()
+            response.read()
+            assert response.status == 400
+    finally:
+        connection.close()
+    raw_exchange(server, b"GET / HTTP/1.1 extra\r\nHost: x\r\n\r\n")  # malformed request line
+    raw_exchange(server, b"\x16\x03\x01\x00\xa5\x01\x00\x00\xa1\x03\x03" + bytes(200)
+                 + b"\r\n\r\n")  # a TLS hello
+    status, _, body = request(server, "/api/atmospheres")
+    assert status == 200
+    described = json.loads(body)
+    assert described["default"] == "earth"
+    assert "earth" in {entry["name"] for entry in described["atmospheres"]}
+
+
+# 4. Methods and sizes --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("method", ["POST", "PUT", "DELETE", "PATCH", "OPTIONS"])
+@pytest.mark.parametrize("path", ["/", "/api/tables"])
+def test_other_methods_are_405_with_allow(server, method, path):
+    answer = request(server, path, method=method)
+    assert answer[0] == 405
+    assert {value.strip() for value in answer[1]["Allow"].split(",")} == {"GET", "HEAD"}
+    assert method in json_error(answer)
+
+
+def test_get_with_a_body_is_413(server):
+    answer = request(server, "/api/atmospheres", body=b"0123456789",
+                     headers={"Content-Length": "10"})
+    assert answer[0] == 413
+    json_error(answer)
+
+
+def test_get_with_a_chunked_body_is_413(server):
+    status, headers, _ = parse_response(raw_exchange(
+        server, b"GET / HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n0\r\n\r\n"))
+    assert status == 413
+
+
+SMUGGLED = b"GET /smuggled HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+AFTER = b"GET /after HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+
+
+def test_body_of_a_refused_get_is_not_read_as_a_request(server):
+    answer = raw_exchange(server, b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: %d\r\n\r\n"
+                          % len(SMUGGLED) + SMUGGLED + AFTER)
+    assert parse_response(answer)[0] == 413
+    assert b"/smuggled" not in answer and count_responses(answer) == 1
+
+
+def test_body_of_a_refused_post_is_not_read_as_a_request(server):
+    answer = raw_exchange(server, b"POST /api/tables HTTP/1.1\r\nHost: x\r\nContent-Length: %d"
+                          b"\r\n\r\n" % len(SMUGGLED) + SMUGGLED + AFTER)
+    assert parse_response(answer)[0] == 405
+    assert b"/smuggled" not in answer
+
+
+def test_request_line_over_the_limit_is_414(server):
+    target = "/api/tables?albedo=0.5&" + "x" * MAX_URL
+    answer = raw_get(server, target)
+    assert parse_response(answer)[0] == 414
+    assert str(MAX_URL) in json_error(parse_response(answer))
+    assert parse_response(raw_get(server, "/nosuch?" + "x" * (MAX_URL - 100)))[0] == 404
+
+
+@pytest.mark.parametrize("path", ["/nosuch", "/api", "/api/tables/", "/API/atmospheres",
+                                  "/index.htm", "*"])
+def test_unknown_path_is_404_json(server, path):
+    answer = parse_response(raw_get(server, path))
+    assert answer[0] == 404
+    json_error(answer)
+
+
+STDLIB_ERRORS = {
+    "request line over 64 KiB (414)": (b"GET /" + b"a" * 70000 + b" HTTP/1.1\r\nHost: x\r\n\r\n",
+                                       414),
+    "over 100 headers (431)": (b"GET / HTTP/1.1\r\n" + b"".join(b"X-%d: 1\r\n" % i
+                                                               for i in range(120)) + b"\r\n",
+                               431),
+    "TRACE (501)": (b"TRACE / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n", 501),
+    "malformed request line (400)": (b"GET / HTTP/1.1 extra\r\nHost: x\r\n\r\n", 400),
+}
+
+
+@pytest.mark.parametrize("case", list(STDLIB_ERRORS))
+def test_every_error_is_json(server, case):
+    data, status = STDLIB_ERRORS[case]
+    answer = parse_response(raw_exchange(server, data))
+    assert answer[0] == status
+    json_error(answer)
+
+
+# 5. Concurrency --------------------------------------------------------------------------------
+
+@pytest.fixture
+def blocked_tables(monkeypatch):
+    """Table computations that wait for `release` (then report progress, as the real one does,
+    and give the label as the message); `started` lists the requests computed."""
+    release = threading.Event()
+    started = []
+
+    def spectral_tables(self, request, progress=None):
+        started.append(request)
+        assert release.wait(30)
+        progress(1, 1, "test")
+        return self.atmosphere(request.atmosphere), None, SimpleNamespace(scattering_names=())
+
+    monkeypatch.setattr(TableService, "spectral_tables", spectral_tables)
+    monkeypatch.setattr(table_service, "gpu_tables", lambda tables, profile, star, label: label)
+    monkeypatch.setattr(table_service, "encode", lambda label: label.encode())
+    yield SimpleNamespace(release=release, started=started)
+    release.set()
+
+
+def fetch_in_thread(server, path: str) -> tuple[threading.Thread, list]:
+    result = []
+    thread = threading.Thread(target=lambda: result.append(request(server, path, timeout=30)),
+                              daemon=True)
+    thread.start()
+    return thread, result
+
+
+def test_newer_table_request_supersedes_the_running_one(server, blocked_tables):
+    first, first_result = fetch_in_thread(server, "/api/tables?albedo=0.1")
+    wait_for(lambda: len(blocked_tables.started) == 1)
+    status, _, body = request(server, "/api/progress")  # answered while it computes
+    assert status == 200 and json.loads(body)["busy"] is True
+    second, second_result = fetch_in_thread(server, "/api/tables?albedo=0.2")
+    wait_for(lambda: server.service._waiting == 2)
+    blocked_tables.release.set()
+    first.join(30)
+    second.join(30)
+    assert first_result[0][0] == 409
+    assert "newer" in json_error(first_result[0])
+    assert second_result[0][0] == 200
+    assert second_result[0][2] == b"earth (preview)"
+    assert [r.albedo for r in blocked_tables.started] == [0.1, 0.2]
+    assert json.loads(request(server, "/api/progress")[2])["busy"] is False
+
+
+def test_too_many_waiting_table_requests_get_429(server, blocked_tables):
+    threads = []
+    for i in range(1 + table_service.MAX_WAITING):  # one computing, MAX_WAITING waiting
+        threads.append(fetch_in_thread(server, f"/api/tables?albedo=0.{i + 1}"))
+        wait_for(lambda n=i + 1: server.service._waiting == n)
+    wait_for(lambda: len(blocked_tables.started) == 1)
+    extra = request(server, "/api/tables?albedo=0.9", timeout=10)
+    assert extra[0] == 429
+    assert int(extra[1]["Retry-After"]) >= 1
+    json_error(extra)
+    blocked_tables.release.set()
+    for thread, _ in threads:
+        thread.join(30)
+    statuses = [result[0][0] for _, result in threads]
+    assert statuses == [409] * table_service.MAX_WAITING + [200]
+    assert len(blocked_tables.started) == 1 + 1  # the first, then the newest only
+    assert server.service._waiting == 0
+    assert request(server, "/api/tables?albedo=0.9")[0] == 200  # no longer busy
+
+
+# 6. Writes -------------------------------------------------------------------------------------
+
+def test_preview_tables_write_nothing(server, tmp_path, monkeypatch):
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
+    cache = tmp_path / "cache"
+    default_cache = Path(os.environ["SKYSCATTER_CACHE_DIR"])
+    places = [cache, cwd, default_cache]
+    before = [snapshot(place) for place in places]
+    package_before = set(snapshot(PACKAGE_DIR, skip="__pycache__"))
+    status, headers, body = request(server, "/api/tables?atmosphere=earth&quality=preview")
+    assert status == 200
+    assert headers["Content-Type"] == "application/octet-stream"
+    assert body[:4] == b"SKYT"
+    assert [snapshot(place) for place in places] == before
+    assert set(snapshot(PACKAGE_DIR, skip="__pycache__")) == package_before
+    assert request(server, "/api/tables?quality=preview")[2] == body  # kept in memory
+
+
+def test_full_tables_write_only_into_the_cache_dir(server, tmp_path, monkeypatch):
+    monkeypatch.setattr(table_service, "QUALITIES", {"preview": (4, 0.25), "full": (4, 0.3)})
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
+    cache = tmp_path / "cache"
+    default_cache = Path(os.environ["SKYSCATTER_CACHE_DIR"])
+    before = [snapshot(place) for place in (cwd, default_cache)]
+    package_before = set(snapshot(PACKAGE_DIR, skip="__pycache__"))
+    status, _, body = request(server, "/api/tables?quality=full")
+    assert status == 200 and body[:4] == b"SKYT"
+    written = snapshot(cache)
+    assert written and all(re.fullmatch(r"[\w-]+\.npz", name) for name in written), written
+    assert [snapshot(place) for place in (cwd, default_cache)] == before
+    assert set(snapshot(PACKAGE_DIR, skip="__pycache__")) == package_before
+
+
+def test_loading_an_atmosphere_writes_only_into_the_cache_dir(server, tmp_path, monkeypatch):
+    default_cache = tmp_path / "default-cache"  # fresh: nothing cached there yet
+    monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(default_cache))
+    answer = request(server, "/api/sky?time=2024-06-21T12:00Z&lat=0&lon=0&atmosphere=exo-hazy")
+    assert answer[0] == 400  # no ephemeris, but the atmosphere was loaded
+    assert snapshot(default_cache) == {}
+
+
+# 7. The sun ------------------------------------------------------------------------------------
+
+def test_sun_position_agrees_with_pyephem(server):
+    ephem = pytest.importorskip("ephem")
+    status, _, body = request(server, BERLIN_NOON)
+    assert status == 200
+    sky = json.loads(body)
+    assert sky["time_utc"] == "2024-06-21T12:00:00+00:00"
+    observer = ephem.Observer()
+    observer.lat, observer.lon = "52.52", "13.40"
+    observer.elevation = 0.0
+    # the viewer's sun is the apparent one, refracted by standard air (1010 hPa, 10 C, as
+    # render.sky_at_time draws it); PyEphem refracts with the same air. 0.005 deg: the two
+    # refraction formulas differ by less than 1e-3 deg at 59 deg altitude
+    observer.pressure, observer.temp = 1010.0, 10.0
+    observer.date = "2024/6/21 12:00:00"
+    sun = ephem.Sun(observer)
+    assert abs(sky["sun_zenith_deg"] - (90.0 - math.degrees(sun.alt))) < 0.005
+    assert abs(sky["sun_azimuth_deg"] - math.degrees(sun.az)) < 0.05
