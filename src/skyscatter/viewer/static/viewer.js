@@ -236,7 +236,10 @@ class Viewer {
   frame() {
     if (!this.tables) return false;
     this.resize();
-    const signature = JSON.stringify([this.state, this.tablesVersion, this.starsVersion,
+    // what the picture depends on: the view, not the physical parameters (those act through
+    // new tables, so a slider does not redraw the old ones while the server computes)
+    const {amounts, albedo, atmosphere, quality, ...view} = this.state;
+    const signature = JSON.stringify([view, this.tablesVersion, this.starsVersion,
                                       this.canvas.width, this.canvas.height]);
     if (signature === this.drawn) return false;
     this.drawn = signature;
@@ -380,7 +383,7 @@ async function main() {
         const received = performance.now();
         viewer.setTables(decoded);
         viewer.frame();
-        viewer.gl.finish();
+        viewer.gl.readPixels(0, 0, 1, 1, viewer.gl.RGBA, viewer.gl.UNSIGNED_BYTE, new Uint8Array(4));  // waits for the frame
         const shown = performance.now();
         viewer.lastChange = {total_ms: shown - started, tables_ms: received - started, draw_ms: shown - received};
         showStatus(`${decoded.header.label}: ${decoded.header.n_wavelengths} wavelengths, ` +
