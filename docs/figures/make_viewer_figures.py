@@ -22,6 +22,8 @@ SHOTS = {
                         "&heading=250&pitch=8&fov=75&altitude_m=2",
     "viewer_mars_orbit.png": "atmosphere=mars-physical&quality=preview&sun_zenith=50"
                              "&sun_azimuth=90&heading=0&pitch=-22&fov=70&altitude_m=300000",
+    "viewer_night.png": "atmosphere=earth&quality=full&projection=fisheye&altitude_m=0"
+                        "&time=2024-07-05T06:00Z&lat=-29.26&lon=-70.73&ev100=-6",
 }
 
 

@@ -110,6 +110,7 @@ function placeSun(state, dir) {
   state.sun_azimuth = (Math.atan2(e, n) / DEG + 360) % 360;
 }
 
+// Binds the panel, the mouse and the keys; returns a function that shows a state changed elsewhere
 export function bindControls(viewer, description, reload, sky) {
   const state = viewer.state;
   const panel = document.getElementById("panel");
@@ -117,7 +118,7 @@ export function bindControls(viewer, description, reload, sky) {
   const canvas = viewer.canvas;
   if (!state.controls) {
     document.body.classList.add("bare");
-    return;
+    return () => {};
   }
   const byId = (id) => document.getElementById(id);
   // Atmosphere
@@ -291,4 +292,5 @@ export function bindControls(viewer, description, reload, sky) {
     }
     byId("ev-readout").textContent = state.ev100.toFixed(2);
   }, 250);
+  return () => { showSun(); showAltitude(); };  // shows a state changed elsewhere
 }

@@ -402,7 +402,7 @@ async function main() {
   };
   const sky = (time, lat, lon) => applySky(viewer, time, lat, lon);
   window.skyscatter = {viewer, state, reload, sky, benchmark: (n) => viewer.benchmark(n)};
-  bindControls(viewer, description, reload, sky);
+  const refreshControls = bindControls(viewer, description, reload, sky);
   // Frame times: the intervals between animation frames that drew (while the view moves)
   let previous = null;
   const loop = (time) => {
@@ -421,6 +421,7 @@ async function main() {
   await reload();
   if (state.time) {
     try { await sky(state.time, state.site_lat, state.site_lon); } catch (error) { showError(error.message); }
+    refreshControls();
     viewer.frame();
   }
   document.body.dataset.ready = "1";
