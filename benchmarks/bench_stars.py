@@ -13,9 +13,9 @@ Run: PYTHONPATH=src python benchmarks/bench_stars.py
 from __future__ import annotations
 
 import time
-import tracemalloc
 
 import numpy as np
+from timing import best_of
 
 from skyscatter.astro import star_catalogue
 from skyscatter.render.camera import FisheyeCamera
@@ -24,21 +24,6 @@ from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, stellar_irradiance
 
 SIZE = 1024
-
-
-def best_of(function, repeats: int = 5) -> tuple[float, float, float]:
-    """(best wall time [s], its CPU time [s], peak traced memory [MiB])."""
-    function()  # warm-up (caches, page faults)
-    best = (float("inf"), 0.0)
-    for _ in range(repeats):
-        wall, cpu = time.perf_counter(), time.process_time()
-        function()
-        best = min(best, (time.perf_counter() - wall, time.process_time() - cpu))
-    tracemalloc.start()
-    function()
-    peak = tracemalloc.get_traced_memory()[1] / 2**20
-    tracemalloc.stop()
-    return best[0], best[1], peak
 
 
 def main() -> None:
@@ -71,7 +56,7 @@ def main() -> None:
     }
     print(f"stars above the horizon: {int(np.sum(directions[:, 2] > 0.0))} of {len(catalogue)}")
     for name, function in steps.items():
-        wall, cpu, peak = best_of(function)
+        wall, cpu, peak = best_of(function, repeats=5, warm_up=True)
         print(f"{name:42s} wall {wall:.3f} s  cpu {cpu:.3f} s  peak {peak:7.1f} MiB")
 
 

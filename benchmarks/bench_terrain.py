@@ -14,10 +14,9 @@ Run: python benchmarks/bench_terrain.py
 from __future__ import annotations
 
 import os
-import time
-import tracemalloc
 
 import numba
+from timing import best_of
 
 from skyscatter.render.camera import PerspectiveCamera
 from skyscatter.render.scene import sun_direction
@@ -25,20 +24,6 @@ from skyscatter.render.terrain import demo_mountains
 
 EXTENT_M = 128_000.0
 EYE_HEIGHT_M = 2.0
-
-
-def best_of(function, repeats: int = 3) -> tuple[float, float, float]:
-    """(best wall time [s], its CPU time [s], peak traced numpy/python memory [MiB])."""
-    best = (float("inf"), 0.0)
-    for _ in range(repeats):
-        wall, cpu = time.perf_counter(), time.process_time()
-        function()
-        best = min(best, (time.perf_counter() - wall, time.process_time() - cpu))
-    tracemalloc.start()
-    function()
-    peak = tracemalloc.get_traced_memory()[1] / 2**20
-    tracemalloc.stop()
-    return best[0], best[1], peak
 
 
 def main() -> None:
