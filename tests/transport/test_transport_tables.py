@@ -8,7 +8,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from transport_cases import EARTH_RADIUS_M, SMALL, exponential_earth, homogeneous_shell
+from transport_cases import EARTH_RADIUS_M, SMALL, homogeneous_shell
 
 from skyscatter.transport.geometry import horizon_cos_zenith, local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
@@ -24,21 +24,10 @@ from skyscatter.transport.table_parameterisation import (
     transmittance_x_from_r_mu,
     unit_range_from_texture_coord,
 )
-from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
+from skyscatter.transport.tables import AtmosphereTables, precompute_tables
 
 PERCENT = 0.01
 TOP_RADIUS_M = EARTH_RADIUS_M + 60e3  # exponential_earth()
-
-
-@pytest.fixture(scope="module")
-def profile():
-    return exponential_earth()
-
-
-@pytest.fixture(scope="module")
-def tables_two_orders(profile):
-    """Bruneton's default resolution, orders 1 and 2, 3 wavelengths (about 5 s)."""
-    return precompute_tables(profile, TableResolution(), orders=2)
 
 
 def single_only(tables: AtmosphereTables) -> AtmosphereTables:

@@ -7,27 +7,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from test_transport_tables import _second_order_brute_force, single_only
-from transport_cases import EARTH_RADIUS_M, exponential_earth
+from transport_cases import EARTH_RADIUS_M
 
 from skyscatter.transport import _table_kernels
 from skyscatter.transport.geometry import local_frame_directions, sun_visible_fraction
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
-from skyscatter.transport.tables import TableResolution, precompute_tables
 
 PERCENT = 0.01
-
-
-@pytest.fixture(scope="module")
-def profile():
-    return exponential_earth()
-
-
-@pytest.fixture(scope="module")
-def tables_two_orders(profile):
-    """Bruneton's default resolution, mu_s down to cos(120 deg), orders 1 and 2 (about 5 s)."""
-    return precompute_tables(profile, TableResolution(), orders=2)
 
 
 @pytest.fixture(scope="module")
