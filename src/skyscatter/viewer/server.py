@@ -121,10 +121,8 @@ class Handler(BaseHTTPRequestHandler):
 
     def parse_request(self) -> bool:
         if len(self.raw_requestline) > MAX_URL:
-            self.requestline, self.request_version, self.command = "", "HTTP/1.1", "GET"
-            self.close_connection = True
-            self._error(HTTPStatus.REQUEST_URI_TOO_LONG,
-                        f"request line longer than {MAX_URL} bytes")
+            self.send_error(HTTPStatus.REQUEST_URI_TOO_LONG,
+                            f"request line longer than {MAX_URL} bytes")
             return False
         return super().parse_request()
 
@@ -135,6 +133,8 @@ class Handler(BaseHTTPRequestHandler):
         self.close_connection = True
         if not getattr(self, "request_version", None) or not getattr(self, "command", None):
             self.request_version, self.command = "HTTP/1.1", "GET"
+        if not hasattr(self, "requestline"):  # refused before the request line was parsed
+            self.requestline = ""
         self._error(code, message or HTTPStatus(code).phrase)
 
     def _send(self, status: int, body: bytes, content_type: str, extra: dict | None = None) -> None:
@@ -152,14 +152,14 @@ class Handler(BaseHTTPRequestHandler):
     def _json(self, status: int, value: object) -> None:
         self._send(status, json.dumps(value).encode(), "application/json")
 
-    def _error(self, status: int, message: str) -> None:
-        self._json(status, {"error": message})
+    def _error(self, status: int, message: str, extra: dict | None = None) -> None:
+        self._send(status, json.dumps({"error": message}).encode(), "application/json", extra)
 
     def _refuse_method(self) -> None:
         self.close_connection = True  # its body is not read: it must not become a request
-        self._send(HTTPStatus.METHOD_NOT_ALLOWED, json.dumps(
-            {"error": f"{self.command} is not allowed; the viewer only answers GET"}).encode(),
-            "application/json", {"Allow": "GET, HEAD"})
+        self._error(HTTPStatus.METHOD_NOT_ALLOWED,
+                    f"{self.command} is not allowed; the viewer only answers GET",
+                    {"Allow": "GET, HEAD"})
 
     do_POST = do_PUT = do_DELETE = do_PATCH = do_OPTIONS = _refuse_method  # noqa: N815
 
@@ -206,8 +206,7 @@ class Handler(BaseHTTPRequestHandler):
         except SupersededError as error:
             self._error(HTTPStatus.CONFLICT, str(error))
         except BusyError as error:
-            self._send(HTTPStatus.TOO_MANY_REQUESTS, json.dumps({"error": str(error)}).encode(),
-                       "application/json", {"Retry-After": "1"})
+            self._error(HTTPStatus.TOO_MANY_REQUESTS, str(error), {"Retry-After": "1"})
 
     def _static(self, name: str) -> None:
         path = self.server.files.get(name)
