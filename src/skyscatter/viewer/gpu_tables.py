@@ -51,11 +51,12 @@ from skyscatter.spectrum.colour import cmf_weights
 from skyscatter.spectrum.star import Star
 from skyscatter.transport.tables import AtmosphereTables
 
-__all__ = ["FORMAT_VERSION", "GpuTables", "LAYOUT", "MAGIC", "PHASE_ROW", "SUN_DISK_SAMPLES",
-           "decode", "encode", "gpu_tables"]
+__all__ = ["FORMAT_VERSION", "GpuTables", "LAYOUT", "MAGIC", "MAX_TABLES", "PHASE_ROW",
+           "SUN_DISK_SAMPLES", "decode", "encode", "gpu_tables"]
 
 MAGIC = b"SKYT"
 FORMAT_VERSION = 1
+MAX_TABLES = 8  # scattering tables the shader loops over: 7 scattering constituents + orders >= 2
 PHASE_ROW = 1024  # texels per row of the phase texture (WebGL2 guarantees 2048)
 SUN_DISK_SAMPLES = 33  # limb-darkened disk radiance at cos(limb angle) = 0, 1/32, .., 1
 FLOAT16_TARGET = 2.0**14  # the largest value of each table after scaling
@@ -106,6 +107,9 @@ def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
     irradiance = tables.irradiance @ weights
     n_r, n_mu, n_mu_s, n_nu, n_t, _ = tables.scattering.shape
     n_s = n_t - 1
+    if n_t > MAX_TABLES:
+        raise InputError(f"{label or 'this atmosphere'} has {n_s} scattering constituents; the "
+                         f"viewer shows at most {MAX_TABLES - 1}", key="atmosphere", value=label)
     scattering = np.empty((n_t, n_r, n_mu, n_nu, n_mu_s, 3))
     phase_rows = -(-tables.phase.shape[1] // PHASE_ROW)
     phase = np.zeros((n_s, phase_rows * PHASE_ROW, 3))

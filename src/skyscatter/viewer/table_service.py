@@ -41,7 +41,6 @@ from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.table_store import cached_tables
 from skyscatter.transport.tables import AtmosphereTables, TableResolution
-from skyscatter.viewer.codegen import MAX_TABLES
 from skyscatter.viewer.gpu_tables import encode, gpu_tables
 
 __all__ = ["BusyError", "QUALITIES", "SupersededError", "TableRequest", "TableService"]
@@ -231,11 +230,6 @@ class TableService:
                          "label": label}
         try:
             atmosphere, profile, tables = self.spectral_tables(request, progress)
-            if len(tables.scattering_names) + 1 > MAX_TABLES:
-                raise InputError(f"{request.atmosphere} has {len(tables.scattering_names)} "
-                                 f"scattering constituents; the viewer shows at most "
-                                 f"{MAX_TABLES - 1}", key="atmosphere",
-                                 value=request.atmosphere)
             return encode(gpu_tables(tables, profile, atmosphere.planet.star, label))
         finally:
             self.progress = {"busy": False, "stage": "done", "done": 1, "total": 1,
