@@ -16,11 +16,17 @@ from functools import lru_cache
 
 import numpy as np
 
+from skyscatter.checks import ANGLE_DEG, ELEVATION_M, LATITUDE_DEG, ZENITH_DEG, checked_number
 from skyscatter.render.camera import Camera
 from skyscatter.render.lunar_eclipse import circle_overlap_area
 from skyscatter.render.surfaces import Ground, surface_radiance
 from skyscatter.spectrum.colour import spectral_to_xyz, white_balance, xyz_to_rgb
 from skyscatter.spectrum.star import Star
+from skyscatter.transport.geometry import (
+    disk_fraction_above,
+    horizon_cos_zenith,
+    towards_visible_sun,
+)
 from skyscatter.transport.single_scattering import observer_position
 
 __all__ = [
@@ -44,8 +50,10 @@ SPLAT_PIXELS = 4.0  # a disk covering fewer pixels than this is deposited into o
 
 def sun_direction(zenith_deg: float, azimuth_deg: float) -> np.ndarray:
     """Unit vector towards the sun in the local east-north-up frame; azimuth from north
-    towards east [deg]."""
-    zenith, azimuth = np.radians(zenith_deg), np.radians(azimuth_deg)
+    towards east [deg]. InputError for a zenith angle outside [0, 180] or a non-finite
+    azimuth (`checks.ZENITH_DEG`, `checks.ANGLE_DEG`)."""
+    zenith = np.radians(ZENITH_DEG.check("zenith_deg", zenith_deg))
+    azimuth = np.radians(ANGLE_DEG.check("azimuth_deg", azimuth_deg))
     return np.array([np.sin(zenith) * np.sin(azimuth), np.sin(zenith) * np.cos(azimuth),
                      np.cos(zenith)])
 
@@ -88,15 +96,25 @@ class Viewpoint:
 
 
 def ground_viewpoint(altitude_m: float, bottom_radius_m: float) -> Viewpoint:
-    """An observer `altitude_m` above the north pole; local frame = world frame."""
+    """An observer `altitude_m` above the north pole; local frame = world frame. InputError
+    for an altitude outside `checks.ELEVATION_M` or a radius that is not finite and > 0."""
+    _check_place(altitude_m, bottom_radius_m)
     return Viewpoint(observer_position(altitude_m, bottom_radius_m), np.eye(3))
+
+
+def _check_place(altitude_m: float, bottom_radius_m: float) -> None:
+    ELEVATION_M.check("altitude_m", altitude_m)
+    checked_number("planet_radius_m", bottom_radius_m, 0.0, None, low_open=True)
 
 
 def orbit_viewpoint(altitude_m: float, latitude_deg: float, longitude_deg: float,
                     bottom_radius_m: float) -> Viewpoint:
     """A camera `altitude_m` above the ground point at (latitude, longitude) [deg]; its local
-    frame is east-north-up at that point, so pitch -90 looks at the planet's centre."""
-    lat, lon = np.radians(latitude_deg), np.radians(longitude_deg)
+    frame is east-north-up at that point, so pitch -90 looks at the planet's centre.
+    InputError for a value outside `checks` bounds (as `ground_viewpoint`)."""
+    _check_place(altitude_m, bottom_radius_m)
+    lat = np.radians(LATITUDE_DEG.check("latitude_deg", latitude_deg))
+    lon = np.radians(ANGLE_DEG.check("longitude_deg", longitude_deg))
     up = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
     east = np.array([-np.sin(lon), np.cos(lon), 0.0])
     north = np.cross(up, east)
@@ -116,12 +134,17 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     spectral = camera_image(directions, valid, profile.n_wavelengths, lambda rays: (
         diffuse_radiance(solver, viewpoint.position_m, rays, world_sun, ground, progress)),
         viewpoint)
-    sun_transmittance = solver.transmittance(viewpoint.position_m, world_sun)
+    # The visible part of a setting disk shines along the grazing ray; the planet hides the rest
+    position = viewpoint.position_m
+    sun_transmittance = solver.transmittance(
+        position, towards_visible_sun(position, world_sun, profile.bottom_radius_m))
     if ground is not None and ground.terrain is not None and ground.terrain.shadowed(
-            viewpoint.position_m, world_sun)[0]:
+            position, world_sun)[0]:
         sun_transmittance = np.zeros_like(sun_transmittance)  # the sun is behind a mountain
     add_sun_disk(spectral, camera, directions, valid, sun_dir, star,
-                 profile.wavelengths_nm, sun_transmittance)
+                 profile.wavelengths_nm, sun_transmittance,
+                 horizon_cos_zenith=horizon_cos_zenith(float(np.linalg.norm(position)),
+                                                       profile.bottom_radius_m))
     return sky_image(spectral, directions, valid, viewpoint, profile)
 
 
@@ -214,13 +237,18 @@ def disk_visible_fraction(direction: np.ndarray, radius_rad: float,
 def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
                  valid: np.ndarray, sun_dir: np.ndarray, star: Star,
                  wavelengths_nm: np.ndarray, transmittance: np.ndarray,
-                 occluder: tuple[np.ndarray, float] | None = None) -> None:
+                 occluder: tuple[np.ndarray, float] | None = None,
+                 horizon_cos_zenith: float = -1.0) -> None:
     """Add the transmitted sun disk to `spectral` (h, w, n_wl) in place. `occluder`
     (direction, angular radius [rad]), e.g. the moon in a solar eclipse, hides the part of
     the disk behind it (a sub-pixel disk is dimmed by `disk_visible_fraction`, limb darkening
-    left out there)."""
+    left out there). The planet hides the part below the geometric horizon at local zenith
+    cosine `horizon_cos_zenith` (a sub-pixel disk is dimmed by
+    `geometry.disk_fraction_above`)."""
     visible = 1.0 if occluder is None else disk_visible_fraction(
         sun_dir, star.angular_radius_rad, *occluder)
+    visible *= disk_fraction_above(float(sun_dir[2]), horizon_cos_zenith,
+                                   star.angular_radius_rad)
     if not np.any(transmittance > 0.0) or visible <= 0.0 or deposit_small_disk(
             spectral, camera, valid, sun_dir, star.solid_angle_sr,
             lambda: star.irradiance_toa(wavelengths_nm) * transmittance * visible):
@@ -228,6 +256,7 @@ def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
     sin_alpha = np.sin(star.angular_radius_rad)
     cos_angle = np.clip(directions @ sun_dir, -1.0, 1.0)
     inside = valid & (cos_angle > np.cos(star.angular_radius_rad))
+    inside &= directions[..., 2] >= horizon_cos_zenith
     if occluder is not None:
         inside &= directions @ occluder[0] <= np.cos(occluder[1])
     if not np.any(inside):

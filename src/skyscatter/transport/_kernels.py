@@ -255,8 +255,8 @@ def single_scattering(origins, directions, max_distances, sun_direction, n_sampl
 def transmittance_rays(origins, directions, distances, n_samples, bottom_radius, top_radius,
                        h_step, density, extinction):
     """Transmittance (n_ray, n_wl) from each origin along its direction over `distances` [m]
-    (inf: to the ground or out of the atmosphere; a ray blocked by the ground before the
-    distance gets 0)."""
+    (inf: out of the atmosphere, towards a light source; a ray blocked by the ground, before
+    the distance or with an infinite one, gets 0)."""
     n_ray = origins.shape[0]
     n_c, n_wl = extinction.shape
     result = np.ones((n_ray, n_wl))
@@ -265,8 +265,7 @@ def transmittance_rays(origins, directions, distances, n_samples, bottom_radius,
         r = math.sqrt(ox * ox + oy * oy + oz * oz)
         mu = (ox * directions[i, 0] + oy * directions[i, 1] + oz * directions[i, 2]) / r
         t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
-        blocked = hits_ground and distances[i] > t_end * (1.0 + 1e-12) and math.isfinite(
-            distances[i])
+        blocked = hits_ground and distances[i] > t_end * (1.0 + 1e-12)
         if blocked:
             for w in range(n_wl):
                 result[i, w] = 0.0

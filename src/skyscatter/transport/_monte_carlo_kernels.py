@@ -381,14 +381,17 @@ def first_collision_cdf(n, w, nu_sun, t_nodes, view_column, node_density, sun_co
     for j in range(1, n):
         lit_total += 0.5 * (cdf[j - 1] + cdf[j]) * (t_nodes[j] - t_nodes[j - 1])
     lit_share = 0.5 if lit_total > 0.0 else 0.0
-    collide_total = 1.0 - math.exp(-tau[n - 1])
+    # 1 - exp(-tau) and its pieces with expm1: for an optically thin ray (a few metres below
+    # the top, tau ~ 1e-17) 1 - exp(-tau) rounds to 0 and the masses would divide 0 by 0.
+    collide_total = -math.expm1(-tau[n - 1])
     lit_previous = cdf[0]
     cdf[0] = 0.0
     for j in range(1, n):
         lit_mass = (0.5 * (lit_previous + cdf[j]) * (t_nodes[j] - t_nodes[j - 1]) / lit_total
                     if lit_total > 0.0 else 0.0)
         lit_previous = cdf[j]
-        collide_mass = (math.exp(-tau[j - 1]) - math.exp(-tau[j])) / collide_total
+        collide_mass = (math.exp(-tau[j - 1]) * -math.expm1(tau[j - 1] - tau[j])
+                        / collide_total)
         cdf[j] = cdf[j - 1] + lit_share * lit_mass + (1.0 - lit_share) * collide_mass
     for j in range(1, n):
         cdf[j] /= cdf[n - 1]

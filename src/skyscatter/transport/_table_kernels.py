@@ -1369,9 +1369,9 @@ def irradiance_lookup(r, mu_s, bottom_radius, top_radius, irradiance, out):
 def transmittance_rays(origins, directions, distances, bottom_radius, top_radius,
                        transmittance):
     """Transmittance (n_ray, n_wl) from each origin ((1, 3) or (n_ray, 3)) along its direction
-    (normalised here) over `distances` [m] from the tables (inf: to the ground or out of the
-    atmosphere; 0 when the ground blocks a finite distance). Observers in space start at the
-    top boundary."""
+    (normalised here) over `distances` [m] from the tables (inf: out of the atmosphere, towards
+    a light source; 0 when the ground blocks the path, finite or infinite). Observers in space
+    start at the top boundary."""
     n_ray = directions.shape[0]
     n_wl = transmittance.shape[2]
     single_origin = origins.shape[0] == 1
@@ -1394,7 +1394,7 @@ def transmittance_rays(origins, directions, distances, bottom_radius, top_radius
         hits_ground = ray_intersects_ground(r, mu, bottom_radius)
         if hits_ground:
             d_end = distance_to_bottom_boundary(r, mu, bottom_radius)
-            if math.isfinite(distance) and distance > d_end * (1.0 + 1e-12):
+            if distance > d_end * (1.0 + 1e-12):
                 out[i, :] = 0.0
                 continue
         else:

@@ -17,11 +17,13 @@ from numba import njit, prange
 
 __all__ = [
     "atmosphere_segment",
+    "disk_fraction_above",
     "distance_to_sphere",
     "ground_distances",
     "horizon_cos_zenith",
     "local_frame_directions",
     "sun_visible_fraction",
+    "towards_visible_sun",
 ]
 
 
@@ -58,7 +60,12 @@ def atmosphere_segment(r, mu, bottom_radius, top_radius):
     """Part of the ray (r, mu) inside the atmosphere: (t_start, t_end, hits_ground) [m].
 
     t_start > 0 for observers in space. t_end is the ground hit when the ray meets the
-    ground before leaving the atmosphere. t_end <= t_start means the ray misses the shell."""
+    ground before leaving the atmosphere. t_end <= t_start means the ray misses the shell.
+    A ray that starts on or above the top and does not point down has no length inside, exactly:
+    the far root -r mu + sqrt(r^2 mu^2 - r^2 + R_top^2) would otherwise leave a rounding-error
+    segment (~1e-9 m) at r = R_top."""
+    if r >= top_radius and mu >= 0.0:
+        return 0.0, 0.0, False
     t_top_far = distance_to_sphere(r, mu, top_radius, True)
     if math.isnan(t_top_far) or t_top_far <= 0.0:
         return 0.0, 0.0, False
@@ -85,25 +92,58 @@ def horizon_cos_zenith(r, bottom_radius):
 
 @njit(cache=True)
 def sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius):
-    """Fraction of a uniform sun disk above the geometric horizon seen from radius r [-].
+    """Fraction of a uniform sun disk above the geometric horizon seen from radius r [-]
+    (`disk_fraction_above` with the horizon of `horizon_cos_zenith`)."""
+    return disk_fraction_above(mu_s, horizon_cos_zenith(r, bottom_radius), sun_angular_radius)
+
+
+@njit(cache=True)
+def disk_fraction_above(mu, mu_h, angular_radius):
+    """Fraction of a uniform disk whose centre has zenith cosine `mu` above a horizon at
+    zenith cosine `mu_h` [-].
 
     With x = (elevation of the disk centre above the horizon) / (angular radius), the visible
     part of a disk cut by a straight edge is 1/2 + (x sqrt(1 - x^2) + asin x) / pi (circular
-    segment area). A point sun (radius 0) is visible when above the horizon."""
-    mu_h = horizon_cos_zenith(r, bottom_radius)
-    sin_h = math.sqrt(1.0 - mu_h * mu_h)
-    # Fast exit well above the horizon: mu_s >= cos(theta_h - radius) (no inverse cosines).
-    if mu_s >= mu_h * math.cos(sun_angular_radius) + sin_h * math.sin(sun_angular_radius):
+    segment area). A point disk (radius 0) is visible when above the horizon."""
+    sin_h = math.sqrt(max(0.0, 1.0 - mu_h * mu_h))
+    # Fast exit well above the horizon: mu >= cos(theta_h - radius) (no inverse cosines).
+    if mu >= mu_h * math.cos(angular_radius) + sin_h * math.sin(angular_radius):
         return 1.0
-    elevation = math.acos(mu_h) - math.acos(min(1.0, max(-1.0, mu_s)))
-    if sun_angular_radius <= 0.0:
+    elevation = math.acos(min(1.0, max(-1.0, mu_h))) - math.acos(min(1.0, max(-1.0, mu)))
+    if angular_radius <= 0.0:
         return 1.0 if elevation >= 0.0 else 0.0
-    x = elevation / sun_angular_radius
+    x = elevation / angular_radius
     if x >= 1.0:
         return 1.0
     if x <= -1.0:
         return 0.0
     return 0.5 + (x * math.sqrt(1.0 - x * x) + math.asin(x)) / math.pi
+
+
+def towards_visible_sun(position: np.ndarray, sun_direction: np.ndarray,
+                        bottom_radius: float) -> np.ndarray:
+    """Unit direction (3,) along which the visible part of the sun disk is attenuated, seen
+    from `position` (planet-centred [m], (3,)): the sun's own direction (3,) while its centre is
+    above the geometric horizon; below it, the horizon direction at the sun's azimuth (the
+    part of a setting disk still visible shines along the grazing ray), raised by 1e-9 rad so
+    that rounding does not make the tangent ray meet the ground. Solvers' `transmittance`
+    along it gives the light of the sun's visible part; `sun_visible_fraction` its size."""
+    position = np.asarray(position, dtype=np.float64)
+    sun = np.asarray(sun_direction, dtype=np.float64)
+    sun = sun / np.linalg.norm(sun)
+    r = float(np.linalg.norm(position))
+    up = position / r
+    mu_s = float(up @ sun)
+    mu_h = horizon_cos_zenith(r, bottom_radius)
+    if mu_s >= mu_h:
+        return sun
+    horizontal = sun - mu_s * up
+    norm = float(np.linalg.norm(horizontal))
+    if norm == 0.0:  # the sun at the nadir: any azimuth
+        horizontal = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
+        norm = float(np.linalg.norm(horizontal))
+    elevation = math.asin(max(-1.0, min(1.0, mu_h))) + 1e-9  # above the horizontal [rad]
+    return math.sin(elevation) * up + math.cos(elevation) * horizontal / norm
 
 
 def local_frame_directions(zenith_rad: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.transport import _kernels
-from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fraction
+from skyscatter.transport.geometry import sun_visible_fraction, towards_visible_sun
 
 __all__ = ["SingleScatteringSolver", "observer_position", "ray_marched_transmittance"]
 
@@ -118,10 +118,9 @@ class SingleScatteringSolver:
         p = self.profile
         mu_s = float(up @ sun)
         r = float(np.linalg.norm(origin))
-        visible = sun_visible_fraction(r, mu_s, p.bottom_radius_m,
-                                                p.sun_angular_radius_rad)
-        sun_transmittance = self.transmittance(origin, sun if mu_s > 0 else _horizon(up, sun, r,
-                                                                                     p))
+        visible = sun_visible_fraction(r, mu_s, p.bottom_radius_m, p.sun_angular_radius_rad)
+        sun_transmittance = self.transmittance(
+            origin, towards_visible_sun(origin, sun, p.bottom_radius_m))
         direct = p.toa_irradiance * sun_transmittance * max(mu_s, 0.0) * visible
         nodes, weights = np.polynomial.legendre.leggauss(n_zenith)
         cos_zenith = 0.5 * (nodes + 1.0)
@@ -155,16 +154,6 @@ def ray_marched_transmittance(profile: OpticalProfile, position: ArrayLike,
 
 def _unit(vector: np.ndarray) -> np.ndarray:
     return vector / np.linalg.norm(vector, axis=-1, keepdims=True)
-
-
-def _horizon(up: np.ndarray, sun: np.ndarray, r: float, p: OpticalProfile) -> np.ndarray:
-    """The direction towards the sun's azimuth on the geometric horizon (for a sun at or just
-    below it, whose visible part is attenuated like the horizon ray)."""
-    mu_h = horizon_cos_zenith(r, p.bottom_radius_m)
-    horizontal = sun - (sun @ up) * up
-    norm = np.linalg.norm(horizontal)
-    horizontal = horizontal / norm if norm > 0 else _tangent_frame(up)[0]
-    return mu_h * up + np.sqrt(1.0 - mu_h**2) * horizontal
 
 
 def _tangent_frame(up: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
