@@ -55,7 +55,7 @@ def main() -> None:
                                 ("fisheye 1080x1080",
                                  "width=1080&height=1080&projection=fisheye")):
                 start = time.perf_counter()
-                page.goto(f"{server.url}?controls=0&quality={quality}&{size}&{VIEW}")
+                page.goto(f"{server.url}&controls=0&quality={quality}&{size}&{VIEW}")
                 page.wait_for_function(f"document.body.dataset.tables === '{quality}'")
                 loaded = time.perf_counter() - start
                 if renderer is None:
@@ -70,7 +70,7 @@ def main() -> None:
                 print(f"{quality:8s} {label:22s}: {ms:8.1f} ms per frame "
                       f"({header['n_wavelengths']} wavelengths, scattering "
                       f"{header['scattering_shape']}), page ready in {loaded:.1f} s")
-        page.goto(f"{server.url}?controls=0&quality=preview&width=1920&height=1080&{VIEW}")
+        page.goto(f"{server.url}&controls=0&quality=preview&width=1920&height=1080&{VIEW}")
         page.wait_for_function("document.body.dataset.ready === '1'")
         changes = [("aerosol", "state.amounts.aerosol = 2.0"),
                    ("aerosol", "state.amounts.aerosol = 0.5"),

@@ -39,7 +39,7 @@ def main() -> None:
         page.set_default_timeout(900_000)
         for name, query in SHOTS.items():
             quality = "full" if "quality=full" in query else "preview"
-            page.goto(f"{server.url}?{query}")
+            page.goto(f"{server.url}&{query}")
             page.wait_for_function(f"document.body.dataset.tables === '{quality}'")
             page.wait_for_timeout(1500)  # the automatic exposure settles
             page.screenshot(path=str(IMAGES / name))

@@ -29,7 +29,14 @@ from skyscatter.cli import main
 from skyscatter.errors import InputError
 from skyscatter.viewer import server as server_module
 from skyscatter.viewer import table_service
-from skyscatter.viewer.server import MAX_FIELDS, MAX_URL, STATIC_DIR, make_server, static_files
+from skyscatter.viewer.server import (
+    MAX_FIELDS,
+    MAX_URL,
+    STATIC_DIR,
+    TOKEN_HEADER,
+    make_server,
+    static_files,
+)
 from skyscatter.viewer.table_service import TableService
 
 PACKAGE_DIR = Path(server_module.__file__).resolve().parents[1]  # src/skyscatter
@@ -54,11 +61,13 @@ def server(tmp_path):
 
 def request(server, path: str, method: str = "GET", body: bytes | None = None,
             headers: dict | None = None, timeout: float = 60.0):
-    """(status, headers, body) of one request through http.client."""
+    """(status, headers, body) of one request through http.client, with the server's token
+    (the page's header) unless `headers` gives another."""
     connection = http.client.HTTPConnection("127.0.0.1", server.server_address[1],
                                             timeout=timeout)
     try:
-        connection.request(method, path, body=body, headers=headers or {})
+        connection.request(method, path, body=body,
+                           headers={TOKEN_HEADER: server.token, **(headers or {})})
         response = connection.getresponse()
         return response.status, response.headers, response.read()
     finally:
@@ -79,11 +88,17 @@ def raw_exchange(server, data: bytes, timeout: float = 20.0) -> bytes:
     return b"".join(chunks)
 
 
+def host(server) -> bytes:
+    """The Host header line a browser sends to `server`, and the token header."""
+    return b"Host: 127.0.0.1:%d\r\n%s: %s\r\n" % (server.server_address[1], TOKEN_HEADER.encode(),
+                                                 server.token.encode())
+
+
 def raw_get(server, target: str | bytes, method: bytes = b"GET") -> bytes:
     """The raw answer to `METHOD target HTTP/1.1`, the target sent byte for byte."""
     target = target.encode() if isinstance(target, str) else target
-    return raw_exchange(server, method + b" " + target +
-                        b" HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n")
+    return raw_exchange(server, method + b" " + target + b" HTTP/1.1\r\n" + host(server)
+                        + b"Connection: close\r\n\r\n")
 
 
 def parse_response(data: bytes) -> tuple[int, dict[str, str], bytes]:
@@ -137,7 +152,8 @@ def test_binds_loopback_on_a_free_port_by_default():
         host, port = viewer.server_address[:2]
         assert host == "127.0.0.1"
         assert 0 < port <= 65535
-        assert viewer.url == f"http://127.0.0.1:{port}/"
+        assert viewer.url == f"http://127.0.0.1:{port}/?token={viewer.token}"
+        assert len(viewer.token) >= 40  # 32 random bytes, URL-safe base64
     finally:
         viewer.server_close()
     viewer = make_server(TableService(), lambda *args: (0.0, 0.0, ""))
@@ -184,8 +200,8 @@ def test_cli_view_off_loopback_warns(fake_serve_forever, capsys, tmp_path):
     assert code == 0
     [((host, port), open_browser)] = fake_serve_forever
     assert (host, open_browser) == ("0.0.0.0", False) and port > 0
-    assert f"skyscatter viewer: http://0.0.0.0:{port}/" in out
-    assert "warning" in err and "0.0.0.0" in err and "anyone" in err
+    assert re.search(rf"skyscatter viewer: http://0\.0\.0\.0:{port}/\?token=[\w-]{{40,}} ", out)
+    assert "WARNING" in err and "0.0.0.0" in err and "anyone" in err and "token" in err
 
 
 def test_cli_view_on_loopback_does_not_warn(fake_serve_forever, capsys, tmp_path):
@@ -194,8 +210,9 @@ def test_cli_view_on_loopback_does_not_warn(fake_serve_forever, capsys, tmp_path
     assert code == 0
     [((host, port), open_browser)] = fake_serve_forever
     assert (host, open_browser) == ("127.0.0.1", False) and port > 0
-    assert re.search(rf"^skyscatter viewer: http://127\.0\.0\.1:{port}/ ", out, re.M)
-    assert "warning" not in err
+    assert re.search(rf"^skyscatter viewer: http://127\.0\.0\.1:{port}/\?token=[\w-]{{40,}} ",
+                     out, re.M)
+    assert "warning" not in err.lower()
 
 
 def test_cli_view_bad_port_exits_2_naming_it(fake_serve_forever, capsys):
@@ -345,12 +362,14 @@ def test_server_keeps_running_after_bad_requests(server):
     connection = http.client.HTTPConnection("127.0.0.1", server.server_address[1], timeout=60)
     try:
         for query, _ in BAD_TABLE_QUERIES:
-            connection.request("GET", f"/api/tables?{query}")
+            connection.request("GET", f"/api/tables?{query}",
+                               headers={TOKEN_HEADER: server.token})
             response = connection.getresponse()
             response.read()
             assert response.status == 400
         for query, _ in BAD_SKY_QUERIES:
-            connection.request("GET", f"/api/sky?{query}")
+            connection.request("GET", f"/api/sky?{query}",
+                               headers={TOKEN_HEADER: server.token})
             response = connection.getresponse()
             response.read()
             assert response.status == 400
@@ -386,7 +405,8 @@ def test_get_with_a_body_is_413(server):
 
 def test_get_with_a_chunked_body_is_413(server):
     status, headers, _ = parse_response(raw_exchange(
-        server, b"GET / HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n0\r\n\r\n"))
+        server, b"GET / HTTP/1.1\r\n" + host(server)
+        + b"Transfer-Encoding: chunked\r\n\r\n0\r\n\r\n"))
     assert status == 413
 
 
@@ -395,15 +415,15 @@ AFTER = b"GET /after HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
 
 
 def test_body_of_a_refused_get_is_not_read_as_a_request(server):
-    answer = raw_exchange(server, b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: %d\r\n\r\n"
-                          % len(SMUGGLED) + SMUGGLED + AFTER)
+    answer = raw_exchange(server, b"GET / HTTP/1.1\r\n" + host(server)
+                          + b"Content-Length: %d\r\n\r\n" % len(SMUGGLED) + SMUGGLED + AFTER)
     assert parse_response(answer)[0] == 413
     assert b"/smuggled" not in answer and count_responses(answer) == 1
 
 
 def test_body_of_a_refused_post_is_not_read_as_a_request(server):
-    answer = raw_exchange(server, b"POST /api/tables HTTP/1.1\r\nHost: x\r\nContent-Length: %d"
-                          b"\r\n\r\n" % len(SMUGGLED) + SMUGGLED + AFTER)
+    answer = raw_exchange(server, b"POST /api/tables HTTP/1.1\r\n" + host(server)
+                          + b"Content-Length: %d\r\n\r\n" % len(SMUGGLED) + SMUGGLED + AFTER)
     assert parse_response(answer)[0] == 405
     assert b"/smuggled" not in answer
 

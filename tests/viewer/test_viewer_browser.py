@@ -38,7 +38,7 @@ SIZE = (320, 240)
 def open_view(page, server, view: dict, **extra) -> np.ndarray:
     """The page's canvas (h, w, 3) uint8 for `view` (URL parameters), preview tables."""
     query = dict(view, quality="preview", controls=0, **extra)
-    page.goto(server.url + "?" + "&".join(f"{k}={v}" for k, v in query.items()))
+    page.goto(server.url + "&" + "&".join(f"{k}={v}" for k, v in query.items()))
     page.wait_for_function("document.body.dataset.ready === '1'")
     assert page.evaluate("document.getElementById('error').hidden"), \
         page.evaluate("document.getElementById('error').textContent")
@@ -129,11 +129,11 @@ def test_parameter_change_recomputes_and_matches(page, viewer_url, tmp_path):
 
 
 def test_bad_address_parameter_is_shown_in_the_page(page, viewer_url):
-    page.goto(viewer_url.url + "?albedo=7&quality=preview&controls=0&width=64&height=48")
+    page.goto(viewer_url.url + "&albedo=7&quality=preview&controls=0&width=64&height=48")
     page.wait_for_function("!document.getElementById('error').hidden")
     message = page.evaluate("document.getElementById('error').textContent")
     assert "albedo" in message and "[0, 1]" in message
-    page.goto(viewer_url.url + "?fov=500&quality=preview&controls=0&width=64&height=48")
+    page.goto(viewer_url.url + "&fov=500&quality=preview&controls=0&width=64&height=48")
     page.wait_for_function("document.body.dataset.ready === '1'")
     assert "fov" in page.evaluate("document.getElementById('error').textContent")
 
@@ -181,7 +181,7 @@ def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii):
             rows.append([r, mu, mu_s, nu])
     inputs = np.array(rows, dtype=np.float32).astype(np.float64)
     sizes = (32, 128, 40)
-    page.goto(viewer_url.url + "?controls=0&quality=preview&width=8&height=8")
+    page.goto(viewer_url.url + "&controls=0&quality=preview&width=8&height=8")
     result = page.evaluate(PROBE, {"inputs": inputs.tolist(), "radii": list(radii),
                                    "mu_s_min": tp.COS_SUN_ZENITH_MIN, "sizes": list(sizes)})
     expected = _python_mappings(inputs, bottom, top, tp.COS_SUN_ZENITH_MIN, sizes)

@@ -11,9 +11,13 @@ the gas itself: `atmosphere.variants.scaled_constituent`), the ground albedo and
   full     16 bins and the default sizes, the tables `skyscatter render` uses, from (and into)
            the table cache; the page swaps them in when they arrive.
 
-A newer table request cancels a computation still running for an older one (its progress
-callback raises `SupersededError`), so a user dragging a slider waits for the last value only; at
-most MAX_WAITING requests wait for the lock, more get `BusyError` (HTTP 429). Nothing is written
+The policy for table requests, whoever sends them: one computation at a time (a lock), so the
+viewer never uses more than one table computation's CPU and memory; a newer request of the same
+client (a page's own id, else its address) cancels that client's older one, computing or
+waiting (its progress callback raises `SupersededError`, HTTP 409), so a user dragging a slider
+waits for the last value only, while requests of other clients wait their turn instead of
+cancelling each other; at most MAX_WAITING requests wait for the lock, more get `BusyError`
+(HTTP 429) at once. Tables already in memory are answered without waiting. Nothing is written
 outside the service's cache directory: the full tables go through the table cache, and the Mie
 tables that loading a dusty or hazy atmosphere computes go to its mie/ folder
 (`disk_cache.cache_directory_override`; without a table cache, a temporary directory removed
@@ -109,6 +113,7 @@ class TableService:
         self._lock = threading.Lock()
         self._state = threading.Lock()
         self._generation = 0
+        self._latest: dict[str, int] = {}  # client -> its newest request's generation
         self._waiting = 0
         self._messages: OrderedDict[TableRequest, bytes] = OrderedDict()
         self.progress = {"busy": False, "stage": "", "done": 0, "total": 0, "label": ""}
@@ -174,10 +179,10 @@ class TableService:
             atmosphere = replace(atmosphere, planet=planet)
         return atmosphere
 
-    def tables(self, request: TableRequest) -> bytes:
+    def tables(self, request: TableRequest, client: str = "") -> bytes:
         """The encoded GPU tables of `request` (`gpu_tables.encode`), computed unless in
-        memory. Raises SupersededError when a newer request cancels it, BusyError when too
-        many wait."""
+        memory. Raises SupersededError when a newer request of the same `client` cancels it,
+        BusyError when too many wait (module docstring)."""
         with self._state:
             if request in self._messages:
                 self._messages.move_to_end(request)
@@ -186,15 +191,18 @@ class TableService:
                 raise BusyError(f"{self._waiting} table requests are already waiting")
             self._generation += 1
             generation = self._generation
+            self._latest[client] = generation
             self._waiting += 1
         try:
             with self._lock:
-                if generation != self._generation:
+                if self._latest.get(client) != generation:
                     raise SupersededError("a newer table request arrived")
-                message = self._compute(request, generation)
+                message = self._compute(request, client, generation)
         finally:
             with self._state:
                 self._waiting -= 1
+                if self._latest.get(client) == generation:
+                    del self._latest[client]
         with self._state:
             self._messages[request] = message
             while len(self._messages) > MEMORY_ENTRIES:
@@ -217,13 +225,13 @@ class TableService:
                                progress=progress, log=self._log)
         return atmosphere, profile, tables
 
-    def _compute(self, request: TableRequest, generation: int) -> bytes:
+    def _compute(self, request: TableRequest, client: str, generation: int) -> bytes:
         label = f"{request.atmosphere} ({request.quality})"
 
         def progress(done: int, total: int, stage: str) -> None:
             self.progress = {"busy": True, "stage": stage, "done": int(done),
                              "total": int(total), "label": label}
-            if generation != self._generation:
+            if self._latest.get(client) != generation:
                 raise SupersededError("a newer table request arrived")
 
         self.progress = {"busy": True, "stage": "starting", "done": 0, "total": 1,

@@ -12,7 +12,7 @@ const NUMBERS = {
   altitude_m: [2, 0, 1e9], lat: [45, -90, 90], lon: [0, -180, 180],
   site_lat: [45, -90, 90], site_lon: [0, -180, 180],
   sun_zenith: [60, 0, 180], sun_azimuth: [180, -1e6, 1e6],
-  ev100: [12, -20, 30], compensation: [0, -10, 10],
+  compensation: [0, -10, 10],  // and ev100, within what the meter can choose (readUrlState)
 };
 const CHOICES = {projection: ["perspective", "fisheye"], operator: ["aces", "clamp", "exponential", "reinhard"],
                  quality: ["full", "preview"], mode: ["ground", "orbit"]};
@@ -40,16 +40,17 @@ export function showProgress(progress) {
 }
 
 // The state from the URL's query, checked; a bad value is named in the page and left at its default
-export function readUrlState(description) {
+export function readUrlState(description, layout) {
   const query = new URLSearchParams(window.location.search);
+  const numbers = {...NUMBERS, ev100: [12, ...layout.exposure.ev100_range]};
   const state = {atmosphere: description.default, amounts: {}, albedo: null, auto_exposure: true,
                  controls: true, projection: "perspective", operator: "aces", quality: "full",
                  mode: "ground", time: ""};
-  for (const [name, [value]] of Object.entries(NUMBERS)) state[name] = value;
+  for (const [name, [value]] of Object.entries(numbers)) state[name] = value;
   const problems = [];
   for (const [key, text] of query) {
-    if (key in NUMBERS) {
-      const [, low, high] = NUMBERS[key];
+    if (key in numbers) {
+      const [, low, high] = numbers[key];
       const value = Number(text);
       if (text.trim() === "" || !Number.isFinite(value) || value < low || value > high) {
         problems.push(`${key} = ${text} must be a number in [${low}, ${high}]`);
@@ -72,7 +73,7 @@ export function readUrlState(description) {
       state.controls = text !== "0";
     } else if (key === "time") {
       state.time = text;
-    } else {
+    } else if (key !== "token") {  // the token is api.js's
       problems.push(`unknown parameter ${key}`);
     }
   }
@@ -110,16 +111,28 @@ function placeSun(state, dir) {
   state.sun_azimuth = (Math.atan2(e, n) / DEG + 360) % 360;
 }
 
-// Binds the panel, the mouse and the keys; returns a function that shows a state changed elsewhere
+// Binds the panel (unless controls=0), the mouse, the keys and the automatic exposure; returns a
+// function that shows a state changed elsewhere. Without the panel the view still follows the
+// mouse, the keys and the meter (kiosk and dome use).
 export function bindControls(viewer, description, reload, sky) {
   const state = viewer.state;
-  const panel = document.getElementById("panel");
-  panel.hidden = !state.controls;
-  const canvas = viewer.canvas;
-  if (!state.controls) {
-    document.body.classList.add("bare");
-    return () => {};
-  }
+  document.getElementById("panel").hidden = !state.controls;
+  const refresh = state.controls ? bindPanel(viewer, description, reload, sky) : () => {};
+  bindPointer(viewer, refresh);
+  let frames = 0;
+  setInterval(() => {
+    if (state.auto_exposure && viewer.tables && frames++ % 2 === 0) {
+      const metered = viewer.meter();
+      if (metered !== null) state.ev100 = metered;
+    }
+    refresh();
+  }, 250);
+  return refresh;
+}
+
+// The panel's widgets; returns a function that shows the state in them
+function bindPanel(viewer, description, reload, sky) {
+  const state = viewer.state;
   const byId = (id) => document.getElementById(id);
   // Atmosphere
   const select = byId("atmosphere");
@@ -163,7 +176,6 @@ export function bindControls(viewer, description, reload, sky) {
   };
   sunElevation.addEventListener("input", () => { state.sun_zenith = 90 - Number(sunElevation.value); showSun(); });
   sunAzimuth.addEventListener("input", () => { state.sun_azimuth = Number(sunAzimuth.value); showSun(); });
-  showSun();
   const time = byId("time");
   time.value = state.time || new Date().toISOString().slice(0, 16) + "Z";
   byId("site-lat").value = state.site_lat;
@@ -198,7 +210,6 @@ export function bindControls(viewer, description, reload, sky) {
     byId("altitude-readout").textContent = km < 1 ? `${state.altitude_m.toFixed(0)} m` : `${km.toFixed(km < 100 ? 1 : 0)} km`;
   };
   altitude.addEventListener("input", () => { state.altitude_m = Math.pow(10, Number(altitude.value)); showAltitude(); });
-  showAltitude();
   byId("projection").value = state.projection;
   byId("projection").addEventListener("change", (event) => { state.projection = event.target.value; });
   byId("mode").value = state.mode;
@@ -217,20 +228,39 @@ export function bindControls(viewer, description, reload, sky) {
     showAltitude();
   });
   const fov = byId("fov");
-  fov.value = state.fov;
   fov.addEventListener("input", () => { state.fov = Number(fov.value); });
-  // Exposure
+  // Exposure: the slider spans what the meter can choose (layout.exposure.ev100_range)
   const ev = byId("ev100");
+  [ev.min, ev.max] = viewer.layout.exposure.ev100_range;
   const auto = byId("auto-exposure");
   auto.checked = state.auto_exposure;
-  ev.value = state.ev100;
   ev.addEventListener("input", () => { state.ev100 = Number(ev.value); auto.checked = false; state.auto_exposure = false; });
   auto.addEventListener("change", () => { state.auto_exposure = auto.checked; });
   byId("compensation").value = state.compensation;
   byId("compensation").addEventListener("input", (event) => { state.compensation = Number(event.target.value); });
   byId("operator").value = state.operator;
   byId("operator").addEventListener("change", (event) => { state.operator = event.target.value; });
-  // Mouse and keys: drag to look (ground) or to orbit; shift-drag or double-click places the sun
+  const show = () => {
+    showSun();
+    showAltitude();
+    fov.value = state.fov;
+    ev.value = state.ev100;
+    byId("ev-readout").textContent = state.ev100.toFixed(2);
+    const times = viewer.frameTimes;
+    const gpu = viewer.gpuMs === null ? "" : `GPU ${viewer.gpuMs.toFixed(2)} ms per frame; `;
+    const ms = times.length ? times.reduce((a, b) => a + b, 0) / times.length : null;
+    const rate = ms === null ? "redraws when the view changes" : `${ms.toFixed(1)} ms between frames (${(1000 / ms).toFixed(0)} fps)`;
+    byId("frame-time").textContent = `${gpu}${rate}; ${viewer.canvas.width}×${viewer.canvas.height}`;
+  };
+  show();
+  return show;
+}
+
+// Mouse and keys: drag to look (ground) or to orbit; shift-drag or double-click places the sun;
+// the wheel zooms (ctrl or orbit: altitude); Page Up/Down, E/Q climb and descend
+function bindPointer(viewer, refresh) {
+  const state = viewer.state;
+  const canvas = viewer.canvas;
   let drag = null;
   canvas.addEventListener("pointerdown", (event) => {
     drag = {x: event.clientX, y: event.clientY};
@@ -241,7 +271,7 @@ export function bindControls(viewer, description, reload, sky) {
     if (!drag) return;
     if (event.shiftKey) {
       placeSun(state, pixelDirection(state, canvas, event.offsetX, event.offsetY));
-      showSun();
+      refresh();
       return;
     }
     const scale = (state.projection === "perspective" ? state.fov : state.fisheye_fov) / canvas.clientHeight;
@@ -258,39 +288,23 @@ export function bindControls(viewer, description, reload, sky) {
   canvas.addEventListener("pointerup", () => { drag = null; });
   canvas.addEventListener("dblclick", (event) => {
     placeSun(state, pixelDirection(state, canvas, event.offsetX, event.offsetY));
-    showSun();
+    refresh();
   });
   canvas.addEventListener("wheel", (event) => {
     event.preventDefault();
     if (event.ctrlKey || state.mode === "orbit") {
       state.altitude_m = Math.min(1e9, Math.max(0, state.altitude_m * Math.exp(event.deltaY * 0.002) + (event.deltaY > 0 ? 1 : 0)));
-      showAltitude();
     } else {
       state.fov = Math.max(1, Math.min(170, state.fov * Math.exp(event.deltaY * 0.001)));
-      fov.value = state.fov;
     }
+    refresh();
   }, {passive: false});
   window.addEventListener("keydown", (event) => {
     if (event.target.tagName === "INPUT") return;
     const factor = {PageUp: 1.5, e: 1.5, PageDown: 1 / 1.5, q: 1 / 1.5}[event.key];
     if (factor) {
       state.altitude_m = Math.max(0, state.altitude_m * factor + (factor > 1 ? 1 : 0));
-      showAltitude();
+      refresh();
     }
   });
-  // Readouts, auto exposure
-  let frames = 0;
-  setInterval(() => {
-    const times = viewer.frameTimes;
-    const gpu = viewer.gpuMs === null ? "" : `GPU ${viewer.gpuMs.toFixed(2)} ms per frame; `;
-    const ms = times.length ? times.reduce((a, b) => a + b, 0) / times.length : null;
-    const rate = ms === null ? "redraws when the view changes" : `${ms.toFixed(1)} ms between frames (${(1000 / ms).toFixed(0)} fps)`;
-    byId("frame-time").textContent = `${gpu}${rate}; ${viewer.canvas.width}×${viewer.canvas.height}`;
-    if (state.auto_exposure && viewer.tables && frames++ % 2 === 0) {
-      const metered = viewer.meter();
-      if (metered !== null) { state.ev100 = metered; ev.value = metered; }
-    }
-    byId("ev-readout").textContent = state.ev100.toFixed(2);
-  }, 250);
-  return () => { showSun(); showAltitude(); };  // shows a state changed elsewhere
 }

@@ -2,6 +2,7 @@
 // frame (shaders/*.glsl, the GLSL twins of the Python renderer), asks the server for new
 // tables when a physical parameter changes (a preview first, then the full tables), and
 // places the sun by hand or from a date, time and place.
+import {apiFetch, apiJson} from "./api.js";
 import {decodeTables, deleteTables, fetchLayout, uploadTables} from "./tables.js";
 import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
 import {cameraBasis, localFrame, sunDirection, toWorld} from "./geometry.js";
@@ -19,6 +20,16 @@ const PREFIX = "#version 300 es\nprecision highp float;\nprecision highp int;\np
 const FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n";
 const METER_SIZE = [64, 36];  // the auto-exposure meter renders the view this small
 const DEG = Math.PI / 180;
+
+// Exposure change [EV] for a scene of log-average luminance L [cd m^-2] (twin of
+// render.tonemap.night_compensation_ev, Krawczyk et al. 2005): 0 by day, down to a floor in
+// twilight and at night
+function nightCompensationEv(logAverage, exposure) {
+  const key = (luminance) => 1.03 - 2.0 / (2.0 + Math.log10(luminance + 1.0));
+  const shift = Math.log2(key(logAverage) / key(exposure.daylight_log_average_cd_m2));
+  const meteredGrey = exposure.meter_calibration_k / (exposure.iso_speed * exposure.saturation_factor);
+  return Math.max(shift, Math.log2(exposure.dark_scene_key / meteredGrey));
+}
 
 function compile(gl, type, source) {
   const shader = gl.createShader(type);
@@ -222,10 +233,11 @@ class Viewer {
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
 
+  // The canvas fills the window (in device pixels) unless the address fixed its width or height
   resize() {
     const s = this.state;
-    const width = s.width || Math.round(this.canvas.clientWidth * (window.devicePixelRatio || 1));
-    const height = s.height || Math.round(this.canvas.clientHeight * (window.devicePixelRatio || 1));
+    const width = s.width || Math.round(window.innerWidth * (window.devicePixelRatio || 1));
+    const height = s.height || Math.round(window.innerHeight * (window.devicePixelRatio || 1));
     if (this.canvas.width !== width || this.canvas.height !== height) {
       this.canvas.width = width;
       this.canvas.height = height;
@@ -267,8 +279,11 @@ class Viewer {
     return this.gpuMs;
   }
 
-  // EV100 a meter would choose for the current view (twin of api.save_image's metering):
-  // incident light from space, else the geometric mean of the sky pixels' luminance
+  // EV100 a meter would choose for the current view, as `render --time` meters
+  // (api.save_image with adapt_to_night): from space the incident-light meter on the sunlight
+  // (tonemap.incident_ev100), else the reflected-light meter on the sky pixels, each luminance
+  // held at least at the natural night sky's, less the night compensation of their log-average
+  // (twin of render.tonemap.night_adapted_exposure)
   meter() {
     const gl = this.gl;
     const header = this.tables.header;
@@ -285,16 +300,23 @@ class Viewer {
     const p = new Float32Array(w * h * 4);
     gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, p);
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-    let sum = 0, count = 0, litSum = 0, litCount = 0;
+    // log-luminance sums of the pixels to meter, as render.scene.sky_image picks them: those
+    // looking above the horizontal, else the lit ones, else all inside the image (alpha 1)
+    const sums = {sky: [0, 0], lit: [0, 0], valid: [0, 0]};
+    const add = (key, value) => { sums[key][0] += value; sums[key][1] += 1; };
     for (let i = 0; i < w * h; ++i) {
       const luminance = p[4 * i];
-      if (!(luminance > 0)) continue;
-      litSum += Math.log(luminance); litCount += 1;
-      if (p[4 * i + 1] > 0.5) { sum += Math.log(luminance); count += 1; }
+      if (!(p[4 * i + 3] > 0.5) || !Number.isFinite(luminance)) continue;
+      const logLuminance = Math.log(Math.max(luminance, exposure.natural_night_sky_cd_m2));
+      add("valid", logLuminance);
+      if (luminance > 0) add("lit", logLuminance);
+      if (p[4 * i + 1] > 0.5) add("sky", logLuminance);
     }
-    const mean = count ? sum / count : litCount ? litSum / litCount : null;
-    if (mean === null) return null;
-    return Math.log2(Math.exp(mean) * exposure.iso_speed / exposure.meter_calibration_k);
+    const [sum, count] = [sums.sky, sums.lit, sums.valid].find(([, n]) => n > 0) || [0, 0];
+    if (!count) return null;
+    const logAverage = Math.exp(sum / count);
+    const metered = Math.log2(logAverage * exposure.iso_speed / exposure.meter_calibration_k);
+    return metered - nightCompensationEv(logAverage, exposure);
   }
 
   // Milliseconds per frame over n frames drawn back to back, each waited for (readPixels)
@@ -317,7 +339,7 @@ async function loadTables(viewer, query, onProgress) {
   const poll = async () => {
     while (!done.value) {
       try {
-        const progress = await (await fetch("api/progress")).json();
+        const progress = await apiJson("progress");
         if (!done.value) onProgress(progress);
       } catch (error) { /* the server is busy answering; try again */ }
       await new Promise((resolve) => setTimeout(resolve, 200));
@@ -325,7 +347,7 @@ async function loadTables(viewer, query, onProgress) {
   };
   poll();
   try {
-    const response = await fetch(`api/tables?${query}`);
+    const response = await apiFetch(`tables?${query}`);
     if (!response.ok) {
       const message = (await response.json().catch(() => ({error: response.statusText}))).error;
       const error = new Error(message);
@@ -343,9 +365,7 @@ async function loadTables(viewer, query, onProgress) {
 async function applySky(viewer, time, lat, lon) {
   const state = viewer.state;
   const params = new URLSearchParams({atmosphere: state.atmosphere, time, lat, lon});
-  const response = await fetch(`api/sky?${params}`);
-  const answer = await response.json();
-  if (!response.ok) throw new Error(answer.error);
+  const answer = await apiJson(`sky?${params}`);
   state.site_lat = Number(lat);
   state.site_lon = Number(lon);
   if (state.mode === "ground") { state.lat = state.site_lat; state.lon = state.site_lon; }
@@ -364,9 +384,10 @@ async function main() {
     return;
   }
   const [layout, programs, description] = await Promise.all([
-    fetchLayout(), buildPrograms(gl), fetch("api/atmospheres").then((r) => r.json())]);
-  const state = readUrlState(description);
+    fetchLayout(), buildPrograms(gl), apiJson("atmospheres")]);
+  const state = readUrlState(description, layout);
   const viewer = new Viewer(canvas, layout, programs, state);
+  canvas.classList.toggle("fixed-size", Boolean(state.width || state.height));
   let request = 0;
   const reload = async () => {
     const mine = ++request;
