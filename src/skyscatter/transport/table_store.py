@@ -3,8 +3,10 @@
 An entry is keyed by a hash of its metadata: the atmosphere's fingerprint (a hash of every
 number of its optical profile, so of everything in the config that changes the tables), the
 table resolution, the orders, mu_s_min, the wavelengths, the package version and a hash of the
-source files that compute the tables. A file that is corrupt, truncated or made from other
-inputs is reported and recomputed, never used (`transport/cache.py`).
+code the precomputation runs (`code_fingerprint`: the functions `precompute_tables` reaches,
+not whole files, so an edit to a lookup keeps the tables and one to a precomputation kernel
+replaces them). A file that is corrupt, truncated or made from other inputs is reported and
+recomputed, never used (`transport/cache.py`).
 """
 
 from __future__ import annotations
@@ -13,8 +15,6 @@ import dataclasses
 import hashlib
 import json
 from collections.abc import Callable
-from functools import lru_cache
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -23,6 +23,7 @@ from skyscatter import __version__
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache, profile_fingerprint
+from skyscatter.transport.code_fingerprint import code_fingerprint
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
@@ -31,22 +32,23 @@ __all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_a
 TABLE_FORMAT = 1  # bump when the arrays stored change meaning
 _ARRAYS = ("wavelengths_nm", "transmittance", "scattering", "irradiance", "phase",
            "order_mean_radiance", "order_zenith_radiance")
-# The files whose code decides the tables' numbers: an edit to them invalidates old entries.
-_CODE_FILES = ("tables.py", "_table_kernels.py", "table_parameterisation.py", "_kernels.py")
+# Where the precomputation starts: the key covers the code it reaches (`code_fingerprint`).
+_PRECOMPUTATION = ("skyscatter.transport.tables", "precompute_tables")
 
 
-@lru_cache(maxsize=1)
-def _code_fingerprint() -> str:
-    digest = hashlib.sha256()
-    for name in _CODE_FILES:
-        digest.update((Path(__file__).parent / name).read_bytes())
-    return digest.hexdigest()[:16]
+def _code_fingerprint(profile: OpticalProfile) -> str:
+    """Fingerprint of the code `precompute_tables` runs for `profile`: its call graph, plus
+    the classes of the profile's phase functions (called through the objects, so found by
+    type, not by name)."""
+    phases = sorted({(type(phase).__module__, type(phase).__name__)
+                     for phase in profile.phases if phase is not None})
+    return code_fingerprint((_PRECOMPUTATION, *phases))
 
 
 def table_metadata(profile: OpticalProfile, resolution: TableResolution, orders: int,
                    min_cos_sun_zenith: float) -> dict[str, Any]:
     """What an entry was made from; two entries with equal metadata hold equal tables."""
-    return {"format": TABLE_FORMAT, "version": __version__, "code": _code_fingerprint(),
+    return {"format": TABLE_FORMAT, "version": __version__, "code": _code_fingerprint(profile),
             "atmosphere_fingerprint": profile_fingerprint(profile),
             "resolution": dataclasses.asdict(resolution), "orders": int(orders),
             "min_cos_sun_zenith": float(min_cos_sun_zenith),

@@ -1,0 +1,87 @@
+"""The table cache's code key covers exactly the code the precomputation runs.
+
+References: the functions `precompute_tables` calls, read off its source by hand (the kernels
+of each table, `geometry.sun_visible_fraction` through the single-scattering table) and the
+lookups that only `LutSolver` calls at render time (`sky_radiance_rays`, `transmittance_rays`).
+"""
+
+from __future__ import annotations
+
+import pytest
+from transport_cases import exponential_earth
+
+from skyscatter.transport import code_fingerprint as fingerprint_module
+from skyscatter.transport.code_fingerprint import code_fingerprint, reached_definitions
+from skyscatter.transport.table_store import table_metadata
+from skyscatter.transport.tables import TableResolution
+
+ROOT = ("skyscatter.transport.tables", "precompute_tables")
+KERNELS = "skyscatter.transport._table_kernels"
+
+
+@pytest.fixture(scope="module")
+def reached():
+    return set(reached_definitions([ROOT]))
+
+
+def test_precomputation_kernels_and_sun_visible_fraction_are_covered(reached):
+    for name in ("single_scattering_table", "multiple_scattering_table", "indirect_irradiance",
+                 "direct_ground_irradiance", "incoming_radiance"):
+        assert (KERNELS, name) in reached
+    assert ("skyscatter.transport.geometry", "sun_visible_fraction") in reached
+    assert ("skyscatter.transport._kernels", "column_table") in reached
+    # a module-level constant the precomputation reads
+    assert ("skyscatter.transport.tables", "DIRECT_GROUND_SAMPLES") in reached
+
+
+def test_render_time_lookups_and_error_classes_are_not_covered(reached):
+    for name in ("sky_radiance_rays", "transmittance_rays", "aerial_perspective_points",
+                 "ground_irradiance_points"):
+        assert (KERNELS, name) not in reached
+    assert not any(module == "skyscatter.transport.lut_solver" for module, _ in reached)
+    assert ("skyscatter.errors", "InputError") not in reached  # only raised
+
+
+def _edited(module: str, old: str, new: str):
+    """A source reader that returns `module` with `old` replaced by `new`."""
+    original = fingerprint_module._module_source
+
+    def read(name: str) -> str | None:
+        source = original(name)
+        if name != module:
+            return source
+        assert old in source
+        return source.replace(old, new, 1)
+    return read
+
+
+def _fingerprint(read=fingerprint_module._module_source) -> dict:
+    return reached_definitions([ROOT], read)
+
+
+def test_an_edit_to_a_lookup_keeps_the_key_and_one_to_precomputed_code_changes_it():
+    base = _fingerprint()
+    lookup = _fingerprint(_edited(KERNELS, "def sky_radiance_rays(",
+                                  "def unused_helper():\n    return 1\n\n\ndef sky_radiance_rays("))
+    assert lookup == base
+    comment_only = _fingerprint(_edited("skyscatter.transport.geometry",
+                                        "def sun_visible_fraction(r, mu_s, bottom_radius, "
+                                        "sun_angular_radius):\n",
+                                        "def sun_visible_fraction(r, mu_s, bottom_radius, "
+                                        "sun_angular_radius):  # a comment\n"))
+    assert comment_only == base
+    physics = _fingerprint(_edited("skyscatter.transport.geometry",
+                                   "return disk_fraction_above(mu_s,",
+                                   "return 0.5 * disk_fraction_above(mu_s,"))
+    assert physics != base
+    assert (physics[("skyscatter.transport.geometry", "sun_visible_fraction")]
+            != base[("skyscatter.transport.geometry", "sun_visible_fraction")])
+
+
+def test_key_is_deterministic_and_includes_the_phase_function_classes():
+    profile = exponential_earth()
+    first = table_metadata(profile, TableResolution(), 2, -0.5)["code"]
+    code_fingerprint.cache_clear()
+    assert table_metadata(profile, TableResolution(), 2, -0.5)["code"] == first
+    with_phase = set(reached_definitions([ROOT, ("skyscatter.optics.phase", "RayleighPhase")]))
+    assert ("skyscatter.optics.phase", "rayleigh") in with_phase
