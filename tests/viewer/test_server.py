@@ -30,6 +30,7 @@ from skyscatter.errors import InputError
 from skyscatter.viewer import server as server_module
 from skyscatter.viewer import table_service
 from skyscatter.viewer.server import (
+    CLIENT_HEADER,
     MAX_FIELDS,
     MAX_URL,
     STATIC_DIR,
@@ -216,7 +217,10 @@ def test_cli_view_on_loopback_does_not_warn(fake_serve_forever, capsys, tmp_path
 
 
 def test_cli_view_bad_port_exits_2_naming_it(fake_serve_forever, capsys):
-    code = main(["view", "--no-browser", "--port", "70000"])
+    try:  # refused by the option parser (SystemExit) or by the server (returned)
+        code = main(["view", "--no-browser", "--port", "70000"])
+    except SystemExit as stop:
+        code = stop.code
     _, err = capsys.readouterr()
     assert code == 2 and "70000" in err and "Traceback" not in err
     assert not fake_serve_forever
@@ -595,3 +599,331 @@ def test_sun_position_agrees_with_pyephem(server):
     sun = ephem.Sun(observer)
     assert abs(sky["sun_zenith_deg"] - (90.0 - math.degrees(sun.alt))) < 0.005
     assert abs(sky["sun_azimuth_deg"] - math.degrees(sun.az)) < 0.05
+
+
+# 8. Who may ask: Host, Origin, token ------------------------------------------------------------
+
+@pytest.fixture
+def counted_tables(monkeypatch):
+    """Table requests answered at once with a fake message; the list of those computed."""
+    started = []
+
+    def tables(self, request, client=""):
+        started.append((request, client))
+        return b"SKYT fake"
+
+    monkeypatch.setattr(TableService, "tables", tables)
+    return started
+
+
+def answer_with(server, target: str, headers: dict[str, str]) -> tuple[int, dict, bytes]:
+    """The parsed answer to GET `target` with exactly these headers (no others)."""
+    lines = "".join(f"{name}: {value}\r\n" for name, value in headers.items())
+    return parse_response(raw_exchange(
+        server, f"GET {target} HTTP/1.1\r\n{lines}Connection: close\r\n\r\n".encode()))
+
+
+FORGED_HOSTS = ["evil.example:{port}", "evil.example", "127.0.0.1.evil.example:{port}",
+                "localhost.evil.example:{port}", "127.0.0.1:{other}", "localhost:{other}",
+                "127.0.0.1", "user@127.0.0.1:{port}", "127.0.0.1:{port}/x", "", "[::1",
+                "10.0.0.1:{port}"]
+
+
+@pytest.mark.parametrize("forged", FORGED_HOSTS)
+@pytest.mark.parametrize("target", ["/api/tables?quality=preview", "/api/progress", "/"])
+def test_forged_host_is_refused_before_any_work(server, counted_tables, forged, target):
+    """A Host that is not this server's address and port (what a page of another site sends
+    after rebinding its DNS name to 127.0.0.1), with the right token even: 421, nothing
+    computed."""
+    port = server.server_address[1]
+    host = forged.format(port=port, other=port + 1 if port < 65535 else port - 1)
+    answer = answer_with(server, target, {"Host": host, TOKEN_HEADER: server.token})
+    assert answer[0] == 421
+    assert "host" in json_error(answer)
+    assert counted_tables == []
+
+
+def test_missing_host_is_refused(server, counted_tables):
+    answer = answer_with(server, "/api/tables", {TOKEN_HEADER: server.token})
+    assert answer[0] == 421 and counted_tables == []
+
+
+def test_dns_rebinding_is_refused(server, counted_tables):
+    """The rebinding attack itself: the browser connects to 127.0.0.1 (the attacker's name
+    now resolves there) and sends the attacker's name as Host; its page cannot know the token
+    and its fetch carries its own Origin. Refused whichever of the three it gets right."""
+    port = server.server_address[1]
+    for headers in ({"Host": f"evil.example:{port}"},
+                    {"Host": f"evil.example:{port}", "Origin": f"http://evil.example:{port}"},
+                    {"Host": f"evil.example:{port}", TOKEN_HEADER: server.token}):
+        status, _, _ = answer_with(server, "/api/tables?quality=full", headers)
+        assert status == 421
+    assert counted_tables == []
+
+
+@pytest.mark.parametrize("host", ["127.0.0.1:{port}", "localhost:{port}", "LocalHost:{port}",
+                                  "[::1]:{port}"])
+def test_own_host_names_are_served(server, counted_tables, host):
+    port = server.server_address[1]
+    status, _, body = answer_with(server, "/api/tables?quality=preview",
+                                  {"Host": host.format(port=port), TOKEN_HEADER: server.token})
+    assert status == 200 and body == b"SKYT fake"
+
+
+@pytest.mark.parametrize("origin", ["http://evil.example", "http://evil.example:{port}",
+                                    "null", "http://127.0.0.1:{other}", "https://127.0.0.1:{port}",
+                                    "http://localhost:{port}", "file://"])
+def test_foreign_origin_is_refused_before_any_work(server, counted_tables, origin):
+    """A cross-origin request (another site's page, a sandboxed frame, another port, or the
+    other loopback name than the page's own): 403, nothing computed."""
+    port = server.server_address[1]
+    answer = answer_with(server, "/api/tables?quality=preview", {
+        "Host": f"127.0.0.1:{port}", TOKEN_HEADER: server.token,
+        "Origin": origin.format(port=port, other=port + 1 if port < 65535 else port - 1)})
+    assert answer[0] == 403
+    assert "refused" in json_error(answer)
+    assert counted_tables == []
+
+
+def test_own_origin_is_served(server, counted_tables):
+    port = server.server_address[1]
+    status, _, _ = answer_with(server, "/api/tables", {
+        "Host": f"127.0.0.1:{port}", "Origin": f"http://127.0.0.1:{port}",
+        TOKEN_HEADER: server.token})
+    assert status == 200 and len(counted_tables) == 1
+
+
+@pytest.mark.parametrize("token", [None, "", "wrong", "x" * 43, "{token}x", "{token_prefix}"])
+@pytest.mark.parametrize("route", ["/api/tables?quality=preview", "/api/progress",
+                                   "/api/atmospheres", BERLIN_NOON, "/api/nosuch"])
+def test_missing_or_wrong_token_is_403_before_any_work(server, counted_tables, token, route):
+    port = server.server_address[1]
+    headers = {"Host": f"127.0.0.1:{port}"}
+    if token is not None:
+        headers[TOKEN_HEADER] = token.format(token=server.token, token_prefix=server.token[:-1])
+    answer = answer_with(server, route, headers)
+    assert answer[0] == 403
+    assert "token" in json_error(answer)
+    assert counted_tables == []
+
+
+def test_token_in_the_query_or_header_is_accepted(server, counted_tables):
+    port = server.server_address[1]
+    host = {"Host": f"127.0.0.1:{port}"}
+    assert answer_with(server, f"/api/tables?token={server.token}", host)[0] == 200
+    assert answer_with(server, "/api/tables", {**host, TOKEN_HEADER: server.token})[0] == 200
+    assert answer_with(server, "/api/tables?token=wrong", host)[0] == 403
+    assert len(counted_tables) == 2
+
+
+def test_the_page_and_its_files_need_no_token(server):
+    """The printed address (/?token=...) and the static files load without a token header;
+    only the API needs it."""
+    port = server.server_address[1]
+    host = {"Host": f"127.0.0.1:{port}"}
+    assert answer_with(server, f"/?token={server.token}", host)[0] == 200
+    assert answer_with(server, "/static/viewer.js", host)[0] == 200
+
+
+def test_every_launch_has_its_own_token():
+    servers = [api.viewer_server() for _ in range(3)]
+    try:
+        assert len({viewer.token for viewer in servers}) == 3
+    finally:
+        for viewer in servers:
+            viewer.server_close()
+
+
+@pytest.mark.parametrize(("header", "bound", "allowed"), [
+    ("127.0.0.1:8080", "127.0.0.1", True), ("localhost:8080", "127.0.0.1", True),
+    ("[::1]:8080", "::1", True), ("192.168.1.2:8080", "192.168.1.2", True),
+    ("192.168.1.2:8080", "127.0.0.1", False), ("192.168.1.2:8080", "0.0.0.0", True),
+    ("[fe80::1]:8080", "::", True), ("evil.example:8080", "0.0.0.0", False),
+    ("viewer.lan:8080", "viewer.lan", True), ("viewer.lan:8081", "viewer.lan", False),
+    ("127.0.0.1", "127.0.0.1", False), ("127.0.0.1:80x", "127.0.0.1", False),
+])
+def test_host_allowed(header, bound, allowed):
+    """The Host rule on its own (server.host_allowed) for a server on port 8080: loopback
+    names, the --host given and, for a wildcard --host, IP addresses but no DNS names."""
+    assert server_module.host_allowed(header, bound, 8080) is allowed
+
+
+# 9. Limits: connections, slow clients, table requests per client --------------------------------
+
+def ok_request(server, timeout: float = 5.0) -> int:
+    """The status of a normal request (the page's progress poll), given `timeout` seconds."""
+    return request(server, "/api/progress", timeout=timeout)[0]
+
+
+def test_200_connections_do_not_exhaust_the_server(server):
+    """200 connections held open (idle, or with half a request): a normal request is still
+    answered (each newcomer closes the connection that has waited longest), and the server
+    never holds more than max_connections of them."""
+    port = server.server_address[1]
+    sockets = []
+    try:
+        for i in range(200):
+            sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+            if i % 2:
+                sock.sendall(b"GET /api/progress HTTP/1.1\r\nHost: 127.0.0.1\r\n")  # no end
+            sockets.append(sock)
+        assert ok_request(server) == 200
+        wait_for(lambda: server.open_connections <= server.max_connections, seconds=10)
+    finally:
+        for sock in sockets:
+            sock.close()
+    wait_for(lambda: server.open_connections == 0, seconds=10)
+    assert ok_request(server) == 200
+
+
+def test_a_trickling_client_is_cut_off(server):
+    """A client sending its request head a byte at a time is closed once request_timeout_s has
+    passed (a per-read timeout alone would let it hold a thread forever); a normal request is
+    answered meanwhile."""
+    server.request_timeout_s = 1.0
+    with socket.create_connection(("127.0.0.1", server.server_address[1]), timeout=5) as sock:
+        sock.sendall(b"GET /api/progress HTTP/1.1\r\n")
+        deadline = time.monotonic() + 15.0  # bounds the loop: the server cuts it after ~1 s
+        closed = False
+        while time.monotonic() < deadline and not closed:
+            try:
+                sock.sendall(b"X")
+                time.sleep(0.1)
+                sock.setblocking(False)
+                closed = sock.recv(4096) == b""
+            except BlockingIOError:
+                pass
+            except OSError:  # reset or broken pipe: closed too
+                closed = True
+            finally:
+                sock.setblocking(True)
+            if not closed:
+                assert ok_request(server) == 200
+    assert closed
+
+
+@pytest.fixture
+def blocked_sky(server):
+    """/api/sky requests that wait for `release`; `waiting` counts those that have started."""
+    release = threading.Event()
+    waiting = []
+
+    def sky_at(atmosphere, time_text, lat, lon):
+        waiting.append(time_text)
+        assert release.wait(30)
+        return {"time_utc": time_text}
+
+    server.sky_at = sky_at
+    yield SimpleNamespace(release=release, waiting=waiting)
+    release.set()
+
+
+def test_busy_connections_give_a_quick_json_503(server, blocked_sky):
+    """With every connection answering a request, a newcomer gets 503 with Retry-After at
+    once (not a hung connection), and is served again once they are done."""
+    server.max_connections = 3
+    threads = [fetch_in_thread(server, BERLIN_NOON) for _ in range(3)]
+    wait_for(lambda: len(blocked_sky.waiting) == 3)
+    answer = request(server, "/api/progress", timeout=5)
+    assert answer[0] == 503 and int(answer[1]["Retry-After"]) >= 1
+    assert "try again" in json_error(answer)
+    blocked_sky.release.set()
+    for thread, result in threads:
+        thread.join(30)
+        assert result[0][0] == 200
+    assert ok_request(server) == 200
+
+
+def test_a_client_supersedes_only_its_own_table_requests(server, blocked_tables):
+    """Table policy (table_service docstring): one computation at a time; a client's newer
+    request cancels its own older one (409) but not another client's, which waits its turn."""
+    def fetch(query: str, client: str):
+        result = []
+        thread = threading.Thread(target=lambda: result.append(request(
+            server, f"/api/tables?{query}", headers={CLIENT_HEADER: client}, timeout=30)),
+            daemon=True)
+        thread.start()
+        return thread, result
+
+    a_old = fetch("albedo=0.1", "page-a")
+    wait_for(lambda: len(blocked_tables.started) == 1)
+    b = fetch("albedo=0.2", "page-b")
+    wait_for(lambda: server.service._waiting == 2)
+    a_new = fetch("albedo=0.3", "page-a")
+    wait_for(lambda: server.service._waiting == 3)
+    blocked_tables.release.set()
+    for thread, _ in (a_old, b, a_new):
+        thread.join(30)
+    assert a_old[1][0][0] == 409
+    assert b[1][0][0] == 200 and a_new[1][0][0] == 200
+    assert sorted(r.albedo for r in blocked_tables.started) == [0.1, 0.2, 0.3]
+
+
+# 10. Logs and errors ---------------------------------------------------------------------------
+
+@pytest.fixture
+def logged(server):
+    """The server's log lines."""
+    lines = []
+    server.log = lines.append
+    return lines
+
+
+def test_a_client_leaving_mid_answer_logs_no_traceback(server, logged, capfd, monkeypatch):
+    """A client that resets its connection while a 64 MiB answer is being written: no
+    traceback on stderr, nothing but the request in the log, and the server goes on."""
+    monkeypatch.setattr(TableService, "tables", lambda self, request, client="": bytes(64 << 20))
+    for _ in range(3):
+        sock = socket.create_connection(("127.0.0.1", server.server_address[1]), timeout=5)
+        sock.sendall(b"GET /api/tables HTTP/1.1\r\n" + host(server) + b"\r\n")
+        sock.recv(1024)  # the answer has started
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\x00\x00\x00\x00\x00\x00\x00")
+        sock.close()  # linger 0: a reset
+    wait_for(lambda: server.open_connections == 0, seconds=20)
+    assert ok_request(server) == 200
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and "Error" not in err
+    assert not any("Error" in line or "error" in line for line in logged), logged
+
+
+def test_control_characters_are_escaped_in_the_log(server, logged):
+    raw_exchange(server, b"GET /\x1b[2J\x1b]0;owned\x07x\x7f\x9b HTTP/1.1\r\n" + host(server)
+                 + b"Connection: close\r\n\r\n")
+    text = "\n".join(logged)
+    assert logged and "owned" in text
+    assert not any(ord(c) < 0x20 or 0x7F <= ord(c) < 0xA0 for c in text), ascii(text)
+    assert "\\x1b[2J" in text and "\\x07" in text and "\\x7f" in text and "\\x9b" in text
+
+
+def test_an_internal_failure_is_a_json_500_and_one_log_line(server, logged, capfd):
+    def sky_at(*args):
+        raise RuntimeError("boom")
+
+    server.sky_at = sky_at
+    answer = request(server, BERLIN_NOON)
+    assert answer[0] == 500
+    assert "RuntimeError" in json_error(answer)
+    assert [line for line in logged if "internal error" in line] == [
+        line for line in logged if "boom" in line]
+    assert len([line for line in logged if "boom" in line]) == 1
+    assert "Traceback" not in capfd.readouterr().err
+    assert ok_request(server) == 200
+
+
+OUT_OF_RANGE_TIMES = ["0001-01-01T00:00%2B01:00", "9999-12-31T23:59-01:00",
+                      "10000-01-01T00:00Z", "99999-01-01T00:00Z", "0000-01-01T00:00Z",
+                      "-0001-01-01T00:00Z", "2024-13-01T00:00Z", "2024-02-30T00:00Z"]
+
+
+@pytest.mark.parametrize("when", OUT_OF_RANGE_TIMES)
+def test_sky_date_out_of_range_is_json_400(server, when):
+    answer = request(server, f"/api/sky?time={when}&lat=52.5&lon=13.4")
+    assert answer[0] == 400
+    assert "time" in json_error(answer)
+
+
+@pytest.mark.parametrize("when", ["0001-01-01T00:00Z", "9999-12-31T23:59Z"])
+def test_sky_at_the_ends_of_the_calendar_is_answered(server, when):
+    status, _, body = request(server, f"/api/sky?time={when}&lat=52.5&lon=13.4")
+    assert status == 200
+    assert json.loads(body)["time_utc"].startswith(when[:10])

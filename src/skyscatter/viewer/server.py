@@ -77,7 +77,7 @@ MAX_FIELDS = 40  # query fields
 MAX_CONNECTIONS = 32  # served at once: a page uses up to 6, a dome a few pages
 REQUEST_TIMEOUT_S = 10.0  # for a request's line and headers, from the connection's last answer
 SOCKET_TIMEOUT_S = 10.0  # for each read, and each whole response write (socket.sendall)
-LISTEN_BACKLOG = 128  # connects the kernel queues (Linux caps it at net.core.somaxconn)
+LISTEN_BACKLOG = 256  # connects the kernel queues (Linux caps it at net.core.somaxconn)
 TOKEN_HEADER = "X-Skyscatter-Token"  # the per-launch secret, as the page sends it
 CLIENT_HEADER = "X-Skyscatter-Client"  # a page's own id: its table requests supersede each other
 LOOPBACK_NAMES = frozenset({"127.0.0.1", "localhost", "::1"})
@@ -166,6 +166,12 @@ class ViewerServer(ThreadingHTTPServer):
         host, port = self.server_address[:2]
         host = f"[{host}]" if ":" in host else host
         return f"http://{host}:{port}/?token={quote(self.token)}"
+
+    @property
+    def open_connections(self) -> int:
+        """Connections accepted and not yet closed."""
+        with self._connections:
+            return len(self._deadlines)
 
     def host_allowed(self, header: str) -> bool:
         """`host_allowed` for this server's address."""
