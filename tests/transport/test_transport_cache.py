@@ -1,13 +1,27 @@
-"""The table cache: round trip, and every bad file detected (never silently used)."""
+"""The table cache: round trip, every bad file detected (never silently used), the size limit
+with least-recently-used eviction, and the temporaries of killed writers swept."""
 
 from __future__ import annotations
 
 import dataclasses
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+import zipfile
 
 import numpy as np
 import pytest
 from transport_cases import exponential_earth
 
+from skyscatter.disk_cache import (
+    DEFAULT_MAX_BYTES,
+    MAX_BYTES_VARIABLE,
+    sweep_stale_temporaries,
+    temporary_path,
+)
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache, profile_fingerprint
 
@@ -101,3 +115,175 @@ def test_fingerprint_changes_with_the_atmosphere_and_not_otherwise():
     assert profile_fingerprint(hazier) != profile_fingerprint(profile)
     brighter = dataclasses.replace(profile, ground_albedo=profile.ground_albedo + 0.1)
     assert profile_fingerprint(brighter) != profile_fingerprint(profile)
+
+
+# --- size limit and least-recently-used eviction ---------------------------------------------
+
+def _entry_bytes(tmp_path) -> int:
+    probe = TableCache(tmp_path / "probe")
+    return probe.store("probe", arrays(), METADATA).stat().st_size
+
+
+def _age(cache, key, seconds_ago):
+    when = time.time() - seconds_ago
+    os.utime(cache.path(key), (when, when))
+
+
+def test_least_recently_used_entries_go_first_and_never_the_new_one(tmp_path):
+    size = _entry_bytes(tmp_path)
+    cache = TableCache(tmp_path / "lru", max_bytes=3 * size)  # room for three entries
+    for age, key in ((300, "a"), (200, "b"), (100, "c")):
+        cache.store(key, arrays(), METADATA)
+        _age(cache, key, age)
+    assert cache.load("a", METADATA)[1] == "ok"  # a is now the most recently used
+    cache.store("d", arrays(), METADATA)
+    assert sorted(p.stem for p in cache.directory.glob("*.npz")) == ["a", "c", "d"]
+    # A limit below one entry keeps only the entry just written
+    small = TableCache(cache.directory, max_bytes=size // 2)
+    small.store("e", arrays(), METADATA)
+    assert [p.stem for p in cache.directory.glob("*.npz")] == ["e"]
+
+
+def test_eviction_counts_and_removes_only_cache_entries(tmp_path):
+    cache = TableCache(tmp_path / "mixed", max_bytes=0)
+    cache.directory.mkdir()
+    (cache.directory / "notes.txt").write_text("mine")
+    np.savez(cache.directory / "my-own.npz", x=np.zeros(10))  # an npz that is not an entry
+    cache.store("a", arrays(), METADATA)
+    cache.store("b", arrays(), METADATA)
+    assert sorted(p.name for p in cache.directory.iterdir()) == ["b.npz", "my-own.npz",
+                                                                 "notes.txt"]
+    assert [entry.key for entry in cache.entries()] == ["b"]
+
+
+def test_subfolders_count_towards_the_limit(tmp_path):
+    # The Mie tables live in <cache>/mie/: the root's limit covers them.
+    size = _entry_bytes(tmp_path)
+    root = TableCache(tmp_path / "root", max_bytes=2 * size)
+    mie = TableCache(root.directory / "mie", max_bytes=10 * size)
+    mie.store("m1", arrays(), METADATA)
+    _age(mie, "m1", 100)
+    mie.store("m2", arrays(), METADATA)
+    root.store("t", arrays(), METADATA)
+    assert sorted(e.key for e in root.entries()) == ["m2", "t"]
+    assert sum(e.size_bytes for e in root.entries()) <= root.max_bytes
+
+
+def test_clear_older_than_removes_only_old_entries(tmp_path):
+    cache = TableCache(tmp_path / "clear")
+    cache.store("old", arrays(), METADATA)
+    cache.store("new", arrays(), METADATA)
+    _age(cache, "old", 3 * 86400)
+    assert [e.key for e in cache.clear(older_than_s=2 * 86400)] == ["old"]
+    assert [e.key for e in cache.entries()] == ["new"]
+    assert [e.key for e in cache.clear()] == ["new"] and cache.entries() == []
+
+
+def test_the_limit_comes_from_the_environment_and_bad_values_are_named(monkeypatch, tmp_path):
+    monkeypatch.setenv(MAX_BYTES_VARIABLE, "500M")
+    assert TableCache(tmp_path).max_bytes == 500 * 1024**2
+    monkeypatch.setenv(MAX_BYTES_VARIABLE, "1073741824")
+    assert TableCache(tmp_path).max_bytes == 2**30
+    monkeypatch.delenv(MAX_BYTES_VARIABLE)
+    assert TableCache(tmp_path).max_bytes == DEFAULT_MAX_BYTES == 2 * 2**30
+    for bad in ("lots", "-1", "nan", "1e400", "9" * 30):
+        monkeypatch.setenv(MAX_BYTES_VARIABLE, bad)
+        with pytest.raises(InputError, match=MAX_BYTES_VARIABLE):
+            TableCache(tmp_path)
+    with pytest.raises(InputError, match="max_bytes"):
+        TableCache(tmp_path, max_bytes=-1)
+
+
+# --- robustness -------------------------------------------------------------------------------
+
+def test_a_folder_in_place_of_an_entry_is_reported_and_replaced_when_empty(cache):
+    cache.path("earth").mkdir(parents=True)
+    assert cache.load("earth", METADATA) == (None, "not a file (a folder or device is in its "
+                                                   "place)")
+    cache.store("earth", arrays(), METADATA)
+    assert cache.load("earth", METADATA)[1] == "ok"
+    cache.path("full").mkdir()
+    (cache.path("full") / "something").write_text("x")
+    with pytest.raises(InputError, match="is a folder with files in it"):
+        cache.store("full", arrays(), METADATA)
+
+
+def test_a_header_declaring_7_tib_is_corrupt_not_a_memory_error(cache):
+    path = cache.store("earth", arrays(), METADATA)
+    with zipfile.ZipFile(path) as archive:
+        members = {name: archive.read(name) for name in archive.namelist()}
+    header = io.BytesIO()
+    np.lib.format.write_array_header_2_0(header, {"descr": "<f8", "fortran_order": False,
+                                                  "shape": (2**40 - 1, 7)})
+    members["irradiance.npy"] = header.getvalue() + b"\0" * 56
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    loaded, status = cache.load("earth", METADATA)
+    assert loaded is None and "corrupt" in status and "declares" in status
+    cache.store("earth", arrays(), METADATA)  # repaired by the next store
+    assert cache.load("earth", METADATA)[1] == "ok"
+
+
+def test_a_file_as_cache_directory_is_refused_and_a_folder_is_writable(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InputError, match="not a directory"):
+        TableCache(tmp_path / "file").check_writable()
+    assert TableCache(tmp_path / "new" / "folder").check_writable() is None
+    assert list((tmp_path / "new" / "folder").iterdir()) == []  # the probe is gone
+
+
+# --- temporaries ------------------------------------------------------------------------------
+
+def test_temporaries_carry_the_pid_and_dead_or_day_old_ones_are_swept(tmp_path):
+    target = tmp_path / "tables-x.npz"
+    mine = temporary_path(target)
+    assert mine.parent == tmp_path and mine.name.startswith(".tables-x.npz.")
+    assert f".{os.getpid()}." in mine.name and mine.name.endswith(".tmp")
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    orphan = tmp_path / f".tables-x.npz.{int(dead.stdout)}.0123abcd.tmp"
+    old_style = tmp_path / ".tables-y.npz.k2j4h5g6.npz.tmp"  # mkstemp, before pids
+    for path in (mine, orphan, old_style, tmp_path / "keep.tmp"):
+        path.write_bytes(b"partial")
+    assert sweep_stale_temporaries(tmp_path) == [orphan]
+    day_old = time.time() - 2 * 86400
+    os.utime(old_style, (day_old, day_old))
+    os.utime(mine, (day_old, day_old))
+    assert sorted(sweep_stale_temporaries(tmp_path)) == sorted([mine, old_style])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.tmp"]
+
+
+_SLOW_WRITER = """
+import sys, numpy as np
+from skyscatter.disk_cache import TableCache
+real_savez = np.savez
+def slow_savez(stream, **payload):
+    stream.write(b"PK partial " * 100_000)
+    stream.flush()
+    print("writing", flush=True)
+    sys.stdin.readline()  # until killed
+    real_savez(stream, **payload)
+np.savez = slow_savez
+TableCache(sys.argv[1]).store("earth", {"x": np.ones(1000)}, {"run": 2})
+"""
+
+
+@pytest.mark.parametrize("signal_number", [signal.SIGKILL, signal.SIGTERM])
+def test_a_writer_killed_mid_write_leaves_the_old_entry_and_no_temporary(cache, signal_number):
+    cache.store("earth", arrays(), METADATA)
+    writer = subprocess.Popen([sys.executable, "-c", _SLOW_WRITER, str(cache.directory)],
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert writer.stdout.readline().strip() == "writing"
+        (temporary,) = cache.directory.glob(".earth.npz.*.tmp")
+        assert f".{writer.pid}." in temporary.name and temporary.stat().st_size > 1e6
+        writer.send_signal(signal_number)
+        writer.wait(timeout=30)
+    finally:
+        writer.kill()
+        writer.wait()
+    assert temporary.exists()  # what the kill leaves behind ...
+    loaded, status = cache.load("earth", METADATA)  # ... the next load sweeps
+    assert status == "ok" and set(loaded) == set(arrays())
+    assert [p.name for p in cache.directory.iterdir()] == ["earth.npz"]

@@ -5,11 +5,16 @@ reported and recomputed, never used."""
 from __future__ import annotations
 
 import dataclasses
+import io
+import os
+import zipfile
 
 import numpy as np
 import pytest
 from transport_cases import SMALL, exponential_earth
 
+from skyscatter.errors import InputError
+from skyscatter.transport import table_store
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.table_store import cached_tables
 
@@ -19,6 +24,23 @@ ARRAYS = ("transmittance", "scattering", "irradiance", "phase", "order_mean_radi
 @pytest.fixture
 def cache(tmp_path):
     return TableCache(tmp_path / "cache")
+
+
+def declare_huge_array(path, member, shape):
+    """Rewrite the .npy header of `member` in the npz at `path` to declare `shape` (float32),
+    keeping its few real bytes: the file stays a valid zip of the same size."""
+    with zipfile.ZipFile(path) as archive:
+        members = {name: archive.read(name) for name in archive.namelist()}
+    stream = io.BytesIO(members[member])
+    np.lib.format.read_magic(stream)
+    np.lib.format.read_array_header_1_0(stream)
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(header, {"descr": "<f4", "fortran_order": False,
+                                                  "shape": shape})
+    members[member] = header.getvalue() + stream.read()
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
 
 
 def _tables(profile, cache, orders=2, resolution=SMALL):
@@ -58,7 +80,7 @@ def test_anything_that_changes_the_tables_makes_a_new_entry(cache, change):
     assert len(list(cache.directory.glob("*.npz"))) == 2
 
 
-@pytest.mark.parametrize("damage", ["truncate", "flip"])
+@pytest.mark.parametrize("damage", ["truncate", "flip", "huge header", "folder"])
 def test_a_damaged_entry_is_recomputed_and_replaced(cache, damage):
     profile = exponential_earth()
     reference, _ = _tables(profile, cache)
@@ -66,13 +88,55 @@ def test_a_damaged_entry_is_recomputed_and_replaced(cache, damage):
     data = path.read_bytes()
     if damage == "truncate":
         path.write_bytes(data[: len(data) // 2])
-    else:  # one bit in the middle of the scattering table
+    elif damage == "flip":  # one bit in the middle of the scattering table
         middle = len(data) // 2
         path.write_bytes(data[:middle] + bytes([data[middle] ^ 0x10]) + data[middle + 1:])
+    elif damage == "huge header":  # the scattering member declares 7 TiB
+        declare_huge_array(path, "scattering.npy", (7 * 2**40 // 4,))
+    else:  # an (empty) folder in the entry's place
+        path.unlink()
+        path.mkdir()
     recomputed, message = _tables(profile, cache)
     assert "precomputing" in message
-    assert ("unreadable" in message) or ("checksum" in message)
+    assert any(word in message for word in ("unreadable", "checksum", "corrupt", "not a file"))
     np.testing.assert_array_equal(recomputed.scattering, reference.scattering)
     _, message = _tables(profile, cache)
     assert "using" in message  # the damaged file was replaced by a good one
 
+
+
+def test_a_file_as_cache_directory_is_refused_before_any_work(tmp_path, monkeypatch):
+    # --cache-dir pointing at a file used to throw the finished tables away (106 s for Earth)
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder")
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the tables were computed before the cache was checked")
+
+    monkeypatch.setattr(table_store, "precompute_tables", no_work)
+    for directory in (blocker, blocker / "below"):
+        with pytest.raises(InputError, match="not a directory"):
+            cached_tables(exponential_earth(), SMALL, 2, cache=TableCache(directory))
+
+
+def test_an_unwritable_cache_computes_and_says_the_tables_are_not_stored(cache, monkeypatch):
+    # As a read-only folder behaves (root ignores permission bits, so the probe is made to fail)
+    def refuse(self):
+        return f"cannot write in {self.directory}: Read-only file system"
+
+    monkeypatch.setattr(TableCache, "check_writable", refuse)
+    tables, message = _tables(exponential_earth(), cache)
+    assert "not stored: cannot write" in message and "Read-only" in message
+    assert tables.orders == 2 and not list(cache.directory.glob("*.npz"))
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write into a read-only folder")
+def test_a_read_only_cache_folder_is_reported_before_the_work(cache):
+    cache.directory.mkdir()
+    cache.directory.chmod(0o555)
+    try:
+        assert "cannot write" in cache.check_writable()
+        _, message = _tables(exponential_earth(), cache)
+        assert "not stored" in message
+    finally:
+        cache.directory.chmod(0o755)

@@ -50,6 +50,7 @@ def table_metadata(profile: OpticalProfile, resolution: TableResolution, orders:
     """What an entry was made from; two entries with equal metadata hold equal tables."""
     return {"format": TABLE_FORMAT, "version": __version__, "code": _code_fingerprint(profile),
             "atmosphere_fingerprint": profile_fingerprint(profile),
+            "constituents": list(profile.names),
             "resolution": dataclasses.asdict(resolution), "orders": int(orders),
             "min_cos_sun_zenith": float(min_cos_sun_zenith),
             "wavelengths_nm": [float(w) for w in profile.wavelengths_nm]}
@@ -89,7 +90,12 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
                   log: Callable[[str], None] | None = None) -> AtmosphereTables:
     """The tables of `profile`: from `cache` when a valid entry exists (and not `force`),
     otherwise precomputed (`precompute_tables`) and stored. `log` gets one line saying which
-    happened and why. Without a cache the tables are computed and kept in memory only."""
+    happened and why. Without a cache the tables are computed and kept in memory only.
+
+    Whether the cache can be written is checked before the precomputation: a cache directory
+    that is a file raises InputError up front; one that cannot be written (permissions, a
+    read-only file system) is reported through `log` and the tables are computed and returned
+    without being stored, as they are when storing fails afterwards (a full disk)."""
     resolution = resolution or TableResolution()
     say = log or (lambda message: None)
     if cache is None:
@@ -98,6 +104,7 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
     metadata = table_metadata(profile, resolution, orders, min_cos_sun_zenith)
     key = _key(metadata)
     path = cache.path(key)
+    unwritable = cache.check_writable()  # before the work: a file as cache dir is refused
     if force:
         reason = "recomputing as asked"
     else:
@@ -110,9 +117,15 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
             else:
                 say(f"tables: using {path}")
                 return tables
+    where = (f"will be stored in {path}" if unwritable is None
+             else f"not stored: {unwritable}")
     say(f"tables: precomputing {orders} orders for {profile.n_wavelengths} wavelengths "
-        f"({reason}; will be stored in {path})")
+        f"({reason}; {where})")
     tables = precompute_tables(profile, resolution, orders, min_cos_sun_zenith,
                                progress=progress)
-    cache.store(key, tables_to_arrays(tables), metadata)
+    if unwritable is None:
+        try:
+            cache.store(key, tables_to_arrays(tables), metadata)
+        except (OSError, InputError) as error:  # e.g. the disk filled up meanwhile
+            say(f"tables: not stored in {path}: {error}")
     return tables
