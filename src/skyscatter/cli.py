@@ -407,6 +407,26 @@ def build_parser() -> argparse.ArgumentParser:
                           help="seed of the Monte Carlo paths (default 0)")
     _add_cache_arguments(validate)
     validate.set_defaults(run=_validate)
+
+    cache = commands.add_parser(
+        "cache", help="list, size or clear the cache of precomputed tables",
+        description="Inspect or empty the cache of precomputed tables (scattering tables, Mie "
+        "tables, the star catalogue). The cache holds at most $SKYSCATTER_CACHE_MAX_BYTES "
+        "(default 2G; units K, M, G, T are powers of 1024): after each new entry the least "
+        "recently used ones are removed until the rest fit. Temporaries left by killed runs "
+        "are removed by the next run that uses the cache.")
+    cache.add_argument("action", choices=("list", "size", "clear"),
+                       help="list: one line per entry, least recently used first (key, size, "
+                       "last use, what it holds); size: the total and the limit; clear: "
+                       "remove the entries (with --older-than only the old ones)")
+    cache.add_argument("--older-than", type=float, default=None, metavar="DAYS",
+                       help="clear: only the entries not used for DAYS days")
+    cache.add_argument("--format", choices=("text", "json"), default="text",
+                       help="list: output format (default text)")
+    cache.add_argument("--cache-dir", type=Path, default=None, metavar="DIR",
+                       help="the cache (default: $SKYSCATTER_CACHE_DIR, else "
+                       "$XDG_CACHE_HOME/skyscatter or ~/.cache/skyscatter)")
+    cache.set_defaults(run=_cache)
     return parser
 
 
@@ -691,6 +711,45 @@ def _view(args: argparse.Namespace) -> None:
               file=sys.stderr, flush=True)
     print(f"skyscatter viewer: {server.url}  (Ctrl-C stops it)", flush=True)
     serve_forever(server, open_browser=not args.no_browser)
+
+
+def _cache(args: argparse.Namespace) -> None:
+    from skyscatter.checks import checked_number
+    from skyscatter.disk_cache import TableCache
+    from skyscatter.errors import InputError
+    if args.older_than is not None and args.action != "clear":
+        raise InputError(f"--older-than applies to `skyscatter cache clear`, not to "
+                         f"`{args.action}`", key="older_than", value=args.older_than)
+    days = checked_number("--older-than", args.older_than or 0.0, low=0.0)
+    cache = TableCache(args.cache_dir)
+    if args.action == "clear":
+        removed = cache.clear(older_than_s=days * 86400.0)
+        freed = sum(entry.size_bytes for entry in removed)
+        print(f"removed {len(removed)} entries ({freed / 2**20:.1f} MiB) from {cache.directory}")
+        return
+    entries = cache.entries()
+    if args.action == "size":
+        total = sum(entry.size_bytes for entry in entries)
+        print(f"{total / 2**20:.1f} MiB in {len(entries)} entries in {cache.directory} "
+              f"(limit {cache.max_bytes / 2**20:.0f} MiB)")
+        return
+    rows = [entry.summary(cache.directory) for entry in entries]
+    if args.format == "json":
+        json.dump({"directory": str(cache.directory), "max_bytes": cache.max_bytes,
+                   "entries": rows}, sys.stdout, indent=1, allow_nan=False)
+        sys.stdout.write("\n")
+        return
+    for row in rows:
+        what = row["what"]
+        if "constituents" in row:
+            what += " of " + "+".join(row["constituents"])
+        if "orders" in row:
+            what += f", {row['orders']} orders"
+        if "wavelengths_nm" in row:
+            w = row["wavelengths_nm"]
+            what += f", {w['count']} wavelengths {w['first']:g}-{w['last']:g} nm"
+        name = row["key"] if row["folder"] == "." else f"{row['folder']}/{row['key']}"
+        print(f"{name}  {row['size_bytes'] / 2**20:8.1f} MiB  {row['last_used']}  {what}")
 
 
 def _validate(args: argparse.Namespace) -> int:

@@ -226,6 +226,30 @@ class CacheEntry:
         except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
             return None
 
+    def summary(self, root: Path) -> dict[str, Any]:
+        """JSON-ready description: key, folder (relative to `root`), size_bytes, last_used
+        (ISO 8601, UTC) and what the metadata says it holds: `what` (tables, Mie tables or
+        another entry), constituents, orders and wavelengths_nm (count, first, last) where
+        given."""
+        metadata = self.metadata() or {}
+        parent = self.path.parent
+        folder = "." if parent == root else parent.relative_to(root).as_posix()
+        what = ("tables" if "orders" in metadata else
+                "Mie tables" if "distribution" in metadata else "entry")
+        row: dict[str, Any] = {
+            "key": self.key, "folder": folder, "size_bytes": self.size_bytes,
+            "last_used": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(self.last_used)),
+            "what": what}
+        if metadata.get("constituents"):
+            row["constituents"] = [str(name) for name in metadata["constituents"]]
+        if "orders" in metadata:
+            row["orders"] = metadata["orders"]
+        wavelengths = metadata.get("wavelengths_nm")
+        if isinstance(wavelengths, list) and wavelengths:
+            row["wavelengths_nm"] = {"count": len(wavelengths), "first": wavelengths[0],
+                                     "last": wavelengths[-1]}
+        return row
+
 
 class TableCache:
     """Entries named by a key (a file-name-safe string) in one directory, at most `max_bytes`
