@@ -5,6 +5,7 @@ same spectral tables (issue 7: PSNR >= 35 dB in 8-bit sRGB)."""
 from __future__ import annotations
 
 import io
+import json
 from pathlib import Path
 
 import numpy as np
@@ -14,8 +15,10 @@ from PIL import Image
 from skyscatter import api
 from skyscatter.render.scene import render_sky, sun_direction
 from skyscatter.render.sky_at_time import render_sky_at
+from skyscatter.render.tonemap import night_adapted_exposure
 from skyscatter.transport import table_parameterisation as tp
 from skyscatter.transport.lut_solver import LutSolver
+from skyscatter.viewer import codegen
 
 PROBE = (Path(__file__).parent / "glsl_probe.js").read_text()
 MIN_PSNR_DB = 35.0  # issue 7
@@ -195,3 +198,67 @@ def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii):
     np.testing.assert_allclose(gl["distances"][:, :2], expected["distances"][:, :2],
                                rtol=1e-5, atol=2.0)
     np.testing.assert_allclose(gl["distances"][:, 3], expected["distances"][:, 3], atol=1e-6)
+
+
+@pytest.mark.parametrize("sun_zenith", [30, 120], ids=["noon", "night"])
+def test_automatic_exposure_meters_like_render(page, viewer_url, sun_zenith):
+    """The page's meter (viewer.js `meter`, twin of render.tonemap.night_adapted_exposure)
+    against the Python meter on the CPU renderer's image of the same view at the meter's size
+    (64 x 36), metered as `render --time` meters (api.save_image with adapt_to_night). At night
+    the plain meter chose EV100 -21, below the slider's end, and clipped every star white."""
+    view = dict(VIEWS["noon"], sun_zenith=sun_zenith)
+    open_view(page, viewer_url, view, width=320, height=240)
+    gpu_ev = page.evaluate("window.skyscatter.viewer.meter()")
+    service = viewer_url.service
+    atmosphere, profile, tables = service.spectral_tables(
+        service.parse({"atmosphere": "earth", "quality": "preview"}))
+    image = render_sky(LutSolver(profile, tables=tables), camera_of(view, 64, 36),
+                       api.viewpoint_at(view["altitude_m"], profile.bottom_radius_m, view["lat"],
+                                        view["lon"]),
+                       sun_direction(view["sun_zenith"], view["sun_azimuth"]),
+                       atmosphere.planet.star)
+    metered, night = night_adapted_exposure(image.xyz(False)[..., 1], image.sky)
+    # float16 tables and float32 shading against float64: measured 2e-5 EV at noon, 0 at night
+    # (every sky pixel below the natural night sky's luminance, which the meter holds)
+    assert gpu_ev == pytest.approx(metered - night, abs=0.01)
+    low, high = json.loads(codegen.layout_json())["exposure"]["ev100_range"]
+    assert low <= gpu_ev <= high
+    assert not page.errors
+
+
+def test_controls_0_is_a_full_window_view_that_keeps_working(page, viewer_url):
+    """controls=0 (kiosk, dome): no panel, the canvas fills the window and follows it when it
+    is resized, the exposure is metered, and the mouse and the keys still move the view."""
+    page.goto(viewer_url.url + "&controls=0&quality=preview&sun_zenith=60&pitch=10")
+    page.wait_for_function("document.body.dataset.ready === '1'")
+    assert page.evaluate("document.getElementById('panel').hidden")
+    size = page.evaluate("[window.skyscatter.viewer.canvas.width, "
+                         "window.skyscatter.viewer.canvas.height]")
+    assert size == [1000, 800]  # the page fixture's viewport, device pixel ratio 1
+    shot = Image.open(io.BytesIO(page.locator("#sky").screenshot()))
+    assert shot.size == (1000, 800)
+    page.wait_for_function("window.skyscatter.state.ev100 !== 12")  # metered, not the default
+    page.set_viewport_size({"width": 640, "height": 360})
+    page.wait_for_function("window.skyscatter.viewer.canvas.width === 640 && "
+                           "window.skyscatter.viewer.canvas.height === 360")
+    assert Image.open(io.BytesIO(page.screenshot())).size == (640, 360)
+    heading, altitude = page.evaluate("[window.skyscatter.state.heading, "
+                                      "window.skyscatter.state.altitude_m]")
+    page.mouse.move(320, 180)
+    page.mouse.down()
+    page.mouse.move(220, 180, steps=5)
+    page.mouse.up()
+    page.keyboard.press("PageUp")
+    after = page.evaluate("[window.skyscatter.state.heading, window.skyscatter.state.altitude_m]")
+    assert after[0] != heading and after[1] > altitude
+    assert not page.errors
+
+
+def test_page_without_the_token_says_how_to_open_it(page, viewer_url):
+    """The address without its token (or with another) loads the page, whose API requests are
+    refused: the page names the token instead of failing silently."""
+    base = viewer_url.url.split("?")[0]
+    for address in (base, base + "?token=wrong"):
+        page.goto(address)
+        page.wait_for_function("!document.getElementById('error').hidden")
+        assert "token" in page.evaluate("document.getElementById('error').textContent")
