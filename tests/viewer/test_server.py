@@ -27,6 +27,7 @@ import pytest
 from skyscatter import api
 from skyscatter.cli import main
 from skyscatter.errors import InputError
+from skyscatter.transport.cache import TableCache
 from skyscatter.viewer import server as server_module
 from skyscatter.viewer import table_service
 from skyscatter.viewer.server import (
@@ -927,3 +928,22 @@ def test_sky_at_the_ends_of_the_calendar_is_answered(server, when):
     status, _, body = request(server, f"/api/sky?time={when}&lat=52.5&lon=13.4")
     assert status == 200
     assert json.loads(body)["time_utc"].startswith(when[:10])
+
+
+def test_the_viewer_adds_a_bounded_amount_to_the_cache(server, tmp_path, monkeypatch):
+    """Once a service has stored its VIEWER_CACHE_BYTES of new tables (here: a budget of one
+    byte, crossed by the first entry), full tables of other parameters are still answered but
+    no longer written; the cache's own size limit is the cache's (TableCache.max_bytes)."""
+    monkeypatch.setattr(table_service, "QUALITIES", {"preview": (4, 0.25), "full": (4, 0.3)})
+    cache = server.service.cache
+    assert isinstance(cache, table_service.ViewerCache)
+    assert cache.budget_bytes == table_service.VIEWER_CACHE_BYTES
+    assert cache.max_bytes == TableCache(tmp_path / "other").max_bytes
+    cache.budget_bytes = 1
+    status, _, first = request(server, "/api/tables?quality=full&albedo=0.1")
+    assert status == 200 and first[:4] == b"SKYT"
+    stored = snapshot(tmp_path / "cache", skip="mie")
+    assert len(stored) == 1 and cache.stored_bytes == sum(size for size, _ in stored.values())
+    status, _, second = request(server, "/api/tables?quality=full&albedo=0.2")
+    assert status == 200 and second[:4] == b"SKYT" and second != first
+    assert snapshot(tmp_path / "cache", skip="mie") == stored

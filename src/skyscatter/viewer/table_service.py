@@ -17,9 +17,15 @@ client (a page's own id, else its address) cancels that client's older one, comp
 waiting (its progress callback raises `SupersededError`, HTTP 409), so a user dragging a slider
 waits for the last value only, while requests of other clients wait their turn instead of
 cancelling each other; at most MAX_WAITING requests wait for the lock, more get `BusyError`
-(HTTP 429) at once. Tables already in memory are answered without waiting. Nothing is written
-outside the service's cache directory: the full tables go through the table cache, and the Mie
-tables that loading a dusty or hazy atmosphere computes go to its mie/ folder
+(HTTP 429) at once. Tables already in memory are answered without waiting.
+
+What the viewer may add to the table cache is bounded twice: the cache's own size limit (least
+recently used entries removed beyond `TableCache.max_bytes`) and, per service, VIEWER_CACHE_BYTES
+of new entries (`ViewerCache`); beyond it full tables are computed and kept in memory only, so
+a page stepping through parameters adds about 1 GiB at most, not 243 MiB per step.
+
+Nothing is written outside the service's cache directory: the full tables go through the table
+cache, and the Mie tables that loading a dusty or hazy atmosphere computes go to its mie/ folder
 (`disk_cache.cache_directory_override`; without a table cache, a temporary directory removed
 with the service).
 """
@@ -47,12 +53,14 @@ from skyscatter.transport.table_store import cached_tables
 from skyscatter.transport.tables import AtmosphereTables, TableResolution
 from skyscatter.viewer.gpu_tables import encode, gpu_tables
 
-__all__ = ["BusyError", "QUALITIES", "SupersededError", "TableRequest", "TableService"]
+__all__ = ["BusyError", "QUALITIES", "SupersededError", "TableRequest", "TableService",
+           "VIEWER_CACHE_BYTES", "ViewerCache"]
 
 QUALITIES = {"preview": (8, 0.5), "full": (16, 1.0)}  # wavelength bins, table size factor
 MAX_AMOUNT = 20.0  # largest factor on a constituent's amount
 MAX_WAITING = 2  # table requests that may wait while another is computed
 MEMORY_ENTRIES = 6  # table messages kept in memory (a full Earth one is about 25 MB)
+VIEWER_CACHE_BYTES = 1 << 30  # new cache entries per service: four full Earth sets (243 MiB)
 
 
 class SupersededError(Exception):
@@ -85,6 +93,28 @@ def _number(name: str, text: str, low: float, high: float) -> float:
     return value
 
 
+class ViewerCache(TableCache):
+    """A table cache as the viewer uses it: it reads like `cache`, and stores until
+    `budget_bytes` of new entries were written through it (the entry that crosses the line is
+    still stored); then `check_writable` says why not, and the tables are kept in memory."""
+
+    def __init__(self, cache: TableCache, budget_bytes: int = VIEWER_CACHE_BYTES) -> None:
+        super().__init__(cache.directory, cache.max_bytes)
+        self.budget_bytes = budget_bytes
+        self.stored_bytes = 0
+
+    def check_writable(self) -> str | None:
+        if self.stored_bytes >= self.budget_bytes:
+            return (f"the viewer has added {self.stored_bytes / 2**20:.0f} MiB to the cache, "
+                    f"its limit of {self.budget_bytes / 2**20:.0f} MiB per session")
+        return super().check_writable()
+
+    def store(self, key: str, arrays: dict, metadata: dict) -> Path:
+        path = super().store(key, arrays, metadata)
+        self.stored_bytes += path.stat().st_size
+        return path
+
+
 class TableService:
     """The atmospheres a viewer offers and their tables (module docstring).
 
@@ -93,7 +123,7 @@ class TableService:
 
     def __init__(self, config: str | Path | None = None, cache: TableCache | None = None,
                  log: Callable[[str], None] | None = None) -> None:
-        self.cache = cache
+        self.cache = ViewerCache(cache) if cache is not None else None
         if cache is not None:
             self.directory = Path(cache.directory)
         else:
