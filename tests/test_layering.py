@@ -8,7 +8,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "skyscatter"
 
 # Base modules every layer may import; they import no layer themselves.
-BASE = {"errors", "disk_cache", "checks"}
+BASE = {"errors", "disk_cache", "checks", "output_files", "jit_cache"}
 
 # Subpackage -> the skyscatter subpackages it may import (besides itself and BASE).
 ALLOWED = {

@@ -4,7 +4,12 @@ Data flow (one module boundary per arrow, see DESIGN.md):
 config (TOML) -> Atmosphere -> solver (transport) -> scene (render) -> colour -> image.
 """
 
+from pathlib import Path
+
 from skyscatter.errors import ConfigError, InputError, SkyscatterError
+from skyscatter.jit_cache import use_writable_cache_folder
 
 __version__ = "0.1.0"
 __all__ = ["ConfigError", "InputError", "SkyscatterError", "__version__"]
+
+use_writable_cache_folder(Path(__file__).parent)  # before any numba kernel is imported

@@ -19,9 +19,11 @@ from __future__ import annotations
 import datetime
 import ipaddress
 import itertools
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 
@@ -31,9 +33,10 @@ from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.gas import describe_gas
 from skyscatter.atmosphere.model import Atmosphere
 from skyscatter.errors import InputError
+from skyscatter.output_files import check_writable_file, check_writable_folder, staged_outputs
 from skyscatter.render.albedo_map import AlbedoMap
 from skyscatter.render.camera import Camera, EquirectangularCamera, FisheyeCamera, PerspectiveCamera
-from skyscatter.render.image_io import write_exr, write_png
+from skyscatter.render.image_io import display_format, display_image_writer, exr_writer, write_png
 from skyscatter.render.scene import (
     SkyImage,
     Viewpoint,
@@ -77,6 +80,7 @@ from skyscatter.viewer.table_service import TableService
 __all__ = [
     "AlbedoMap",
     "EquirectangularCamera",
+    "FRAME_NAME",
     "FisheyeCamera",
     "Ground",
     "Heightfield",
@@ -109,6 +113,8 @@ __all__ = [
 EXR_UNITS = {"rgb": "linear RGB, Y = 1 for 1 cd/m^2", "luminance": "cd/m^2",
              "spectral": "W m^-2 sr^-1 nm^-1"}
 EXR_CONTENTS = tuple(EXR_UNITS)
+# The files of a time-lapse's frames folder: the folder holds these only, and is replaced whole
+FRAME_NAME = re.compile(r"frame_[0-9]{5,}\.png")
 
 
 def solver_options(atmosphere: Atmosphere, orders: int | None = None, n_samples: int = 64,
@@ -281,18 +287,27 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     constant `adaptation_time_s` in simulated time (`adapted_ev100`), so day, twilight and
     night flow into each other. With `objects.scintillation` (a random generator) the stars
     twinkle, a new draw each frame. `on_frame(index, time, ev100)` is called after each
-    frame."""
+    frame.
+
+    The outputs are checked before any work (`check_writable_file`, `check_writable_folder`:
+    `frames_dir` may hold only frames, `FRAME_NAME`). The frames go to a new temporary folder
+    and the video to a temporary file; only when all are done do they replace `frames_dir`
+    and `video_path` together, so the folder holds exactly this run's frames and an
+    interrupted run leaves the previous frames and video as they were."""
     if len(times) < 1:
         raise InputError("a time-lapse needs at least one time", key="times", value=times)
     check_image_options(operator, colour_space)
     VideoWriter(video_path, fps)  # checks the format and the rate before any work
+    check_writable_file(video_path)
+    check_writable_folder(frames_dir, FRAME_NAME)
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
     engine = load_solver(atmosphere, wavelengths_nm, solver, options)
     objects = objects or SkyObjects()
     frames_dir = Path(frames_dir)
     frames, exposures = [], []
     ev100 = None
-    with VideoWriter(video_path, fps) as video:
+    with staged_outputs() as stage, VideoWriter(video_path, fps, stage) as video:
+        new_frames_dir = stage.folder(frames_dir)
         for index, observer in enumerate(observers):
             image = _render_at(engine, atmosphere, camera, observer, objects, None,
                                orbit_altitude_m, None)
@@ -303,11 +318,12 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
             ev100 = adapted_ev100(ev100, metered - night, abs(elapsed), adaptation_time_s)
             rgb8 = _display_rgb8(xyz_to_rgb(xyz, colour_space), image.valid, ev100,
                                  compensation_ev, operator)
-            path = frames_dir / f"frame_{index + 1:05d}.png"
-            write_png(path, rgb8, text={"Software": "skyscatter", "EV100": f"{ev100:.3f}",
-                                        "Time": observer.time_utc.isoformat()})
+            name = f"frame_{index + 1:05d}.png"
+            write_png(new_frames_dir / name, rgb8,
+                      text={"Software": "skyscatter", "EV100": f"{ev100:.3f}",
+                            "Time": observer.time_utc.isoformat()})
             video.add(rgb8)
-            frames.append(path)
+            frames.append(frames_dir / name)
             exposures.append(ev100)
             if on_frame is not None:
                 on_frame(index, observer.time_utc, ev100)
@@ -355,22 +371,38 @@ def orbit_field_of_view_deg(altitude_m: float, planet_radius_m: float,
 
 
 def check_image_options(operator: str = "aces", colour_space: str = "srgb",
-                        exr_content: str = "rgb") -> None:
-    """Raise InputError for an unknown tone-mapping operator, colour space or EXR content, so
-    that a caller can reject them before rendering; `save_image` makes the same checks."""
+                        exr_content: str = "rgb",
+                        png_path: str | Path | BinaryIO | None = None,
+                        exr_path: str | Path | None = None) -> None:
+    """Raise InputError for an unknown tone-mapping operator, colour space or EXR content, and
+    for output paths that cannot be written (a suffix other than .png/.jpg/.jpeg for the
+    display image or .exr for the EXR, a directory, a read-only file or folder; see
+    `output_files.check_writable_file`), so that a caller can reject them before rendering;
+    `save_image` makes the same checks."""
     if exr_content not in EXR_CONTENTS:
         raise InputError(f"unknown EXR content {exr_content!r}; choose one of: "
                          f"{', '.join(EXR_CONTENTS)}", key="exr_content", value=exr_content)
     tonemap(np.zeros(3), operator)
     xyz_to_rgb(np.zeros(3), colour_space)
+    if png_path is not None and not hasattr(png_path, "write"):
+        display_format(png_path)
+        check_writable_file(png_path)
+    if exr_path is not None:
+        if Path(exr_path).suffix.lower() != ".exr":
+            raise InputError(f"cannot write an EXR as {str(exr_path)!r}: name it .exr",
+                             key="exr_path", value=str(exr_path), allowed=".exr")
+        check_writable_file(exr_path)
 
 
-def save_image(image: SkyImage, png_path: str | Path | None = None,
+def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
                exr_path: str | Path | None = None, ev100: float | None = None,
                compensation_ev: float = 1.0, operator: str = "aces",
                colour_space: str = "srgb", balance_to_light: bool = False,
                exr_content: str = "rgb", adapt_to_night: bool = False) -> float:
-    """Write a tone-mapped 8-bit PNG and/or a linear float32 EXR; returns the EV100 used.
+    """Write a tone-mapped 8-bit PNG (or JPEG: `png_path` named .jpg/.jpeg; or a PNG to a
+    binary stream such as `sys.stdout.buffer`) and/or a linear float32 EXR; returns the EV100
+    used. Both files are written to temporaries first and replace the old ones together, so a
+    failure in either leaves both old files as they were (`output_files.staged_outputs`).
 
     EXR contents: "rgb" (linear `colour_space`, 1.0 = 1 cd m^-2 of luminance), "luminance"
     (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
@@ -378,7 +410,7 @@ def save_image(image: SkyImage, png_path: str | Path | None = None,
     views from space from the starlight (incident-light metering: sunlit white is white);
     `adapt_to_night` meters night skies as night (`night_adapted_exposure`: darker than a
     daylight grey, the exposure returned includes that shift)."""
-    check_image_options(operator, colour_space, exr_content)
+    check_image_options(operator, colour_space, exr_content, png_path, exr_path)
     xyz = image.xyz(balance_to_light)
     if ev100 is None and image.from_space:
         ev100 = incident_ev100(float(spectral_to_xyz(image.light_spectrum,
@@ -389,21 +421,29 @@ def save_image(image: SkyImage, png_path: str | Path | None = None,
     elif ev100 is None:
         ev100 = auto_ev100(xyz[..., 1], image.sky)
     linear = xyz_to_rgb(xyz, colour_space)
-    if png_path is not None:
-        write_png(png_path, _display_rgb8(linear, image.valid, ev100, compensation_ev, operator),
-                  text={"Software": "skyscatter", "EV100": f"{ev100:.3f}",
-                        "ColourSpace": colour_space})
-    if exr_path is not None:
-        if exr_content == "rgb":
-            data, names = linear, ("R", "G", "B")
-        elif exr_content == "luminance":
-            data, names = xyz[..., 1:2], ("Y",)
-        else:
-            data = image.spectral
-            names = tuple(f"radiance_{w:07.2f}nm" for w in image.wavelengths_nm)
-        write_exr(exr_path, data.astype(np.float32), names,
-                  attributes={"skyscatter_units": EXR_UNITS[exr_content],
-                              "skyscatter_colour_space": colour_space})
+    stream = png_path if hasattr(png_path, "write") else None
+    with staged_outputs() as stage:
+        if png_path is not None:
+            write = display_image_writer(
+                _display_rgb8(linear, image.valid, ev100, compensation_ev, operator),
+                {"Software": "skyscatter", "EV100": f"{ev100:.3f}", "ColourSpace": colour_space},
+                "PNG" if stream is not None else display_format(png_path))
+            if stream is None:
+                stage.write(png_path, write)
+        if exr_path is not None:
+            if exr_content == "rgb":
+                data, names = linear, ("R", "G", "B")
+            elif exr_content == "luminance":
+                data, names = xyz[..., 1:2], ("Y",)
+            else:
+                data = image.spectral
+                names = tuple(f"radiance_{w:07.2f}nm" for w in image.wavelengths_nm)
+            stage.write(exr_path, exr_writer(data.astype(np.float32), names,
+                                             {"skyscatter_units": EXR_UNITS[exr_content],
+                                              "skyscatter_colour_space": colour_space}))
+    if stream is not None:
+        write(stream)
+        stream.flush()
     return float(ev100)
 
 

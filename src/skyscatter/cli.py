@@ -259,8 +259,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="none, or adapt the star's white (its top-of-atmosphere "
                         "spectrum) to D65 (default none)")
     render.add_argument("-o", "--output", type=Path, default=Path("sky.png"),
-                        help="PNG path (default sky.png)")
-    render.add_argument("--exr", type=Path, default=None, help="also write a linear EXR")
+                        help="display image: .png, .jpg or .jpeg, or - for a PNG on standard "
+                        "output (default sky.png; missing folders are made)")
+    render.add_argument("--exr", type=Path, default=None,
+                        help="also write a linear EXR (.exr); it and the display image replace "
+                        "old files together, or neither does")
     render.add_argument("--exr-content", choices=("rgb", "luminance", "spectral"),
                         default="rgb", help="what the EXR holds (default rgb)")
     render.set_defaults(run=_render)
@@ -315,7 +318,8 @@ def build_parser() -> argparse.ArgumentParser:
                            help="video path, .mp4 or .gif (default timelapse.mp4)")
     timelapse.add_argument("--frames-dir", type=Path, default=None, metavar="DIR",
                            help="where the PNG frames go (default: beside the video, "
-                           "<name>_frames/)")
+                           "<name>_frames/); the folder holds only frames and is replaced as "
+                           "a whole when the run completes")
     timelapse.set_defaults(run=_timelapse)
 
     radiance = commands.add_parser(
@@ -462,7 +466,9 @@ def _render(args: argparse.Namespace) -> None:
     from skyscatter.errors import InputError
     from skyscatter.render.progress import progress
 
-    api.check_image_options(args.tonemap, args.colour_space, args.exr_content)
+    image_target = _image_target(args.output)
+    api.check_image_options(args.tonemap, args.colour_space, args.exr_content, image_target,
+                            args.exr)  # the outputs can be written: checked before any work
     atmosphere = api.load_atmosphere(args.atmosphere)
     observer = _observer(args) if args.time is not None else None
     summary = None
@@ -499,14 +505,28 @@ def _render(args: argparse.Namespace) -> None:
                                args.wavelengths, args.solver, options, bar.update,
                                orbit_latitude_deg=latitude if orbit else None,
                                orbit_longitude_deg=longitude, ground=ground)
-    ev100 = api.save_image(image, args.output, args.exr, args.exposure,
+    ev100 = api.save_image(image, image_target, args.exr, args.exposure,
                            args.exposure_compensation, args.tonemap, args.colour_space,
                            args.white_balance == "star", args.exr_content,
                            adapt_to_night=observer is not None)
-    written = [str(args.output)] + ([str(args.exr)] if args.exr else [])
+    written = ["the PNG to standard output" if image_target is not args.output
+               else str(args.output)] + ([str(args.exr)] if args.exr else [])
     print(f"wrote {', '.join(written)} (EV100 {ev100:.2f})", file=sys.stderr)
     if summary is not None:
         print(summary, file=sys.stderr)
+
+
+def _image_target(output: Path):
+    """Where `-o` sends the display image: the path, or for `-` standard output (refused on a
+    terminal, which binary PNG data would garble)."""
+    from skyscatter.errors import InputError
+
+    if str(output) != "-":
+        return output
+    if sys.stdout.isatty():
+        raise InputError("-o -: standard output is a terminal; redirect it to a file or a pipe "
+                         "(skyscatter render ... -o - > sky.png)", key="output", value="-")
+    return sys.stdout.buffer
 
 
 def _observer(args: argparse.Namespace, time: str | None = None):
@@ -792,15 +812,20 @@ def _validate(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `skyscatter` command; returns the exit code."""
     from skyscatter.errors import SkyscatterError
+    from skyscatter.output_files import Terminated, sigterm_as_interrupt
 
     args = build_parser().parse_args(argv)
     try:
-        code = args.run(args)
+        with sigterm_as_interrupt():  # SIGTERM cleans up like Ctrl-C
+            code = args.run(args)
     except SkyscatterError as error:
         if args.debug:
             raise
         print(f"skyscatter: {error}", file=sys.stderr)
         return 2
+    except Terminated:
+        print("skyscatter: terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("skyscatter: interrupted", file=sys.stderr)
         return 130

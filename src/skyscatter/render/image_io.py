@@ -5,10 +5,14 @@ channel is written as its own scanline channel ("R", "G", "B" or "Y", ...), ZIP-
 float32 (float16 arrays stay half), so other tools see a standard RGB or luminance image.
 PNG goes through Pillow. No timestamps are written: the same image gives the same bytes.
 
-Every writer is atomic: it writes a temporary file in the target directory
-(`tempfile.mkstemp`), then `os.replace`s it onto the target, so a reader never sees a partial
-file and a failed write leaves the previous file as it was. Missing parent directories are
-created. A path that cannot be written raises `InputError("cannot write <path>: <reason>")`.
+Display images are PNG or JPEG, chosen by the file name's suffix (`display_format`; any other
+suffix is refused, never written as PNG under another name). `exr_writer` and
+`display_image_writer` return the function that writes one file, so that a caller can stage
+several outputs and replace them together (`skyscatter.output_files.staged_outputs`).
+Every writer is atomic through `output_files`: a temporary file in the target directory, renamed
+onto the target when complete, so a reader never sees a partial file and a failed write leaves
+the previous file as it was. Missing parent directories are created. A path that cannot be
+written raises `InputError("cannot write <path>: <reason>")`.
 
 Sources: OpenEXR file layout and standard attributes, "Reading and Writing OpenEXR Image
 Files with the OpenEXR Library" (openexr.com); PNG, ISO/IEC 15948:2004.
@@ -16,12 +20,10 @@ Files with the OpenEXR Library" (openexr.com); PNG, ISO/IEC 15948:2004.
 
 from __future__ import annotations
 
-import contextlib
-import functools
 import os
-import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 import OpenEXR
@@ -29,8 +31,14 @@ from numpy.typing import ArrayLike
 from PIL import Image, PngImagePlugin
 
 from skyscatter.errors import InputError
+from skyscatter.output_files import atomic_write
 
-__all__ = ["atomic_write", "read_exr", "read_exr_attributes", "write_exr", "write_png"]
+__all__ = ["DISPLAY_FORMATS", "atomic_write", "display_format", "display_image_writer",
+           "exr_writer", "read_exr", "read_exr_attributes", "write_exr", "write_png"]
+
+# Display image formats by file suffix (Pillow's format names)
+DISPLAY_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG"}
+JPEG_QUALITY = 95  # with full-resolution chroma: sky gradients without visible blocks
 
 _DEFAULT_CHANNELS = {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}
 # Channels read back in this order; any others follow in the file's (alphabetical) order.
@@ -42,50 +50,20 @@ _RESERVED_ATTRIBUTES = frozenset({
 })
 
 
-@functools.cache
-def _umask() -> int:
-    """The process umask (read once; there is no way to read it without setting it)."""
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def atomic_write(path: str | os.PathLike[str], write: Callable[[str], None]) -> Path:
-    """Call `write(temporary_path)`, then rename the result onto `path`; clean up on failure.
-    An OSError becomes an InputError naming the file."""
-    target = Path(path)
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(suffix=target.suffix, prefix=f".{target.name}.",
-                                   dir=target.parent)
-    except OSError as exc:
-        raise InputError(f"cannot write {target}: {exc.strerror or exc}", key="path",
-                         value=str(target)) from exc
-    os.close(fd)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual file mode
-        os.replace(tmp, target)
-    except BaseException as exc:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        if isinstance(exc, (OSError, RuntimeError)):
-            reason = getattr(exc, "strerror", None) or str(exc)
-            raise InputError(f"cannot write {target}: {reason}", key="path",
-                             value=str(target)) from exc
-        raise
-    return target
-
-
 def write_exr(path: str | os.PathLike[str], image: ArrayLike,
               channel_names: Sequence[str] | None = None,
               attributes: Mapping[str, str] | None = None) -> Path:
-    """Write a linear image to an OpenEXR file (scanline, ZIP), atomically.
+    """Write a linear image to an OpenEXR file (scanline, ZIP), atomically; parent directories
+    are created. The other arguments as `exr_writer`. Returns the written file."""
+    return atomic_write(path, exr_writer(image, channel_names, attributes))
+
+
+def exr_writer(image: ArrayLike, channel_names: Sequence[str] | None = None,
+               attributes: Mapping[str, str] | None = None) -> Callable[[str], None]:
+    """Check a linear image for an OpenEXR file; returns `write(path)`, which writes it there.
 
     Parameters
     ----------
-    path : path-like
-        Target file; parent directories are created.
     image : array_like, shape (h, w, c)
         Pixel values, stored as float32 (float16 input stays half). Linear units of the
         caller's choice, e.g. radiance [W m⁻² sr⁻¹] or luminance [cd m⁻²]; say which in
@@ -94,11 +72,6 @@ def write_exr(path: str | os.PathLike[str], image: ArrayLike,
         Default ("Y",), ("R", "G", "B") or ("R", "G", "B", "A") for c = 1, 3, 4.
     attributes : mapping of str to str, optional
         Extra string attributes for the header (e.g. {"units": "cd/m^2"}).
-
-    Returns
-    -------
-    Path
-        The written file.
     """
     arr = np.asarray(image)
     if arr.ndim != 3 or arr.shape[0] < 1 or arr.shape[1] < 1 or arr.shape[2] < 1:
@@ -126,7 +99,7 @@ def write_exr(path: str | os.PathLike[str], image: ArrayLike,
                              f"standard header name to a string", key="attributes", value=key)
         header[key] = value
     channels = {name: np.ascontiguousarray(arr[..., k]) for k, name in enumerate(names)}
-    return atomic_write(path, lambda tmp: OpenEXR.File(header, channels).write(tmp))
+    return lambda path: OpenEXR.File(header, channels).write(path)
 
 
 def _open_exr(path: str | os.PathLike[str]) -> OpenEXR.File:
@@ -168,30 +141,51 @@ def read_exr_attributes(path: str | os.PathLike[str]) -> dict[str, str]:
     return {k: v for k, v in header.items() if isinstance(v, str) and k not in _RESERVED_ATTRIBUTES}
 
 
-def write_png(path: str | os.PathLike[str], rgb8: ArrayLike,
-              text: Mapping[str, str] | None = None) -> Path:
-    """Write an 8-bit sRGB image to a PNG file, atomically.
+def display_format(path: str | os.PathLike[str]) -> str:
+    """Pillow's format name ("PNG", "JPEG") for a display image at `path`, from its suffix;
+    InputError naming the supported suffixes for any other."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in DISPLAY_FORMATS:
+        hint = "; a linear EXR is written with --exr" if suffix == ".exr" else ""
+        raise InputError(f"cannot write a display image as {str(path)!r}: name it "
+                         f"{', '.join(DISPLAY_FORMATS)}{hint}", key="path", value=str(path),
+                         allowed=", ".join(DISPLAY_FORMATS))
+    return DISPLAY_FORMATS[suffix]
+
+
+def display_image_writer(rgb8: ArrayLike, text: Mapping[str, str] | None = None,
+                         image_format: str = "PNG") -> Callable[[str | BinaryIO], None]:
+    """Check an 8-bit sRGB image; returns `write(target)`, which writes it to a path or a
+    binary stream as PNG (with `text` as tEXt chunks) or JPEG (quality 95, no chroma
+    subsampling, alpha dropped, `text` as one comment).
 
     Parameters
     ----------
-    path : path-like
-        Target file; parent directories are created.
     rgb8 : array_like of uint8, shape (h, w, 3) or (h, w, 4)
         sRGB-encoded codes (see `tonemap.to_srgb8`); a 4th channel is alpha.
     text : mapping of str to str, optional
-        PNG tEXt chunks (e.g. {"Software": "skyscatter", "Description": ...}).
-
-    Returns
-    -------
-    Path
-        The written file.
+        Metadata (e.g. {"Software": "skyscatter", "Description": ...}).
+    image_format : {"PNG", "JPEG"}
+        A value of `DISPLAY_FORMATS` (see `display_format`).
     """
     arr = np.asarray(rgb8)
     if arr.dtype != np.uint8 or arr.ndim != 3 or arr.shape[2] not in (3, 4) or 0 in arr.shape:
         raise InputError(f"a PNG image must be uint8 of shape (height, width, 3 or 4), got "
                          f"{arr.dtype} {arr.shape}", key="rgb8", value=(str(arr.dtype), arr.shape))
+    picture = Image.fromarray(np.ascontiguousarray(arr))  # uint8 (h, w, 3|4) -> RGB|RGBA
+    if image_format == "JPEG":
+        comment = "; ".join(f"{key}: {value}" for key, value in (text or {}).items())
+        rgb = picture.convert("RGB")
+        return lambda target: rgb.save(target, format="JPEG", quality=JPEG_QUALITY,
+                                       subsampling=0, comment=comment)
     info = PngImagePlugin.PngInfo()
     for key, value in (text or {}).items():
         info.add_text(str(key), str(value))
-    picture = Image.fromarray(np.ascontiguousarray(arr))  # uint8 (h, w, 3|4) -> RGB|RGBA
-    return atomic_write(path, lambda tmp: picture.save(tmp, format="PNG", pnginfo=info))
+    return lambda target: picture.save(target, format="PNG", pnginfo=info)
+
+
+def write_png(path: str | os.PathLike[str], rgb8: ArrayLike,
+              text: Mapping[str, str] | None = None) -> Path:
+    """Write an 8-bit sRGB image to a PNG file, atomically; parent directories are created.
+    The other arguments as `display_image_writer`. Returns the written file."""
+    return atomic_write(path, display_image_writer(rgb8, text, "PNG"))

@@ -7,9 +7,10 @@
 
 Both write to a temporary file beside the target and rename it when complete, so an
 interrupted time-lapse never leaves a half-written video under the final name
-(`image_io.atomic_write`). Frames arrive one at a time (`VideoWriter.add`), so a long
-sequence is never held in memory as a whole (GIF keeps Pillow's palettised frames, 1 byte
-per pixel).
+(`skyscatter.output_files`); given a `StagedOutputs`, the writer leaves the rename to its
+owner, which replaces the video together with other outputs (the frames). Frames arrive one
+at a time (`VideoWriter.add`), so a long sequence is never held in memory as a whole (GIF
+keeps Pillow's palettised frames, 1 byte per pixel).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import numpy as np
 from PIL import Image
 
 from skyscatter.errors import InputError
-from skyscatter.render.image_io import atomic_write
+from skyscatter.output_files import StagedOutputs
 
 __all__ = ["VIDEO_FORMATS", "VideoWriter", "video_format"]
 
@@ -40,19 +41,23 @@ def video_format(path: str | os.PathLike[str]) -> str:
 class VideoWriter:
     """Collects 8-bit sRGB frames (h, w, 3) and writes `path` (.mp4 or .gif) on `close`.
 
-    Use as a context manager; if the block raises, nothing is written under `path`.
+    Use as a context manager; if the block raises, nothing is written under `path`. With
+    `stage`, the video is written to that stage's temporary and moved onto `path` when the
+    stage commits; without, `close` moves it there.
     """
 
-    def __init__(self, path: str | os.PathLike[str], fps: float) -> None:
+    def __init__(self, path: str | os.PathLike[str], fps: float,
+                 stage: StagedOutputs | None = None) -> None:
         self.path = Path(path)
         self.format = video_format(self.path)
         if not (np.isfinite(fps) and 0.1 <= fps <= 120.0):
             raise InputError(f"fps = {fps!r} must lie in [0.1, 120]", key="fps", value=fps,
                              allowed="[0.1, 120]")
         self.fps = float(fps)
+        self._own_stage = stage is None
+        self._stage = StagedOutputs() if stage is None else stage
         self._gif_frames: list[Image.Image] = []
         self._ffmpeg = None
-        self._temporary: Path | None = None
         self._size: tuple[int, int] | None = None
 
     def __enter__(self) -> VideoWriter:
@@ -81,19 +86,30 @@ class VideoWriter:
             self._send_mp4(frame)
 
     def close(self) -> Path:
-        """Finish the file and move it to `path`; returns `path`."""
+        """Finish the file and move it to `path` (with a `stage`: when that commits); returns
+        `path`."""
         if self._size is None:
             raise InputError("no frames to write", key="video", value=str(self.path))
-        if self.format == "gif":
-            first, rest = self._gif_frames[0], self._gif_frames[1:]
-            duration_ms = max(20, round(1000.0 / self.fps))
-            atomic_write(self.path, lambda tmp: first.save(
-                tmp, format="GIF", save_all=True, append_images=rest, duration=duration_ms,
-                loop=0, optimize=False))
-            self._gif_frames = []
-            return self.path
-        self._ffmpeg.close()  # flushes and waits for ffmpeg
-        os.replace(self._temporary, self.path)
+        try:
+            if self.format == "gif":
+                first, rest = self._gif_frames[0], self._gif_frames[1:]
+                duration_ms = max(20, round(1000.0 / self.fps))
+                self._stage.write(self.path, lambda tmp: first.save(
+                    tmp, format="GIF", save_all=True, append_images=rest,
+                    duration=duration_ms, loop=0, optimize=False))
+                self._gif_frames = []
+            else:
+                ffmpeg, self._ffmpeg = self._ffmpeg, None
+                ffmpeg.close()  # flushes and waits for ffmpeg
+            if self._own_stage:
+                self._stage.commit()
+        except (OSError, RuntimeError) as error:
+            self._abort()
+            raise InputError(f"cannot write {self.path}: {error}", key="video",
+                             value=str(self.path)) from error
+        except BaseException:
+            self._abort()
+            raise
         return self.path
 
     def _send_mp4(self, frame: np.ndarray) -> None:
@@ -101,20 +117,19 @@ class VideoWriter:
         if self._ffmpeg is None:
             import imageio_ffmpeg
 
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._temporary = self.path.with_name(f".{self.path.name}.partial.mp4")
+            temporary = self._stage.reserve(self.path)  # no .mp4 suffix: say the format
             self._ffmpeg = imageio_ffmpeg.write_frames(
-                str(self._temporary), (width, height), fps=self.fps, codec="libx264",
+                str(temporary), (width, height), fps=self.fps, codec="libx264",
                 pix_fmt_in="rgb24", pix_fmt_out="yuv420p", quality=8, macro_block_size=1,
-                ffmpeg_log_level="error")
+                ffmpeg_log_level="error", output_params=["-f", "mp4"])
             self._ffmpeg.send(None)  # start the generator
         self._ffmpeg.send(np.ascontiguousarray(frame[:height, :width]))
 
     def _abort(self) -> None:
         self._gif_frames = []
-        if self._ffmpeg is not None:
-            try:
+        try:
+            if self._ffmpeg is not None:
                 self._ffmpeg.close()
-            finally:
-                if self._temporary is not None and self._temporary.exists():
-                    self._temporary.unlink()
+        finally:
+            if self._own_stage:
+                self._stage.discard()
