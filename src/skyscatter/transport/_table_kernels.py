@@ -748,11 +748,12 @@ def order_statistics(tables, use_phase, phase_table, bottom_radius, top_radius, 
 def _enter_atmosphere(ox, oy, oz, dx, dy, dz, top_radius):
     """Move an observer in space to the top boundary along the ray (Bruneton 2017,
     `GetSkyRadiance`): (x, y, z, travelled distance, inside) with inside False when the ray
-    misses the atmosphere."""
+    misses the atmosphere; also for a ray that leaves from the top itself (r = top, not
+    pointing down: no length inside, as in `geometry.atmosphere_segment`)."""
     r = math.sqrt(ox * ox + oy * oy + oz * oz)
-    if r <= top_radius:
-        return ox, oy, oz, 0.0, True
     r_mu = ox * dx + oy * dy + oz * dz
+    if r < top_radius or (r == top_radius and r_mu < 0.0):
+        return ox, oy, oz, 0.0, True
     discriminant = r_mu * r_mu - r * r + top_radius * top_radius
     if r_mu >= 0.0 or discriminant < 0.0:
         return ox, oy, oz, 0.0, False
