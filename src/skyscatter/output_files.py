@@ -11,8 +11,8 @@ reports); a base module that every layer may import.
   right after the other with SIGINT and SIGTERM held back, so that a failure or an interrupt
   in any write leaves all old outputs as they were. A folder is swapped in whole: the old one
   is renamed aside, the new one renamed in, the old one removed.
-- Left-overs. A process killed with SIGKILL leaves its temporaries. The first write into a
-  folder (and `check_writable_*`) removes the temporaries there whose writing process is gone
+- Left-overs. A process killed with SIGKILL leaves its temporaries. Each write into a folder
+  (and `check_writable_*`) first removes the temporaries there whose writing process is gone
   or that are older than a day (`sweep_stale_temporaries`); only names that match our pattern.
 - Up front. `check_writable_file` and `check_writable_folder` refuse, before any computation,
   a path that is a directory (or a file where a folder is wanted), a read-only file, a folder
@@ -56,7 +56,6 @@ __all__ = [
 TEMPORARY_NAME = re.compile(r"\.(?P<name>.+)\.(?P<pid>[0-9]+)\.(?P<token>[0-9a-f]{8})\.tmp")
 STALE_AFTER_S = 86400.0  # a temporary this old is stale even if its pid is alive (pid reuse)
 _MAX_NAME = 200  # of the target's name inside a temporary's name (file names: 255 bytes)
-_swept: set[Path] = set()  # folders swept by this process
 
 
 class Terminated(KeyboardInterrupt):
@@ -126,11 +125,10 @@ def sweep_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
     return removed
 
 
-def _sweep_once(folder: Path) -> None:
-    """Sweep `folder` the first time this process writes there."""
-    key = folder.absolute()
-    if key not in _swept:
-        _swept.add(key)
+def _sweep(folder: Path) -> None:
+    """Sweep `folder` before writing there, unless it is itself one of our temporaries (a
+    folder of frames being made: nothing stale can be in it)."""
+    if not TEMPORARY_NAME.fullmatch(folder.absolute().name):
         sweep_stale_temporaries(folder)
 
 
@@ -157,7 +155,7 @@ def _probe_folder_of(target: Path) -> None:
     except OSError as error:
         where = "" if folder == target.parent else f" (in {folder})"
         raise _cannot_write(target, f"{error.strerror or error}{where}") from None
-    _sweep_once(folder)
+    _sweep(folder)
 
 
 def check_writable_file(path: str | os.PathLike[str]) -> Path:
@@ -181,7 +179,7 @@ def check_writable_folder(path: str | os.PathLike[str], owned: re.Pattern[str]) 
     if os.path.lexists(target) and not target.is_dir():
         raise _cannot_write(target, "it is a file; give a folder")
     if target.is_dir():
-        _sweep_once(target)
+        _sweep(target)
         try:
             foreign = sorted(name for name in os.listdir(target)
                              if not (owned.fullmatch(name) or TEMPORARY_NAME.fullmatch(name)))
@@ -230,7 +228,7 @@ class StagedOutputs:
         target = Path(target)
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
-            _sweep_once(target.parent)
+            _sweep(target.parent)
             temporary = temporary_path(target)
             os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
         except OSError as error:
@@ -254,7 +252,7 @@ class StagedOutputs:
         target = Path(target)
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
-            _sweep_once(target.parent)
+            _sweep(target.parent)
             temporary = temporary_path(target)
             temporary.mkdir()
         except OSError as error:
