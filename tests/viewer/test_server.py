@@ -644,9 +644,12 @@ def test_forged_host_is_refused_before_any_work(server, counted_tables, forged, 
     assert counted_tables == []
 
 
-def test_missing_host_is_refused(server, counted_tables):
+def test_missing_or_repeated_host_is_refused(server, counted_tables):
     answer = answer_with(server, "/api/tables", {TOKEN_HEADER: server.token})
     assert answer[0] == 421 and counted_tables == []
+    twice = raw_exchange(server, b"GET /api/tables HTTP/1.1\r\n" + host(server)
+                         + b"Host: evil.example\r\nConnection: close\r\n\r\n")
+    assert parse_response(twice)[0] == 421 and counted_tables == []
 
 
 def test_dns_rebinding_is_refused(server, counted_tables):

@@ -340,8 +340,9 @@ class Handler(BaseHTTPRequestHandler):
 
     def _check_caller(self) -> None:
         """Refuse a request for another host name (DNS rebinding) or from another origin."""
-        host = self.headers.get("Host", "")
-        if not self.server.host_allowed(host):
+        hosts = self.headers.get_all("Host", [])
+        host = hosts[0] if len(hosts) == 1 else ", ".join(hosts)
+        if len(hosts) != 1 or not self.server.host_allowed(host):
             self.close_connection = True
             raise _RefusedError(HTTPStatus.MISDIRECTED_REQUEST,
                            f"this viewer does not answer for host {host!r}; open the address "
