@@ -236,3 +236,16 @@ def test_a_render_killed_while_writing_leaves_the_old_pair(capsys, tmp_path, old
     assert sorted(os.listdir(png.parent)) == ["sky.exr", "sky.png"]
     assert png.read_bytes() != png_bytes and exr.read_bytes() != exr_bytes
     assert read_exr(exr)[0].shape == (8, 8, 3)
+
+
+def test_validate_refuses_a_read_only_report_folder_before_the_suite(tmp_path):
+    read_only = tmp_path / "ro"
+    read_only.mkdir(mode=0o555)
+    result = subprocess.run([*_unprivileged(), sys.executable, "-m", "skyscatter.cli",
+                             "validate", "--quick", "--output", str(read_only / "report"),
+                             "--cache-dir", str(tmp_path / "cache")],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2
+    assert _one_line(result.stderr) == (f"skyscatter: cannot write {read_only}/report/report.md: "
+                                        f"Permission denied (in {read_only})")
+    assert sorted(os.listdir(tmp_path)) == ["ro"]

@@ -774,6 +774,7 @@ def _cache(args: argparse.Namespace) -> None:
 
 def _validate(args: argparse.Namespace) -> int:
     from skyscatter.errors import InputError
+    from skyscatter.output_files import check_writable_file
     from skyscatter.transport.cache import TableCache
     from skyscatter.validate.report import ValidationSettings
     from skyscatter.validate.suite import run_suite
@@ -781,6 +782,7 @@ def _validate(args: argparse.Namespace) -> int:
     if args.output.exists() and not args.output.is_dir():
         raise InputError(f"--output {args.output} is a file; give a directory",
                          key="output", value=str(args.output))
+    check_writable_file(args.output / "report.md")  # before the suite, not after it
 
     def log(message: str) -> None:
         print(f"skyscatter: {message}", file=sys.stderr, flush=True)
