@@ -8,9 +8,10 @@ resolution, wavelengths, versions) and a SHA-256 of both.
 - `load` returns None, with the reason, for a file that is missing, truncated, corrupt (a
   header that declares more data than the file holds is caught before anything is read), not
   a file (a folder in its place), or made from other inputs, so the caller recomputes it.
-- `store` writes a pid-tagged hidden temporary (`temporary_path`) and renames it, so a reader
-  never sees half a file; temporaries that a killed process left behind are removed on the
-  next load or store in the folder (`sweep_stale_temporaries`).
+- `store` writes a pid-tagged hidden temporary (`output_files.temporary_path`, the one naming of
+  skyscatter's temporaries) and renames it, so a reader never sees half a file; temporaries
+  that a killed process left behind are removed on the next load or store in the folder
+  (`output_files.sweep_stale_temporaries`).
 - The cache holds at most `max_bytes` (default 2 GiB, or $SKYSCATTER_CACHE_MAX_BYTES, e.g.
   `500M`): after each store the least recently used entries (modification time; `load`
   touches what it reads) of the folder and its direct subfolders (mie/) are removed until the
@@ -29,7 +30,6 @@ import json
 import math
 import os
 import re
-import secrets
 import time
 import zipfile
 from collections.abc import Iterator
@@ -40,31 +40,30 @@ from typing import Any
 import numpy as np
 
 from skyscatter.errors import InputError
+from skyscatter.output_files import (
+    STALE_AFTER_S,
+    sweep_stale_temporaries,
+    temporary_path,
+)
 
 __all__ = [
     "DEFAULT_MAX_BYTES",
     "MAX_BYTES_VARIABLE",
-    "STALE_TEMPORARY_S",
     "CacheEntry",
     "TableCache",
     "cache_directory_override",
     "default_cache_directory",
     "default_max_bytes",
     "parse_byte_size",
-    "sweep_stale_temporaries",
-    "temporary_path",
 ]
 
 _METADATA = "__metadata__"
 _CHECKSUM = "__checksum__"
 DEFAULT_MAX_BYTES = 2 * 1024**3  # 2 GiB: eight Earth presets at full resolution (255 MB each)
 MAX_BYTES_VARIABLE = "SKYSCATTER_CACHE_MAX_BYTES"
-STALE_TEMPORARY_S = 86_400.0  # a temporary this old is stale even if its pid is alive (reused)
 _UNITS = {"": 1, "K": 1024, "M": 1024**2, "G": 1024**3, "T": 1024**4}
-# .<target name>.<pid>.<random>.tmp (the name keeps its suffix: .tables-x.npz.12.ab3f.tmp)
-_TEMPORARY = re.compile(r"^\.(?P<target>.+)\.(?P<pid>\d+)\.(?P<token>[0-9a-f]{8})\.tmp$")
 # Temporaries of earlier versions (tempfile.mkstemp, no pid): removed once a day old
-_OLD_TEMPORARY = re.compile(r"^\..+\.npz\.tmp$")
+_OLD_TEMPORARY = re.compile(r"\..+\.npz\.tmp")
 
 
 # The cache root of the code running in this thread/context, when a caller fixed it
@@ -115,50 +114,18 @@ def default_max_bytes() -> int:
     return parse_byte_size(text) if text else DEFAULT_MAX_BYTES
 
 
-def temporary_path(target: str | Path) -> Path:
-    """A hidden temporary beside `target`, named after it and this process:
-    `.<name>.<pid>.<8 hex digits>.tmp`. Write it, then `os.replace` it onto `target`; when the
-    process is killed first, `sweep_stale_temporaries` removes it on a later run."""
-    target = Path(target)
-    return target.with_name(f".{target.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
-
-
-def _process_alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError, OSError):
-        return True  # another user's process (or an odd pid): leave its file alone
-    return True
-
-
-def sweep_stale_temporaries(directory: str | Path,
-                            max_age_s: float = STALE_TEMPORARY_S) -> list[Path]:
-    """Remove the temporaries of `temporary_path` in `directory` whose process is gone or that
-    are older than `max_age_s` [s] (and the pid-less ones of earlier versions older than that).
-    Returns the paths removed; files that vanish or cannot be removed meanwhile are skipped."""
-    removed = []
+def _sweep(directory: str | Path) -> None:
+    """Remove the stale temporaries in `directory` (`output_files.sweep_stale_temporaries`:
+    of processes that are gone, or a day old), and the pid-less ones of earlier versions
+    (`.<key>.<random>.npz.tmp`) once they are a day old."""
+    sweep_stale_temporaries(directory)
     now = time.time()
-    try:
-        names = os.listdir(directory)
-    except OSError:
-        return removed
-    for name in names:
-        match = _TEMPORARY.match(name)
-        if match is None and _OLD_TEMPORARY.match(name) is None:
-            continue
-        path = Path(directory) / name
-        try:
-            old = now - path.lstat().st_mtime > max_age_s
-            if old or (match is not None and not _process_alive(int(match.group("pid")))):
-                path.unlink()
-                removed.append(path)
-        except OSError:
-            continue
-    return removed
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(directory):
+            if _OLD_TEMPORARY.fullmatch(entry.name):
+                with contextlib.suppress(OSError):
+                    if now - entry.stat(follow_symlinks=False).st_mtime > STALE_AFTER_S:
+                        os.unlink(entry.path)
 
 
 def _checksum(arrays: dict[str, np.ndarray], metadata_json: str) -> str:
@@ -298,7 +265,7 @@ class TableCache:
         """(arrays, "ok") for a valid entry made from `expected` metadata, else (None, reason).
         A valid entry is marked as used now (for the least-recently-used eviction)."""
         path = self.path(key)
-        sweep_stale_temporaries(self.directory)
+        _sweep(self.directory)
         if not path.exists():
             return None, "not cached yet"
         if not path.is_file():
@@ -345,7 +312,7 @@ class TableCache:
             except OSError:
                 raise InputError(f"the cache entry {path} is a folder with files in it; "
                                  "remove it", key="cache_dir", value=str(path)) from None
-        sweep_stale_temporaries(self.directory)
+        _sweep(self.directory)
         temporary = temporary_path(path)
         try:
             with open(temporary, "xb") as stream:
@@ -415,5 +382,5 @@ class TableCache:
                 continue
             removed.append(entry)
         for folder in {self.directory} | {entry.path.parent for entry in removed}:
-            sweep_stale_temporaries(folder)
+            _sweep(folder)
         return removed

@@ -16,13 +16,9 @@ import numpy as np
 import pytest
 from transport_cases import exponential_earth
 
-from skyscatter.disk_cache import (
-    DEFAULT_MAX_BYTES,
-    MAX_BYTES_VARIABLE,
-    sweep_stale_temporaries,
-    temporary_path,
-)
+from skyscatter.disk_cache import DEFAULT_MAX_BYTES, MAX_BYTES_VARIABLE
 from skyscatter.errors import InputError
+from skyscatter.output_files import temporary_path
 from skyscatter.transport.cache import TableCache, profile_fingerprint
 
 METADATA = {"fingerprint": "abc", "resolution": [32, 128, 32, 8], "version": "0.1.0",
@@ -235,23 +231,23 @@ def test_a_file_as_cache_directory_is_refused_and_a_folder_is_writable(tmp_path)
 
 # --- temporaries ------------------------------------------------------------------------------
 
-def test_temporaries_carry_the_pid_and_dead_or_day_old_ones_are_swept(tmp_path):
-    target = tmp_path / "tables-x.npz"
-    mine = temporary_path(target)
-    assert mine.parent == tmp_path and mine.name.startswith(".tables-x.npz.")
+def test_temporaries_of_dead_writers_and_day_old_ones_are_swept_by_the_next_load(cache):
+    cache.store("earth", arrays(), METADATA)
+    mine = temporary_path(cache.path("earth"))
+    assert mine.parent == cache.directory and mine.name.startswith(".earth.npz.")
     assert f".{os.getpid()}." in mine.name and mine.name.endswith(".tmp")
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True, check=True)
-    orphan = tmp_path / f".tables-x.npz.{int(dead.stdout)}.0123abcd.tmp"
-    old_style = tmp_path / ".tables-y.npz.k2j4h5g6.npz.tmp"  # mkstemp, before pids
-    for path in (mine, orphan, old_style, tmp_path / "keep.tmp"):
+    orphan = cache.directory / f".earth.npz.{int(dead.stdout)}.0123abcd.tmp"
+    old_style = cache.directory / ".earth.k2j4h5g6.npz.tmp"  # mkstemp's, before pids
+    fresh_old_style = cache.directory / ".earth.a1b2c3d4.npz.tmp"
+    for path in (mine, orphan, old_style, fresh_old_style, cache.directory / "keep.tmp"):
         path.write_bytes(b"partial")
-    assert sweep_stale_temporaries(tmp_path) == [orphan]
     day_old = time.time() - 2 * 86400
     os.utime(old_style, (day_old, day_old))
-    os.utime(mine, (day_old, day_old))
-    assert sorted(sweep_stale_temporaries(tmp_path)) == sorted([mine, old_style])
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.tmp"]
+    assert cache.load("earth", METADATA)[1] == "ok"
+    assert sorted(p.name for p in cache.directory.iterdir()) == sorted(
+        [mine.name, fresh_old_style.name, "earth.npz", "keep.tmp"])
 
 
 _SLOW_WRITER = """
