@@ -508,7 +508,9 @@ def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", por
     preset name or TOML file) is the atmosphere shown first, besides the presets; the full
     tables come from and go to the table cache (`cache_dir`, default
     `default_cache_directory()`) unless `use_cache` is False. `log` gets the requests and
-    where tables came from. Call `viewer.server.serve_forever(server, open_browser)`."""
+    where tables came from. The server's `url` carries its per-launch token, which every API
+    request needs (`viewer.server`: who may ask). Call
+    `viewer.server.serve_forever(server, open_browser)`."""
     cache = TableCache(cache_dir) if use_cache else None
     service = TableService(config, cache, log)
 
