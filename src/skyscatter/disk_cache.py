@@ -240,10 +240,12 @@ class TableCache:
                              value=key)
         return self.directory / f"{key}.npz"
 
-    def check_writable(self) -> str | None:
-        """None when entries can be stored here, else why not (permission denied, read-only
-        file system): the caller may compute without storing. Raises InputError when the
-        cache directory is a file (or lies under one): a mistake to fix before any work."""
+    def check_writable(self, key: str | None = None) -> str | None:
+        """None when entries (the entry `key`, if given) can be stored here, else why not
+        (permission denied, read-only file system, a folder with files in the entry's place):
+        the caller may compute without storing. Raises InputError when the cache directory is
+        a file (or lies under one): a mistake to fix before any work."""
+        path = None if key is None else self.path(key)
         try:
             self.directory.mkdir(parents=True, exist_ok=True)
         except (FileExistsError, NotADirectoryError):
@@ -258,6 +260,9 @@ class TableCache:
             probe.unlink()
         except OSError as error:
             return f"cannot write in {self.directory}: {error.strerror}"
+        if path is not None and path.is_dir() and not path.is_symlink() and any(
+                path.iterdir()):
+            return f"the cache entry {path} is a folder with files in it; remove it"
         return None
 
     def load(self, key: str, expected: dict[str, Any]) -> tuple[dict[str, np.ndarray] | None,
@@ -302,16 +307,12 @@ class TableCache:
         payload = dict(arrays)
         payload[_METADATA] = np.array(metadata_json)
         payload[_CHECKSUM] = np.array(_checksum(arrays, metadata_json))
-        problem = self.check_writable()
+        problem = self.check_writable(key)
         if problem is not None:
-            raise InputError(f"{problem} (set SKYSCATTER_CACHE_DIR or --cache-dir to a "
+            raise InputError(f"{problem} (or set SKYSCATTER_CACHE_DIR or --cache-dir to a "
                              "writable folder)", key="cache_dir", value=str(self.directory))
         if path.is_dir() and not path.is_symlink():
-            try:
-                path.rmdir()
-            except OSError:
-                raise InputError(f"the cache entry {path} is a folder with files in it; "
-                                 "remove it", key="cache_dir", value=str(path)) from None
+            path.rmdir()  # empty (`check_writable`)
         _sweep(self.directory)
         temporary = temporary_path(path)
         try:

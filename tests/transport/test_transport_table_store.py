@@ -121,7 +121,7 @@ def test_a_file_as_cache_directory_is_refused_before_any_work(tmp_path, monkeypa
 
 def test_an_unwritable_cache_computes_and_says_the_tables_are_not_stored(cache, monkeypatch):
     # As a read-only folder behaves (root ignores permission bits, so the probe is made to fail)
-    def refuse(self):
+    def refuse(self, key=None):
         return f"cannot write in {self.directory}: Read-only file system"
 
     monkeypatch.setattr(TableCache, "check_writable", refuse)
@@ -140,3 +140,16 @@ def test_a_read_only_cache_folder_is_reported_before_the_work(cache):
         assert "not stored" in message
     finally:
         cache.directory.chmod(0o755)
+
+
+def test_a_folder_with_files_in_an_entrys_place_is_reported_before_the_work(cache):
+    profile = exponential_earth()
+    _tables(profile, cache)
+    (path,) = cache.directory.glob("*.npz")
+    path.unlink()
+    path.mkdir()
+    (path / "user-file").write_text("keep me")
+    tables, message = _tables(profile, cache)
+    assert "precomputing" in message and "not stored" in message and "folder with files" \
+        in message
+    assert tables.orders == 2 and (path / "user-file").exists()

@@ -104,7 +104,7 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
     metadata = table_metadata(profile, resolution, orders, min_cos_sun_zenith)
     key = _key(metadata)
     path = cache.path(key)
-    unwritable = cache.check_writable()  # before the work: a file as cache dir is refused
+    unwritable = cache.check_writable(key)  # before the work: a file as cache dir is refused
     if force:
         reason = "recomputing as asked"
     else:
