@@ -240,12 +240,10 @@ class TableCache:
                              value=key)
         return self.directory / f"{key}.npz"
 
-    def check_writable(self, key: str | None = None) -> str | None:
-        """None when entries (the entry `key`, if given) can be stored here, else why not
-        (permission denied, read-only file system, a folder with files in the entry's place):
-        the caller may compute without storing. Raises InputError when the cache directory is
-        a file (or lies under one): a mistake to fix before any work."""
-        path = None if key is None else self.path(key)
+    def check_writable(self) -> str | None:
+        """None when entries can be stored here, else why not (permission denied, read-only
+        file system): the caller may compute without storing. Raises InputError when the
+        cache directory is a file (or lies under one): a mistake to fix before any work."""
         try:
             self.directory.mkdir(parents=True, exist_ok=True)
         except (FileExistsError, NotADirectoryError):
@@ -260,9 +258,17 @@ class TableCache:
             probe.unlink()
         except OSError as error:
             return f"cannot write in {self.directory}: {error.strerror}"
-        if path is not None and path.is_dir() and not path.is_symlink() and any(
-                path.iterdir()):
-            return f"the cache entry {path} is a folder with files in it; remove it"
+        return None
+
+    def entry_problem(self, key: str) -> str | None:
+        """Why the entry `key` cannot be stored although the directory can be written (a
+        folder with files in its place), or None."""
+        path = self.path(key)
+        try:
+            if path.is_dir() and not path.is_symlink() and any(path.iterdir()):
+                return f"the cache entry {path} is a folder with files in it; remove it"
+        except OSError as error:
+            return f"cannot read the folder in place of the cache entry {path}: {error.strerror}"
         return None
 
     def load(self, key: str, expected: dict[str, Any]) -> tuple[dict[str, np.ndarray] | None,
@@ -307,7 +313,7 @@ class TableCache:
         payload = dict(arrays)
         payload[_METADATA] = np.array(metadata_json)
         payload[_CHECKSUM] = np.array(_checksum(arrays, metadata_json))
-        problem = self.check_writable(key)
+        problem = self.check_writable() or self.entry_problem(key)
         if problem is not None:
             raise InputError(f"{problem} (or set SKYSCATTER_CACHE_DIR or --cache-dir to a "
                              "writable folder)", key="cache_dir", value=str(self.directory))

@@ -121,7 +121,7 @@ def test_a_file_as_cache_directory_is_refused_before_any_work(tmp_path, monkeypa
 
 def test_an_unwritable_cache_computes_and_says_the_tables_are_not_stored(cache, monkeypatch):
     # As a read-only folder behaves (root ignores permission bits, so the probe is made to fail)
-    def refuse(self, key=None):
+    def refuse(self):
         return f"cannot write in {self.directory}: Read-only file system"
 
     monkeypatch.setattr(TableCache, "check_writable", refuse)

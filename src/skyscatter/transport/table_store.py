@@ -104,7 +104,8 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
     metadata = table_metadata(profile, resolution, orders, min_cos_sun_zenith)
     key = _key(metadata)
     path = cache.path(key)
-    unwritable = cache.check_writable(key)  # before the work: a file as cache dir is refused
+    # Before the work: a file as cache dir is refused, an unwritable one reported
+    unwritable = cache.check_writable() or cache.entry_problem(key)
     if force:
         reason = "recomputing as asked"
     else:
