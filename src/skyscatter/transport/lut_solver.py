@@ -133,10 +133,10 @@ class LutSolver:
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
                       distance_m: ArrayLike = np.inf) -> np.ndarray:
-        """Transmittance [-] from `position` along `directions` over `distance_m` [m] (inf: to
-        the ground or out of the atmosphere; 0 when the ground blocks a finite path), from the
-        transmittance table (ratio of two lookups, Bruneton 2017 `GetTransmittance`).
-        Returns (..., n_wl)."""
+        """Transmittance [-] from `position` along `directions` over `distance_m` [m] (inf:
+        out of the atmosphere, towards a light source; 0 when the ground blocks the path, so
+        for a light below the horizon), from the transmittance table (ratio of two lookups,
+        Bruneton 2017 `GetTransmittance`). Returns (..., n_wl)."""
         origins, dirs, shape = _rays(position, directions)
         distances = _writable(np.broadcast_to(np.asarray(distance_m, dtype=np.float64),
                                               shape).reshape(-1))

@@ -179,8 +179,9 @@ class MonteCarloSolver:
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
                       distance_m: ArrayLike = np.inf, n_samples: int = 256) -> np.ndarray:
-        """Transmittance [-] from `position` along `directions` over `distance_m` [m] (inf: to
-        the ground or out of the atmosphere; 0 when the ground blocks the path), ray marched
-        (`_kernels.transmittance_rays`, deterministic). Returns (..., n_wl)."""
+        """Transmittance [-] from `position` along `directions` over `distance_m` [m] (inf:
+        out of the atmosphere, towards a light source; 0 when the ground blocks the path, so
+        for a light below the horizon), ray marched (`_kernels.transmittance_rays`,
+        deterministic). Returns (..., n_wl)."""
         return ray_marched_transmittance(self.profile, position, directions, distance_m,
                                          n_samples)

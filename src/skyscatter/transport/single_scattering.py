@@ -101,8 +101,9 @@ class SingleScatteringSolver:
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
                       distance_m: ArrayLike = np.inf, n_samples: int = 256) -> np.ndarray:
-        """Transmittance [-] from `position` along `directions` over `distance_m` (inf: to
-        the ground or out of the atmosphere; 0 when the ground blocks the path). (..., n_wl)."""
+        """Transmittance [-] from `position` along `directions` over `distance_m` (inf: out
+        of the atmosphere, towards a light source; 0 when the ground blocks the path, so for a
+        light below the horizon). (..., n_wl)."""
         return ray_marched_transmittance(self.profile, position, directions, distance_m,
                                          n_samples)
 
@@ -140,8 +141,9 @@ def ray_marched_transmittance(profile: OpticalProfile, position: ArrayLike,
                               directions: ArrayLike, distance_m: ArrayLike = np.inf,
                               n_samples: int = 256) -> np.ndarray:
     """Transmittance [-] (..., n_wl) of `profile` from `position` along `directions` over
-    `distance_m` [m] (inf: to the ground or out of the atmosphere; 0 when the ground blocks the
-    path): trapezoid columns with `n_samples` intervals (`_kernels.transmittance_rays`)."""
+    `distance_m` [m] (inf: out of the atmosphere, towards a light source; 0 when the ground
+    blocks the path): trapezoid columns with `n_samples` intervals
+    (`_kernels.transmittance_rays`)."""
     origins, dirs, shape = _broadcast_rays(position, directions)
     distances = np.broadcast_to(np.asarray(distance_m, dtype=np.float64), shape).ravel()
     h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])

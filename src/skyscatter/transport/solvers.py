@@ -3,7 +3,8 @@
 Every solver answers `sky_radiance(position, view_directions, sun_direction)`,
 `transmittance(position, directions, distance_m)`, `ground_irradiance(position,
 sun_direction)` and `aerial_perspective(position, points, sun_direction)` for one
-`OpticalProfile`.
+`OpticalProfile`. `transmittance` with the default infinite distance is the light of a source
+(the sun, the moon, a star) along the directions: 0 where the ray meets the planet.
 """
 
 from __future__ import annotations
