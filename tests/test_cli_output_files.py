@@ -93,20 +93,24 @@ def _unprivileged() -> list[str]:
     (["render", "earth", "-o", "{t}/x.png", "--exr", "{ro}/x.exr"], "{ro}/x.exr"),
     ([*TIMELAPSE, "-o", "{ro}/t.gif", "--frames-dir", "{t}/frames"], "{ro}/t.gif"),
     ([*TIMELAPSE, "-o", "{t}/t.gif", "--frames-dir", "{ro}/frames"], "{ro}/frames"),
+    (["render", "earth", "-o", "{t}/locked.png"], "{t}/locked.png"),
 ])
 def test_a_read_only_folder_is_refused_before_any_table_work(tmp_path, argv, refused):
     read_only = tmp_path / "ro"
     read_only.mkdir(mode=0o555)
+    (tmp_path / "locked.png").write_bytes(b"kept")
+    (tmp_path / "locked.png").chmod(0o444)
     cache = tmp_path / "cache"
     argv = [a.replace("{ro}", str(read_only)).replace("{t}", str(tmp_path)) for a in argv]
     result = subprocess.run([*_unprivileged(), sys.executable, "-m", "skyscatter.cli", *argv,
                              "--cache-dir", str(cache), "--size", "8"],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 2
-    line = _one_line(result.stderr)
-    assert line == (f"skyscatter: cannot write {refused.replace('{ro}', str(read_only))}: "
-                    "Permission denied")
-    assert sorted(os.listdir(tmp_path)) == ["ro"] and os.listdir(read_only) == []
+    refused = refused.replace("{ro}", str(read_only)).replace("{t}", str(tmp_path))
+    reason = "the file is read-only" if "locked" in refused else "Permission denied"
+    assert _one_line(result.stderr) == f"skyscatter: cannot write {refused}: {reason}"
+    assert sorted(os.listdir(tmp_path)) == ["locked.png", "ro"] and os.listdir(read_only) == []
+    assert (tmp_path / "locked.png").read_bytes() == b"kept"
 
 
 # --- the format the name says; standard output ---------------------------------------------------
