@@ -61,6 +61,8 @@ def _hidden(folder) -> list[str]:
     ([*TIMELAPSE, "-o", "{t}/t.gif", "--frames-dir", "{t}/mine"],
      "mine: it holds other files (holiday.jpg)"),
     ([*TIMELAPSE, "-o", "{t}/adir.gif"], "adir.gif: it is a directory"),
+    ([*TIMELAPSE, "-o", "{t}/new/t.gif", "--frames-dir", "{t}/new"],
+     "the video {t}/new/t.gif cannot go inside the frames folder {t}/new"),
 ])
 def test_unwritable_outputs_are_refused_before_any_table_work(capsys, tmp_path, argv, message):
     # Before: the tables were computed (and cached) first, the error came at the end.

@@ -300,6 +300,10 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     VideoWriter(video_path, fps)  # checks the format and the rate before any work
     check_writable_file(video_path)
     check_writable_folder(frames_dir, FRAME_NAME)
+    if Path(video_path).resolve().is_relative_to(Path(frames_dir).resolve()):
+        raise InputError(f"the video {video_path} cannot go inside the frames folder "
+                         f"{frames_dir}, which is replaced as a whole", key="video_path",
+                         value=str(video_path))
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
     engine = load_solver(atmosphere, wavelengths_nm, solver, options)
     objects = objects or SkyObjects()

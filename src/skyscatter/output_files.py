@@ -264,30 +264,32 @@ class StagedOutputs:
         """Move every temporary onto its target, one right after the other, signals held. If
         a rename fails, the folders already swapped go back; files already renamed stay."""
         swapped: list[tuple[Path, Path, Path | None]] = []  # (temporary, target, old one aside)
-        with _signals_held():
-            current = None
-            try:
-                for temporary, current in self._folders:
-                    aside = temporary_path(current) if current.is_dir() else None
-                    if aside is not None:
-                        os.rename(current, aside)
-                    swapped.append((temporary, current, aside))
-                    os.rename(temporary, current)
-                for temporary, current in self._files:
-                    os.replace(temporary, current)
-            except OSError as error:
-                for temporary, target, aside in reversed(swapped):
-                    with contextlib.suppress(OSError):
-                        if not os.path.lexists(temporary):
-                            os.rename(target, temporary)
+        try:
+            with _signals_held():
+                current = None
+                try:
+                    for temporary, current in self._folders:
+                        aside = temporary_path(current) if current.is_dir() else None
                         if aside is not None:
-                            os.rename(aside, target)
-                raise _cannot_write(current, str(error.strerror or error)) from None
-            finally:
-                self.discard()
-        for _, _, aside in swapped:
-            if aside is not None:
-                shutil.rmtree(aside, ignore_errors=True)
+                            os.rename(current, aside)
+                        swapped.append((temporary, current, aside))
+                        os.rename(temporary, current)
+                    for temporary, current in self._files:
+                        os.replace(temporary, current)
+                except OSError as error:
+                    for temporary, target, aside in reversed(swapped):
+                        with contextlib.suppress(OSError):
+                            if not os.path.lexists(temporary):
+                                os.rename(target, temporary)
+                            if aside is not None:
+                                os.rename(aside, target)
+                    raise _cannot_write(current, str(error.strerror or error)) from None
+                finally:
+                    self.discard()
+        finally:  # also when a signal held back during the renames is raised now
+            for _, _, aside in swapped:
+                if aside is not None:
+                    shutil.rmtree(aside, ignore_errors=True)
 
     def discard(self) -> None:
         """Remove the temporaries not (yet) moved onto their targets."""

@@ -257,9 +257,12 @@ def test_a_writer_killed_mid_write_leaves_the_old_pair_and_the_next_run_sweeps(t
 
 
 def test_signals_wait_until_the_renames_are_done(tmp_path, monkeypatch):
-    # A SIGINT arriving between the two renames is delivered after both.
+    # A SIGINT arriving between the renames is delivered after all of them (and the old folder
+    # set aside is still removed).
     (tmp_path / "a.png").write_bytes(b"old a")
     (tmp_path / "b.png").write_bytes(b"old b")
+    (tmp_path / "frames").mkdir()
+    (tmp_path / "frames" / "frame_00001.png").write_bytes(b"old frame")
     real_replace = os.replace
     calls = []
 
@@ -271,8 +274,10 @@ def test_signals_wait_until_the_renames_are_done(tmp_path, monkeypatch):
 
     monkeypatch.setattr(output_files.os, "replace", replace_then_interrupt)
     with pytest.raises(KeyboardInterrupt), staged_outputs() as stage:
+        (stage.folder(tmp_path / "frames") / "frame_00002.png").write_bytes(b"new frame")
         stage.write(tmp_path / "a.png", lambda path: Path(path).write_bytes(b"new a"))
         stage.write(tmp_path / "b.png", lambda path: Path(path).write_bytes(b"new b"))
     assert (tmp_path / "a.png").read_bytes() == b"new a"
     assert (tmp_path / "b.png").read_bytes() == b"new b"
+    assert os.listdir(tmp_path / "frames") == ["frame_00002.png"]
     assert _hidden(tmp_path) == []
