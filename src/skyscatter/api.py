@@ -12,6 +12,11 @@ The whole sky at a date and place (sun, moon, stars; Earth and Mars presets):
     api.save_image(image, png_path="berlin.png", adapt_to_night=True)
     api.timelapse(atmosphere, api.FisheyeCamera(256), times, 52.52, 13.40, "night.mp4",
                   "night_frames")
+
+Every function checks its arguments before any work and raises `skyscatter.InputError` (the
+message the command line prints) for a value that is not finite, out of its range, of the
+wrong type, or that would cost more memory than this computer has or more than an hour of
+computing (`render.budget`; `allow_large=True` lifts that limit).
 """
 
 from __future__ import annotations
@@ -28,13 +33,31 @@ from typing import BinaryIO
 import numpy as np
 
 from skyscatter.astro.mars_time import utc_from_mars_sol_date
-from skyscatter.astro.time import parse_time
-from skyscatter.atmosphere.config import list_presets, load_atmosphere
+from skyscatter.astro.time import check_utc, parse_time
+from skyscatter.atmosphere.config import MAX_SCATTERING_ORDERS, list_presets, load_atmosphere
 from skyscatter.atmosphere.gas import describe_gas
 from skyscatter.atmosphere.model import Atmosphere
+from skyscatter.checks import (
+    ALTITUDE_M,
+    ANGLE_DEG,
+    EV,
+    LATITUDE_DEG,
+    ZENITH_DEG,
+    Bounds,
+    checked_array,
+    checked_integer,
+    checked_number,
+)
 from skyscatter.errors import InputError
 from skyscatter.output_files import check_writable_file, check_writable_folder, staged_outputs
 from skyscatter.render.albedo_map import AlbedoMap
+from skyscatter.render.budget import (
+    BYTES_PER_ROW,
+    MAX_FRAMES,
+    MAX_SAMPLES,
+    check_cost,
+    image_memory_bytes,
+)
 from skyscatter.render.camera import Camera, EquirectangularCamera, FisheyeCamera, PerspectiveCamera
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer, write_png
 from skyscatter.render.scene import (
@@ -68,7 +91,7 @@ from skyscatter.render.tonemap import (
 )
 from skyscatter.render.video_io import VideoWriter
 from skyscatter.spectrum.colour import spectral_to_xyz, xyz_to_rgb
-from skyscatter.spectrum.grid import checked_grid, checked_wavelengths, wavelength_grid
+from skyscatter.spectrum.grid import checked_data_wavelengths, checked_grid, wavelength_grid
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
@@ -90,6 +113,7 @@ __all__ = [
     "SkyObjects",
     "SolverOptions",
     "check_image_options",
+    "check_render_cost",
     "demo_mountains",
     "describe_gas",
     "list_presets",
@@ -124,9 +148,13 @@ def solver_options(atmosphere: Atmosphere, orders: int | None = None, n_samples:
                    log: Callable[[str], None] | None = None) -> SolverOptions:
     """Solver settings for `atmosphere`: `orders` defaults to its config's `[tables] orders`;
     tables are cached in `cache_dir` (default: `default_cache_directory()`) unless
-    `use_cache` is False; `force` recomputes them."""
+    `use_cache` is False; `force` recomputes them. InputError for `orders` outside
+    1-`MAX_SCATTERING_ORDERS` (the config's bound) or `n_samples` outside 1-`MAX_SAMPLES`."""
+    _check_atmosphere(atmosphere)
+    if orders is not None:
+        orders = checked_integer("orders", orders, 1, MAX_SCATTERING_ORDERS)
     return SolverOptions(
-        n_samples=n_samples,
+        n_samples=checked_integer("n_samples", n_samples, 1, MAX_SAMPLES),
         orders=atmosphere.scattering_orders if orders is None else orders,
         cache=TableCache(cache_dir) if use_cache else None, force=force, progress=progress,
         log=log)
@@ -138,15 +166,64 @@ def load_solver(atmosphere: Atmosphere, wavelengths_nm: Sequence[float] | None =
     """A solver (`transport.solvers.SOLVERS`) of `atmosphere` on `wavelengths_nm` (default:
     16 bins over 360-830 nm; `monochromatic`: 1 nm cells at each wavelength, as
     `sky_radiance_rows`). With the "lut" solver the tables come from the cache or are
-    precomputed once and stored (`options`, default `solver_options(atmosphere)`)."""
-    if wavelengths_nm is None:
-        wavelengths = wavelength_grid(16)
-    elif monochromatic:
-        wavelengths = checked_wavelengths(np.atleast_1d(wavelengths_nm), "wavelength")
-    else:
-        wavelengths = checked_grid(wavelengths_nm)
+    precomputed once and stored (`options`, default `solver_options(atmosphere)`).
+    InputError for wavelengths outside the shipped data (`spectrum.grid.checked_data_wavelengths`:
+    360-830 nm for images, 280.5-1690 nm `monochromatic`)."""
+    _check_atmosphere(atmosphere)
+    wavelengths = _checked_wavelength_list(wavelengths_nm, monochromatic)
     profile = atmosphere.optical_profile(wavelengths, monochromatic=monochromatic)
     return make_solver(solver, profile, options or solver_options(atmosphere))
+
+
+def _checked_wavelength_list(wavelengths_nm: Sequence[float] | None,
+                             monochromatic: bool) -> np.ndarray:
+    """The wavelengths of a solver: the default 16 bins, or a checked non-empty 1-D list."""
+    if wavelengths_nm is None:
+        return wavelength_grid(16)
+    checked_array("wavelengths_nm", wavelengths_nm)  # numbers, finite
+    if monochromatic:
+        wavelengths = checked_data_wavelengths(np.atleast_1d(wavelengths_nm), True)
+        if wavelengths.ndim != 1 or wavelengths.size == 0:
+            raise InputError(f"wavelengths_nm = {wavelengths_nm!r} is not allowed: a non-empty "
+                             "list of wavelengths [nm]", key="wavelengths_nm", value=wavelengths_nm,
+                             allowed="a non-empty list of wavelengths [nm]")
+        return wavelengths
+    return checked_grid(checked_data_wavelengths(wavelengths_nm))
+
+
+def check_render_cost(camera: Camera, wavelengths_nm: Sequence[float] | None = None,
+                      solver: str = "lut", n_samples: int = 64, allow_large: bool = False,
+                      frames: int = 1) -> None:
+    """InputError when rendering `frames` images of `camera` on `wavelengths_nm` (default 16)
+    would need more memory than this computer has, or with the "single" and "montecarlo"
+    solvers more than an hour (`render.budget`); nothing with `allow_large`. `render`,
+    `render_at` and `timelapse` call it before any work."""
+    _check_camera(camera)
+    n_wl = 16 if wavelengths_nm is None else int(np.size(wavelengths_nm))
+    width, height = int(camera.width), int(camera.height)
+    what = f"a {width} x {height}-pixel image at {n_wl} wavelengths"
+    if frames > 1:
+        what = f"{frames} frames of {what[2:]}"
+    check_cost(what, image_memory_bytes(width, height, n_wl), float(width) * height * frames,
+               n_wl, solver, n_samples, allow_large)
+
+
+def _check_atmosphere(atmosphere: Atmosphere) -> None:
+    if not isinstance(atmosphere, Atmosphere):
+        raise InputError(f"atmosphere = {atmosphere!r} is not allowed: an Atmosphere, e.g. "
+                         "load_atmosphere('earth')", key="atmosphere", value=atmosphere,
+                         allowed="an Atmosphere")
+
+
+def _check_camera(camera: Camera) -> None:
+    if not all(hasattr(camera, name) for name in ("width", "height", "directions",
+                                                  "valid_mask", "pixel_solid_angles")):
+        raise InputError(f"camera = {camera!r} is not allowed: a camera, e.g. FisheyeCamera(512)",
+                         key="camera", value=camera, allowed="a Camera")
+
+
+def _samples(options: SolverOptions | None) -> int:
+    return 64 if options is None else options.n_samples
 
 
 def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
@@ -155,43 +232,50 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
            options: SolverOptions | None = None,
            progress: Callable[[int], None] | None = None,
            orbit_latitude_deg: float | None = None, orbit_longitude_deg: float = 0.0,
-           ground: Ground | None = None) -> SkyImage:
+           ground: Ground | None = None, *, allow_large: bool = False) -> SkyImage:
     """Render what `camera` sees from `altitude_m` [m] above the ground, with the sun at
     `sun_zenith_deg` and `sun_azimuth_deg` (from north towards east) in the observer's local
     frame. Spectral, on `wavelengths_nm` (default: 16 bins over 360-830 nm). With
     `orbit_latitude_deg` the camera hangs above that latitude/longitude (views from space;
     pitch -90 looks at the planet's centre); otherwise above the north pole. `ground` adds an
     albedo map and/or terrain (table solver). `options`: `solver_options(atmosphere)` by
-    default (the config's orders, tables cached)."""
-    _check_range("sun_zenith_deg", sun_zenith_deg, 0.0, 180.0)
-    _check_range("altitude_m", altitude_m, 0.0, 1e12)
+    default (the config's orders, tables cached). InputError, before any work, for a value
+    out of range (`checks`) or an image too large (`check_render_cost`; `allow_large`)."""
+    _check_atmosphere(atmosphere)
+    sun = sun_direction(ZENITH_DEG.check("sun_zenith_deg", sun_zenith_deg),
+                        ANGLE_DEG.check("sun_azimuth_deg", sun_azimuth_deg))
+    ALTITUDE_M.check("altitude_m", altitude_m)
     if orbit_latitude_deg is not None:
-        _check_range("latitude", orbit_latitude_deg, -90.0, 90.0)
-    engine = load_solver(atmosphere, wavelengths_nm, solver, options)
+        LATITUDE_DEG.check("orbit_latitude_deg", orbit_latitude_deg)
+        ANGLE_DEG.check("orbit_longitude_deg", orbit_longitude_deg)
+    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
+    check_render_cost(camera, wavelengths, solver, _samples(options), allow_large)
+    engine = load_solver(atmosphere, wavelengths, solver, options)
     viewpoint = viewpoint_at(altitude_m, engine.profile.bottom_radius_m, orbit_latitude_deg,
                              orbit_longitude_deg)
-    return render_sky(engine, camera, viewpoint, sun_direction(sun_zenith_deg, sun_azimuth_deg),
-                      atmosphere.planet.star, progress, ground)
+    return render_sky(engine, camera, viewpoint, sun, atmosphere.planet.star, progress, ground)
 
 
 def make_observer(time: str | datetime.datetime, latitude_deg: float, longitude_deg: float,
                   elevation_m: float = 0.0) -> Observer:
     """An `Observer` from an ISO 8601 time with a time zone (or an aware datetime), or a Mars
     Sol Date written "MSD 44795.9998" (Allison & McEwen 2000; `astro.mars_time`), latitude
-    [deg, north +], longitude [deg, east +] and elevation above the ground [m]."""
+    [deg, north +], longitude [deg, east +] and elevation above the ground [m], from -500 m
+    to 1e7 m. InputError for a time without a zone or outside the years 1-9999 in UTC, or a
+    place out of range."""
     if isinstance(time, str) and time.strip().upper().startswith("MSD"):
         when = utc_from_mars_sol_date(_mars_sol_date(time))
     elif isinstance(time, str):
         when = parse_time(time)
     elif isinstance(time, datetime.datetime) and time.utcoffset() is not None:
-        when = time.astimezone(datetime.UTC)
+        when = check_utc(time, "time")
     else:
         raise InputError(f"time {time!r} needs a time zone, e.g. 2024-06-21T21:30+02:00",
                          key="time", value=time)
-    _check_range("latitude", latitude_deg, -90.0, 90.0)
-    _check_range("longitude", longitude_deg, -360.0, 360.0)
-    _check_range("elevation_m", elevation_m, -500.0, 1e7)
-    return Observer(when, float(latitude_deg), float(longitude_deg), float(elevation_m))
+    latitude = LATITUDE_DEG.check("latitude_deg", latitude_deg)
+    longitude = ANGLE_DEG.check("longitude_deg", longitude_deg)
+    elevation = checked_number("elevation_m", elevation_m, -500.0, 1e7)
+    return Observer(when, latitude, longitude, elevation)
 
 
 def _mars_sol_date(text: str) -> float:
@@ -202,8 +286,7 @@ def _mars_sol_date(text: str) -> float:
     except ValueError:
         raise InputError(f"time {text!r}: write a Mars Sol Date as 'MSD 44795.9998'",
                          key="time", value=text) from None
-    _check_range("Mars Sol Date", value, 0.0, 1e6)
-    return value
+    return checked_number("Mars Sol Date", value, 0.0, 1e6)
 
 
 def sky_ephemeris(atmosphere: Atmosphere, observer: Observer) -> Ephemeris:
@@ -216,13 +299,20 @@ def render_at(atmosphere: Atmosphere, camera: Camera, observer: Observer,
               objects: SkyObjects | None = None, wavelengths_nm: Sequence[float] | None = None,
               solver: str = "lut", options: SolverOptions | None = None,
               progress: Callable[[int], None] | None = None,
-              orbit_altitude_m: float | None = None, ground: Ground | None = None) -> SkyImage:
+              orbit_altitude_m: float | None = None, ground: Ground | None = None, *,
+              allow_large: bool = False) -> SkyImage:
     """The whole sky for `observer` (`make_observer`): the atmosphere lit by the sun and the
     moon, the sun's and moon's disks, the stars (`objects`). The camera stands at the
     observer's elevation, or with `orbit_altitude_m` hangs that high above the observer's
-    latitude/longitude (pitch -90 looks at the planet's centre). Other arguments as
-    `render`."""
-    engine = load_solver(atmosphere, wavelengths_nm, solver, options)
+    latitude/longitude (pitch -90 looks at the planet's centre). Other arguments, and the
+    InputError for bad ones, as `render`."""
+    _check_atmosphere(atmosphere)
+    _check_observer(observer)
+    if orbit_altitude_m is not None:
+        ALTITUDE_M.check("orbit_altitude_m", orbit_altitude_m)
+    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
+    check_render_cost(camera, wavelengths, solver, _samples(options), allow_large)
+    engine = load_solver(atmosphere, wavelengths, solver, options)
     return _render_at(engine, atmosphere, camera, observer, objects or SkyObjects(), progress,
                       orbit_altitude_m, ground)
 
@@ -235,12 +325,18 @@ def _render_at(engine, atmosphere: Atmosphere, camera: Camera, observer: Observe
     if orbit_altitude_m is None:
         viewpoint = viewpoint_at(observer.elevation_m, radius)
     else:
-        _check_range("orbit altitude", orbit_altitude_m, 0.0, 1e12)
         viewpoint = viewpoint_at(orbit_altitude_m, radius, observer.latitude_deg,
                                  observer.longitude_deg)
     optics = _eclipse_optics(engine) if sky.moon is not None else None
     return render_sky_at(engine, camera, viewpoint, atmosphere.planet.star, sky, objects,
                          progress, ground, optics)
+
+
+def _check_observer(observer: Observer) -> None:
+    if not isinstance(observer, Observer):
+        raise InputError(f"observer = {observer!r} is not allowed: an Observer from "
+                         "make_observer(time, latitude_deg, longitude_deg)", key="observer",
+                         value=observer, allowed="an Observer")
 
 
 def _eclipse_optics(engine) -> EclipseOptics | None:
@@ -278,7 +374,7 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
               operator: str = "aces", colour_space: str = "srgb",
               adaptation_time_s: float = 600.0,
               on_frame: Callable[[int, datetime.datetime, float], None] | None = None,
-              orbit_altitude_m: float | None = None) -> Timelapse:
+              orbit_altitude_m: float | None = None, *, allow_large: bool = False) -> Timelapse:
     """Render the sky at each of `times` (aware datetimes) for one place and write the frames
     (PNG, `frames_dir/frame_00001.png` ...) and a video (`video_path`, .mp4 or .gif).
 
@@ -293,9 +389,19 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     `frames_dir` may hold only frames, `FRAME_NAME`). The frames go to a new temporary folder
     and the video to a temporary file; only when all are done do they replace `frames_dir`
     and `video_path` together, so the folder holds exactly this run's frames and an
-    interrupted run leaves the previous frames and video as they were."""
-    if len(times) < 1:
-        raise InputError("a time-lapse needs at least one time", key="times", value=times)
+    interrupted run leaves the previous frames and video as they were.
+
+    InputError before any work for bad arguments (as `render`), more than `MAX_FRAMES` times,
+    `compensation_ev` outside [-40, 40] or a negative `adaptation_time_s`."""
+    _check_atmosphere(atmosphere)
+    if not 1 <= len(times) <= MAX_FRAMES:
+        raise InputError(f"a time-lapse of {len(times)} times is not allowed: from 1 to "
+                         f"{MAX_FRAMES} frames", key="times", value=len(times),
+                         allowed=f"1 to {MAX_FRAMES} frames")
+    EV.check("compensation_ev", compensation_ev)
+    checked_number("adaptation_time_s", adaptation_time_s, 0.0, 1e9)
+    if orbit_altitude_m is not None:
+        ALTITUDE_M.check("orbit_altitude_m", orbit_altitude_m)
     check_image_options(operator, colour_space)
     VideoWriter(video_path, fps)  # checks the format and the rate before any work
     check_writable_file(video_path)
@@ -305,7 +411,9 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
                          f"{frames_dir}, which is replaced as a whole", key="video_path",
                          value=str(video_path))
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
-    engine = load_solver(atmosphere, wavelengths_nm, solver, options)
+    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
+    check_render_cost(camera, wavelengths, solver, _samples(options), allow_large, len(times))
+    engine = load_solver(atmosphere, wavelengths, solver, options)
     objects = objects or SkyObjects()
     frames_dir = Path(frames_dir)
     frames, exposures = [], []
@@ -344,7 +452,8 @@ def viewpoint_at(altitude_m: float, planet_radius_m: float, latitude_deg: float 
                  longitude_deg: float = 0.0) -> Viewpoint:
     """The camera's place: above the north pole (`latitude_deg` None, the frame of
     `ground_viewpoint`), or above (latitude, longitude) with that point's east-north-up
-    frame."""
+    frame. InputError for an altitude outside [-500, 1e12] m, a latitude outside [-90, 90],
+    a non-finite longitude or a radius that is not finite and > 0."""
     if latitude_deg is None:
         return ground_viewpoint(altitude_m, planet_radius_m)
     return orbit_viewpoint(altitude_m, latitude_deg, longitude_deg, planet_radius_m)
@@ -355,7 +464,8 @@ def look_at_direction(viewpoint: Viewpoint, target_latitude_deg: float,
                       planet_radius_m: float) -> np.ndarray:
     """Unit direction (local east-north-up of `viewpoint`) from the camera towards the point
     `target_altitude_m` above (latitude, longitude)."""
-    _check_range("look-at latitude", target_latitude_deg, -90.0, 90.0)
+    LATITUDE_DEG.check("target_latitude_deg", target_latitude_deg)
+    ANGLE_DEG.check("target_longitude_deg", target_longitude_deg)
     target = orbit_viewpoint(target_altitude_m, target_latitude_deg, target_longitude_deg,
                              planet_radius_m).position_m
     offset = target - viewpoint.position_m
@@ -370,6 +480,9 @@ def orbit_field_of_view_deg(altitude_m: float, planet_radius_m: float,
                             margin: float = 1.15) -> float:
     """Vertical field of view [deg] that frames the whole planet (with its atmosphere) seen
     from `altitude_m` above the ground: 2 asin(R / (R + h)) times `margin`."""
+    ALTITUDE_M.check("altitude_m", altitude_m)
+    checked_number("planet_radius_m", planet_radius_m, 0.0, None, low_open=True)
+    checked_number("margin", margin, 0.0, 10.0, low_open=True)
     half = np.degrees(np.arcsin(planet_radius_m / (planet_radius_m + altitude_m)))
     return float(min(2.0 * half * margin, 170.0))
 
@@ -413,7 +526,14 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
     `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
     views from space from the starlight (incident-light metering: sunlit white is white);
     `adapt_to_night` meters night skies as night (`night_adapted_exposure`: darker than a
-    daylight grey, the exposure returned includes that shift)."""
+    daylight grey, the exposure returned includes that shift). InputError for an `ev100` or
+    `compensation_ev` outside [-40, 40] (`checks.EV`) or an unknown option."""
+    if not isinstance(image, SkyImage):
+        raise InputError(f"image = {image!r} is not allowed: a SkyImage from render or "
+                         "render_at", key="image", value=image, allowed="a SkyImage")
+    if ev100 is not None:
+        EV.check("ev100", ev100)
+    EV.check("compensation_ev", compensation_ev)
     check_image_options(operator, colour_space, exr_content, png_path, exr_path)
     xyz = image.xyz(balance_to_light)
     if ev100 is None and image.from_space:
@@ -454,19 +574,28 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
 def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                       view_zeniths_deg: Sequence[float], relative_azimuths_deg: Sequence[float],
                       wavelengths_nm: Sequence[float], altitude_m: float = 0.0,
-                      solver: str = "lut", options: SolverOptions | None = None
-                      ) -> list[dict[str, float]]:
+                      solver: str = "lut", options: SolverOptions | None = None, *,
+                      allow_large: bool = False) -> list[dict[str, float]]:
     """Diffuse sky radiance for every combination of the inputs, one dict per row with the keys
     sun_zenith_deg, view_zenith_deg, relative_azimuth_deg, wavelength_nm, radiance
     [W m^-2 sr^-1 nm^-1] and toa_irradiance [W m^-2 nm^-1], plus standard_error of the radiance
     for the Monte Carlo solver. Relative azimuth 0 looks towards the sun. Each wavelength is
-    monochromatic (a 1 nm cell). `options`: `solver_options(atmosphere)` by default."""
-    for value in sun_zeniths_deg:
-        _check_range("sun zenith", value, 0.0, 180.0)
-    for value in view_zeniths_deg:
-        _check_range("view zenith", value, 0.0, 180.0)
-    _check_range("altitude_m", altitude_m, 0.0, 1e12)
-    engine = load_solver(atmosphere, wavelengths_nm, solver, options, monochromatic=True)
+    monochromatic (a 1 nm cell), within 280.5-1690 nm. `options`: `solver_options(atmosphere)`
+    by default. InputError, before any work, for an empty list, a value out of range
+    (zenith angles [0, 180], finite azimuths) or a table too large (`render.budget`;
+    `allow_large`)."""
+    _check_atmosphere(atmosphere)
+    sun_zeniths_deg = _angle_list("sun_zeniths_deg", sun_zeniths_deg, ZENITH_DEG)
+    view_zeniths_deg = _angle_list("view_zeniths_deg", view_zeniths_deg, ZENITH_DEG)
+    relative_azimuths_deg = _angle_list("relative_azimuths_deg", relative_azimuths_deg,
+                                        ANGLE_DEG)
+    ALTITUDE_M.check("altitude_m", altitude_m)
+    wavelengths = _checked_wavelength_list(wavelengths_nm, True)
+    rays = sun_zeniths_deg.size * view_zeniths_deg.size * relative_azimuths_deg.size
+    check_cost(f"a radiance table of {rays * wavelengths.size} rows",
+               rays * wavelengths.size * BYTES_PER_ROW, rays, wavelengths.size, solver,
+               _samples(options), allow_large)
+    engine = load_solver(atmosphere, wavelengths, solver, options, monochromatic=True)
     profile = engine.profile
     position = observer_position(altitude_m, profile.bottom_radius_m)
     view_zenith, azimuth = np.meshgrid(np.radians(view_zeniths_deg),
@@ -493,10 +622,13 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     return rows
 
 
-def _check_range(name: str, value: float, low: float, high: float) -> None:
-    if not np.isfinite(value) or not low <= value <= high:
-        raise InputError(f"{name} = {value!r} must lie in [{low:g}, {high:g}]", key=name,
-                         value=value, allowed=f"[{low:g}, {high:g}]")
+def _angle_list(name: str, values: Sequence[float], bounds: Bounds) -> np.ndarray:
+    """`values` (a number or a list) as a checked non-empty 1-D array."""
+    array = np.atleast_1d(bounds.check_array(name, values))
+    if array.ndim != 1 or array.size == 0:
+        raise InputError(f"{name} = {values!r} is not allowed: a non-empty list of numbers",
+                         key=name, value=values, allowed="a non-empty list of numbers")
+    return array
 
 
 # Stars the viewer draws (brighter than V 6.5: about 9100, half of them up at a time) and the

@@ -10,13 +10,29 @@ A base module: it imports no layer.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from skyscatter.errors import InputError
 
-__all__ = ["checked_array", "checked_integer", "checked_number"]
+__all__ = [
+    "ALTITUDE_M",
+    "ANGLE_DEG",
+    "ANY_NUMBER",
+    "ASPECT",
+    "ELEVATION_ANGLE_DEG",
+    "ELEVATION_M",
+    "EV",
+    "LATITUDE_DEG",
+    "PERSPECTIVE_FOV_DEG",
+    "ZENITH_DEG",
+    "Bounds",
+    "checked_array",
+    "checked_integer",
+    "checked_number",
+]
 
 
 def _bounds_text(low: float | None, high: float | None, low_open: bool,
@@ -57,16 +73,78 @@ def checked_integer(name: str, value: Any, low: int, high: int) -> int:
     return int(value)
 
 
+def _all_numbers(values: Any) -> bool:
+    """Whether every element of nested lists and tuples is a real number, not a bool (numpy
+    would read [550.0, True] as [550.0, 1.0])."""
+    if isinstance(values, list | tuple):
+        return all(_all_numbers(value) for value in values)
+    if isinstance(values, np.ndarray):
+        return values.dtype.kind in "iuf"
+    return not isinstance(values, bool | np.bool_) and isinstance(values, int | float | np.number)
+
+
 def checked_array(name: str, values: Any, low: float | None = None, high: float | None = None,
                   *, low_open: bool = False, high_open: bool = False) -> np.ndarray:
     """`values` as a float64 array when every element is finite and within the bounds, else
-    InputError naming `name` and the first offending element."""
+    InputError naming `name` and the first offending element. Text, booleans and other
+    non-numbers are refused, as by `checked_number` (numpy would read "30" as 30.0)."""
     try:
-        array = np.asarray(values, dtype=np.float64)
+        raw = np.asarray(values)
     except (TypeError, ValueError):
+        raw = np.asarray([None])
+    if raw.dtype.kind not in "iuf" or not _all_numbers(values):
         raise InputError(f"{name} = {values!r} is not allowed: numbers", key=name,
-                         value=values, allowed="numbers") from None
+                         value=values, allowed="numbers")
+    array = raw.astype(np.float64)
     for element in array.reshape(-1):
         checked_number(name, float(element), low, high, low_open=low_open,
                        high_open=high_open)
     return array
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """The allowed interval of one kind of quantity; the CLI's argument types and the API's
+    checks use the same `Bounds`, so both doors refuse the same values."""
+
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+
+    @property
+    def allowed(self) -> str:
+        """What is allowed, in words: "a finite number >= 0 and <= 180"."""
+        return _bounds_text(self.low, self.high, self.low_open, self.high_open)
+
+    def check(self, name: str, value: Any) -> float:
+        """`checked_number(name, value)` within these bounds."""
+        return checked_number(name, value, self.low, self.high, low_open=self.low_open,
+                              high_open=self.high_open)
+
+    def check_array(self, name: str, values: Any) -> np.ndarray:
+        """`checked_array(name, values)` within these bounds."""
+        return checked_array(name, values, self.low, self.high, low_open=self.low_open,
+                             high_open=self.high_open)
+
+
+# The quantities users give, in the units of their names. Angles in degrees: azimuths,
+# headings, longitudes and rolls are periodic, so any finite number is one (numpy's sin and
+# cos reduce any finite float into one turn); zenith angles go from zenith
+# to nadir, elevations and pitches from nadir to zenith.
+ANY_NUMBER = Bounds()
+ZENITH_DEG = Bounds(0.0, 180.0)
+ANGLE_DEG = ANY_NUMBER
+LATITUDE_DEG = Bounds(-90.0, 90.0)
+ELEVATION_ANGLE_DEG = Bounds(-90.0, 90.0)
+# A pinhole's vertical field of view: tan(fov / 2) is infinite at 180 deg.
+PERSPECTIVE_FOV_DEG = Bounds(0.0, 180.0, low_open=True, high_open=True)
+# Perspective width / height: past 100 an image is a line of pixels.
+ASPECT = Bounds(0.0, 100.0, low_open=True)
+# Camera height above the ground [m]: from the surface out to 1e12 m (6.7 au); an observer's
+# elevation may go below sea level, to -500 m (the Dead Sea shore is at -430 m).
+ALTITUDE_M = Bounds(0.0, 1e12)
+ELEVATION_M = Bounds(-500.0, 1e12)
+# Exposure values and their compensation [EV]: a starless night sky meters near EV100 -10, the
+# sun's disk near +24; +-40 leaves room and stops a typo before the image turns black or white.
+EV = Bounds(-40.0, 40.0)

@@ -14,11 +14,13 @@ import csv
 import json
 import os
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-from skyscatter import __version__
+from skyscatter import __version__, checks
+from skyscatter.checks import Bounds
+from skyscatter.errors import InputError
 from skyscatter.validate.suite import CASES as VALIDATION_CASES  # light: no solver imported
 
 __all__ = ["main"]
@@ -26,16 +28,75 @@ __all__ = ["main"]
 CAMERAS = ("fisheye", "panorama", "perspective", "orbit")
 
 
-def _float_list(text: str) -> list[float]:
-    """'0,30,60' -> [0.0, 30.0, 60.0] (argparse type)."""
+def _checked(bounds: Bounds, value: float, text: str) -> float:
+    """`value` (read from `text`) within `bounds` (`checks`), else the argparse error."""
     try:
-        values = [float(part) for part in text.split(",") if part.strip()]
+        return bounds.check("value", value)
+    except InputError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: {bounds.allowed}") from None
+
+
+def _number(bounds: Bounds) -> Callable[[str], float]:
+    """An argparse type: a number within `bounds`, the same check the API makes."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        return _checked(bounds, value, text)
+    return parse
+
+
+def _whole(low: int, high: int) -> Callable[[str], int]:
+    """An argparse type: a whole number from `low` to `high`."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{value} is not allowed: a whole number from "
+                                             f"{low} to {high}")
+        return value
+    return parse
+
+
+def _float_list(text: str, bounds: Bounds = checks.ANY_NUMBER) -> list[float]:
+    """'0,30,60' -> [0.0, 30.0, 60.0], each within `bounds` (argparse type: `_number_list`)."""
+    parts = [part for part in text.split(",") if part.strip()]
+    try:
+        values = [float(part) for part in parts]
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"'{text}' is not a comma-separated list of numbers (e.g. 0,30,60)") from None
+            f"{text!r} is not a comma-separated list of numbers (e.g. 0,30,60)") from None
     if not values:
         raise argparse.ArgumentTypeError("the list is empty; give numbers like 0,30,60")
-    return values
+    return [_checked(bounds, value, part.strip()) for value, part in zip(values, parts,
+                                                                           strict=True)]
+
+
+def _number_list(bounds: Bounds) -> Callable[[str], list[float]]:
+    """An argparse type: a comma-separated list of numbers within `bounds`."""
+    def parse(text: str) -> list[float]:
+        return _float_list(text, bounds)
+    return parse
+
+
+def _wavelength_list(monochromatic: bool) -> Callable[[str], list[float]]:
+    """An argparse type: wavelengths [nm] within the shipped data's range
+    (`spectrum.grid.checked_data_wavelengths`)."""
+    def parse(text: str) -> list[float]:
+        from skyscatter.spectrum.grid import COLOUR_RANGE_NM, MONOCHROMATIC_RANGE_NM
+        low, high = MONOCHROMATIC_RANGE_NM if monochromatic else COLOUR_RANGE_NM
+        data = ("the solar spectrum and the gases' refractive indices" if monochromatic
+                else "the CIE colour-matching functions")
+        try:
+            return _float_list(text, Bounds(low, high))
+        except argparse.ArgumentTypeError as error:
+            if "is not allowed" not in str(error):
+                raise
+            raise argparse.ArgumentTypeError(f"{error} nm, the range of {data}") from None
+    return parse
 
 
 def _name_list(text: str) -> list[str]:
@@ -50,23 +111,49 @@ def _positive_int(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
     if value <= 0:
         raise argparse.ArgumentTypeError(f"{value} must be > 0")
     return value
+
+
+def _size(text: str) -> int:
+    """Image height in pixels, 1 to `render.camera.MAX_SIDE_PIXELS` (argparse type)."""
+    from skyscatter.render.camera import MAX_SIDE_PIXELS
+    return _whole(1, MAX_SIDE_PIXELS)(text)
+
+
+def _orders(text: str) -> int:
+    """Scattering orders, 1 to the config's `MAX_SCATTERING_ORDERS` (argparse type)."""
+    from skyscatter.atmosphere.config import MAX_SCATTERING_ORDERS
+    return _whole(1, MAX_SCATTERING_ORDERS)(text)
+
+
+def _samples(text: str) -> int:
+    """Samples per ray, 1 to `render.budget.MAX_SAMPLES` (argparse type)."""
+    from skyscatter.render.budget import MAX_SAMPLES
+    return _whole(1, MAX_SAMPLES)(text)
+
+
+def _frame_count(text: str) -> int:
+    """Frames of a time-lapse, 1 to `render.budget.MAX_FRAMES` (argparse type)."""
+    from skyscatter.render.budget import MAX_FRAMES
+    return _whole(1, MAX_FRAMES)(text)
 
 
 def _exposure(text: str) -> float | None:
     if text == "auto":
         return None
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"'{text}' is neither 'auto' nor an EV100 number") from None
+            f"{text!r} is neither 'auto' nor an EV100 number") from None
+    return _checked(checks.EV, value, text)
 
 
 _DURATION_UNITS = {"s": 1.0, "sec": 1.0, "min": 60.0, "m": 60.0, "h": 3600.0, "d": 86400.0}
+_DURATION_S = Bounds(0.0, 1e12, low_open=True)  # s; up to 31 700 years
 
 
 def _duration_s(text: str) -> float:
@@ -78,11 +165,9 @@ def _duration_s(text: str) -> float:
                 value = float(stripped[: -len(unit)]) * _DURATION_UNITS[unit]
             except ValueError:
                 break
-            if value > 0.0:
-                return value
-            raise argparse.ArgumentTypeError(f"'{text}' must be > 0")
+            return _checked(_DURATION_S, value, text)
     raise argparse.ArgumentTypeError(
-        f"'{text}' is not a duration; write a number with a unit: 30s, 10min, 1.5h, 1d")
+        f"{text!r} is not a duration; write a number with a unit: 30s, 10min, 1.5h, 1d")
 
 
 MAX_BINS = 471  # 1 nm bins over 360-830 nm, the resolution of the CIE tables
@@ -98,7 +183,7 @@ def _wavelengths(text: str) -> list[float]:
                 "wavelength write it as a list, e.g. 550,")
         from skyscatter.spectrum.grid import wavelength_grid
         return list(wavelength_grid(count))
-    return _float_list(text)
+    return _wavelength_list(monochromatic=False)(text)
 
 
 def _look_at(text: str) -> tuple[float, float, float]:
@@ -106,8 +191,21 @@ def _look_at(text: str) -> tuple[float, float, float]:
     values = _float_list(text)
     if len(values) not in (2, 3):
         raise argparse.ArgumentTypeError(
-            f"'{text}' should be LAT,LON or LAT,LON,ALT_KM (degrees, degrees, km)")
-    return values[0], values[1], values[2] if len(values) == 3 else 0.0
+            f"{text!r} should be LAT,LON or LAT,LON,ALT_KM (degrees, degrees, km)")
+    altitude_km = values[2] if len(values) == 3 else 0.0
+    return (_checked(checks.LATITUDE_DEG, values[0], f"{values[0]:g}"),
+            _checked(checks.ANGLE_DEG, values[1], f"{values[1]:g}"),
+            _checked(_ALTITUDE_KM, altitude_km, f"{altitude_km:g}"))
+
+
+_ALTITUDE_KM = Bounds(checks.ELEVATION_M.low / 1e3, checks.ELEVATION_M.high / 1e3)
+_DISTANCE_KM = Bounds(0.0, checks.ALTITUDE_M.high / 1e3, low_open=True)
+_TERRAIN_M = Bounds(0.0, 1e5, low_open=True)  # m; heightmap spacing and height (100 km)
+_MAGNITUDE = Bounds(-30.0, 30.0)  # V magnitudes: the sun is -26.7, Hipparcos ends near 14
+_MINUTES = Bounds(0.0, 1e7)  # simulated minutes (19 years)
+_POSITIVE = Bounds(0.0, None, low_open=True)
+_ALLOW_LARGE_HELP = ("run even when the estimated memory exceeds this computer's or the "
+                     "computing time exceeds an hour (refused by default, with the estimate)")
 
 
 def _add_solver_arguments(command: argparse.ArgumentParser, samples_default: int) -> None:
@@ -117,12 +215,13 @@ def _add_solver_arguments(command: argparse.ArgumentParser, samples_default: int
                          "computed once per atmosphere and wavelength set, then cached); "
                          "single: ray-marched single scattering, the independent check; "
                          "montecarlo: reference path tracer, all orders, noisy and slow")
-    command.add_argument("--orders", type=_positive_int, default=None,
+    command.add_argument("--orders", type=_orders, default=None,
                          help="scattering orders of the tables (default: the config's "
                          "[tables] orders: 8 for the earth preset)")
-    command.add_argument("--samples", type=_positive_int, default=samples_default,
+    command.add_argument("--samples", type=_samples, default=samples_default,
                          help="single: ray-marching samples per view ray; montecarlo: "
                          f"paths per view ray and wavelength (default {samples_default})")
+    command.add_argument("--allow-large", action="store_true", help=_ALLOW_LARGE_HELP)
     _add_cache_arguments(command)
 
 
@@ -137,13 +236,16 @@ def _add_cache_arguments(command: argparse.ArgumentParser) -> None:
 def _add_place_arguments(command: argparse.ArgumentParser, required: bool = False) -> None:
     """--lat/--lon/--elevation-m: the observer's place for --time (and, for --camera orbit, the
     point below the camera)."""
-    command.add_argument("--lat", type=float, default=None, required=required, metavar="DEG",
+    command.add_argument("--lat", type=_number(checks.LATITUDE_DEG), default=None,
+                         required=required, metavar="DEG",
                          help="observer latitude in degrees, north positive (with --time; "
                          "orbit camera: the latitude below it, default 0)")
-    command.add_argument("--lon", type=float, default=None, required=required, metavar="DEG",
+    command.add_argument("--lon", type=_number(checks.ANGLE_DEG), default=None,
+                         required=required, metavar="DEG",
                          help="observer longitude in degrees, east positive (with --time; "
                          "orbit camera: the longitude below it, default 0)")
-    command.add_argument("--elevation-m", "--altitude", dest="altitude", type=float,
+    command.add_argument("--elevation-m", "--altitude", dest="altitude",
+                         type=_number(checks.ELEVATION_M),
                          default=0.0, metavar="M",
                          help="observer height above the ground (sea level) in metres "
                          "(default 0)")
@@ -159,10 +261,11 @@ def _add_sky_object_arguments(command: argparse.ArgumentParser) -> None:
     command.add_argument("--milky-way", action="store_true",
                          help="add the integrated light of the stars fainter than the "
                          "catalogue (the Milky Way)")
-    command.add_argument("--magnitude-limit", type=float, default=None, metavar="MAG",
+    command.add_argument("--magnitude-limit", type=_number(_MAGNITUDE), default=None,
+                         metavar="MAG",
                          help="draw the stars brighter than this V magnitude (default: the "
                          "whole Hipparcos catalogue, about 118 000 stars)")
-    command.add_argument("--twinkle", type=int, default=None, metavar="SEED",
+    command.add_argument("--twinkle", type=_whole(0, 2**64 - 1), default=None, metavar="SEED",
                          help="stars scintillate (random, seeded; in a time-lapse one draw per "
                          "frame)")
 
@@ -192,40 +295,44 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
                         help="a preset name (see `skyscatter presets`) or a TOML file")
     sun = render.add_mutually_exclusive_group()
-    sun.add_argument("--sun-zenith", type=float, metavar="DEG",
+    sun.add_argument("--sun-zenith", type=_number(checks.ZENITH_DEG), metavar="DEG",
                      help="sun zenith angle in degrees (0 = overhead)")
-    sun.add_argument("--sun-elevation", type=float, metavar="DEG",
+    sun.add_argument("--sun-elevation", type=_number(checks.ELEVATION_ANGLE_DEG), metavar="DEG",
                      help="sun elevation above the horizon in degrees (default 30)")
     sun.add_argument("--time", default=None, metavar="ISO8601",
                      help="date and time with a time zone, e.g. 2024-06-21T21:30+02:00, or a "
                      "Mars Sol Date, e.g. 'MSD 51000.5': the sun, moon and stars for "
                      "--lat/--lon (Earth and Mars presets)")
-    render.add_argument("--sun-azimuth", type=float, default=180.0, metavar="DEG",
+    render.add_argument("--sun-azimuth", type=_number(checks.ANGLE_DEG), default=180.0,
+                        metavar="DEG",
                         help="sun azimuth from north towards east in degrees (default 180)")
     render.add_argument("--camera", choices=CAMERAS, default="fisheye",
                         help="fisheye: all-sky, zenith at centre, north up, east left; "
                         "panorama: equirectangular 2:1; perspective: pinhole; orbit: the planet "
                         "from space, looking at its centre from --distance-km above "
                         "--lat/--lon, north up (default fisheye)")
-    render.add_argument("--size", type=_positive_int, default=512, metavar="PIXELS",
+    render.add_argument("--size", type=_size, default=512, metavar="PIXELS",
                         help="image height in pixels (panorama width = 2 x size; "
                         "perspective width from --aspect) (default 512)")
-    render.add_argument("--aspect", type=float, default=16 / 9,
+    render.add_argument("--aspect", type=_number(checks.ASPECT), default=16 / 9,
                         help="perspective width / height (default 16/9)")
-    render.add_argument("--fov", type=float, default=None, metavar="DEG",
+    render.add_argument("--fov", type=_number(checks.PERSPECTIVE_FOV_DEG), default=None,
+                        metavar="DEG",
                         help="vertical field of view in degrees (default 60 for perspective; "
                         "orbit: the whole planet)")
-    render.add_argument("--distance-km", type=float, default=None, metavar="KM",
+    render.add_argument("--distance-km", type=_number(_DISTANCE_KM), default=None, metavar="KM",
                         help="orbit camera: height above the ground in km (default: the "
                         "planet's radius)")
     _add_place_arguments(render)
     render.add_argument("--look-at", type=_look_at, default=None, metavar="LAT,LON[,ALT_KM]",
                         help="orbit camera: aim at this point instead of the planet's centre "
                         "(the local vertical stays up, so the horizon is level)")
-    render.add_argument("--heading", type=float, default=180.0, metavar="DEG",
+    render.add_argument("--heading", type=_number(checks.ANGLE_DEG), default=180.0,
+                        metavar="DEG",
                         help="view azimuth from north towards east for perspective and "
                         "panorama centre, degrees (default 180: south)")
-    render.add_argument("--pitch", type=float, default=10.0, metavar="DEG",
+    render.add_argument("--pitch", type=_number(checks.ELEVATION_ANGLE_DEG), default=10.0,
+                        metavar="DEG",
                         help="perspective view elevation in degrees (default 10)")
     render.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
                         help="N bins over 360-830 nm, or a comma-separated list in nm "
@@ -239,15 +346,18 @@ def build_parser() -> argparse.ArgumentParser:
                         help="heightmap around the observer (grayscale PNG/EXR/.npy, row 0 = "
                         "north, centred on the observer), or 'demo' for procedural mountains "
                         "10-60 km to the south")
-    render.add_argument("--terrain-spacing", type=float, default=250.0, metavar="M",
+    render.add_argument("--terrain-spacing", type=_number(_TERRAIN_M), default=250.0,
+                        metavar="M",
                         help="distance between heightmap samples in metres (default 250)")
-    render.add_argument("--terrain-height", type=float, default=4500.0, metavar="M",
+    render.add_argument("--terrain-height", type=_number(_TERRAIN_M), default=4500.0,
+                        metavar="M",
                         help="height of full white in the heightmap in metres; for 'demo', "
                         "the highest peak (default 4500)")
     _add_sky_object_arguments(render)
     render.add_argument("--exposure", type=_exposure, default=None, metavar="EV100|auto",
                         help="exposure value EV100, or auto (default auto)")
-    render.add_argument("--exposure-compensation", type=float, default=1.0, metavar="EV",
+    render.add_argument("--exposure-compensation", type=_number(checks.EV), default=1.0,
+                        metavar="EV",
                         help="brightens the metered exposure by this many stops (default +1: "
                         "a clear sky metered to middle grey looks a stop too dark)")
     render.add_argument("--tonemap", default="aces",
@@ -284,31 +394,36 @@ def build_parser() -> argparse.ArgumentParser:
     frames = timelapse.add_mutually_exclusive_group()
     frames.add_argument("--step", type=_duration_s, default=None, metavar="DURATION",
                         help="time between frames: 30s, 10min, 1h ... (default: 60 frames)")
-    frames.add_argument("--frames", type=_positive_int, default=None, metavar="N",
+    frames.add_argument("--frames", type=_frame_count, default=None, metavar="N",
                         help="number of frames, evenly spread from --start to --end")
     _add_place_arguments(timelapse, required=True)
     timelapse.add_argument("--camera", choices=CAMERAS[:3], default="fisheye",
                            help="fisheye (default), panorama or perspective")
-    timelapse.add_argument("--size", type=_positive_int, default=384, metavar="PIXELS",
+    timelapse.add_argument("--size", type=_size, default=384, metavar="PIXELS",
                            help="image height in pixels (default 384)")
-    timelapse.add_argument("--aspect", type=float, default=16 / 9,
+    timelapse.add_argument("--aspect", type=_number(checks.ASPECT), default=16 / 9,
                            help="perspective width / height (default 16/9)")
-    timelapse.add_argument("--fov", type=float, default=None, metavar="DEG",
+    timelapse.add_argument("--fov", type=_number(checks.PERSPECTIVE_FOV_DEG), default=None,
+                           metavar="DEG",
                            help="perspective vertical field of view (default 60)")
-    timelapse.add_argument("--heading", type=float, default=180.0, metavar="DEG",
+    timelapse.add_argument("--heading", type=_number(checks.ANGLE_DEG), default=180.0,
+                           metavar="DEG",
                            help="view azimuth for perspective and panorama (default 180)")
-    timelapse.add_argument("--pitch", type=float, default=10.0, metavar="DEG",
+    timelapse.add_argument("--pitch", type=_number(checks.ELEVATION_ANGLE_DEG), default=10.0,
+                           metavar="DEG",
                            help="perspective view elevation (default 10)")
     timelapse.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
                            help="N bins over 360-830 nm or a list in nm (default 16 bins)")
     _add_solver_arguments(timelapse, 64)
     _add_sky_object_arguments(timelapse)
-    timelapse.add_argument("--fps", type=float, default=12.0,
+    timelapse.add_argument("--fps", type=_number(_POSITIVE), default=12.0,
                            help="video frames per second (default 12)")
-    timelapse.add_argument("--adaptation-minutes", type=float, default=10.0, metavar="MIN",
+    timelapse.add_argument("--adaptation-minutes", type=_number(_MINUTES), default=10.0,
+                           metavar="MIN",
                            help="time constant of the exposure's adaptation, in simulated "
                            "minutes (default 10; 0 meters every frame on its own)")
-    timelapse.add_argument("--exposure-compensation", type=float, default=1.0, metavar="EV",
+    timelapse.add_argument("--exposure-compensation", type=_number(checks.EV), default=1.0,
+                           metavar="EV",
                            help="brightens the metered exposure by this many stops (default +1)")
     timelapse.add_argument("--tonemap", default="aces", help="aces (default), exponential, "
                            "reinhard or clamp")
@@ -330,17 +445,20 @@ def build_parser() -> argparse.ArgumentParser:
     radiance.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
                           help="a preset name (see `skyscatter presets`) or a TOML file")
     radiance_sun = radiance.add_mutually_exclusive_group(required=True)
-    radiance_sun.add_argument("--sun-zenith", type=_float_list, metavar="DEG,...",
+    radiance_sun.add_argument("--sun-zenith", type=_number_list(checks.ZENITH_DEG),
+                              metavar="DEG,...",
                               help="sun zenith angles in degrees")
     radiance_sun.add_argument("--time", default=None, metavar="ISO8601",
                               help="date and time with a time zone: the sun's zenith angle "
                               "there and then for --lat/--lon (Earth and Mars presets)")
-    radiance.add_argument("--view-zenith", type=_float_list, default=[0.0], metavar="DEG,...",
+    radiance.add_argument("--view-zenith", type=_number_list(checks.ZENITH_DEG), default=[0.0],
+                          metavar="DEG,...",
                           help="view zenith angles in degrees (default 0)")
-    radiance.add_argument("--view-azimuth", type=_float_list, default=[0.0],
+    radiance.add_argument("--view-azimuth", type=_number_list(checks.ANGLE_DEG), default=[0.0],
                           metavar="DEG,...", help="view azimuths relative to the sun in "
                           "degrees (default 0)")
-    radiance.add_argument("--wavelengths", type=_float_list, default=[440.0, 550.0, 680.0],
+    radiance.add_argument("--wavelengths", type=_wavelength_list(monochromatic=True),
+                          default=[440.0, 550.0, 680.0],
                           metavar="NM,...", help="wavelengths in nm (default 440,550,680)")
     _add_place_arguments(radiance)
     _add_solver_arguments(radiance, 512)
@@ -364,7 +482,7 @@ def build_parser() -> argparse.ArgumentParser:
     precompute.add_argument("--monochromatic", action="store_true",
                             help="tables for `radiance` at exactly the listed wavelengths "
                             "(1 nm cells) rather than for images")
-    precompute.add_argument("--orders", type=_positive_int, default=None,
+    precompute.add_argument("--orders", type=_orders, default=None,
                             help="scattering orders (default: the config's [tables] orders)")
     precompute.add_argument("--force", action="store_true",
                             help="recompute even when a valid entry is cached")
@@ -383,7 +501,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="the atmosphere shown first: a preset name (see `skyscatter "
                       "presets`) or a TOML file (default earth); the page offers the presets "
                       "too")
-    view.add_argument("--port", type=int, default=0,
+    view.add_argument("--port", type=_whole(0, 65535), default=0,
                       help="port to listen on (default 0: any free port)")
     view.add_argument("--host", default="127.0.0.1",
                       help="address to listen on (default 127.0.0.1, this computer only; "
@@ -407,7 +525,7 @@ def build_parser() -> argparse.ArgumentParser:
                           help="where the report goes (default: ./validation)")
     validate.add_argument("--cases", type=_name_list, default=None, metavar="LIST",
                           help="comma-separated subset of the cases (default: all)")
-    validate.add_argument("--seed", type=int, default=0,
+    validate.add_argument("--seed", type=_whole(0, 2**32 - 1), default=0,
                           help="seed of the Monte Carlo paths (default 0)")
     _add_cache_arguments(validate)
     validate.set_defaults(run=_validate)
@@ -483,15 +601,14 @@ def _render(args: argparse.Namespace) -> None:
     longitude = 0.0 if args.lon is None else args.lon
     if orbit:
         altitude = radius if args.distance_km is None else args.distance_km * 1000.0
-        if not altitude > 0.0:
-            raise InputError(f"--distance-km {args.distance_km} must be > 0", key="distance_km",
-                             value=args.distance_km)
         camera = _orbit_camera(args, altitude, radius, latitude, longitude)
     elif args.look_at is not None:
         raise InputError("--look-at is for --camera orbit; aim other cameras with --heading "
                          "and --pitch", key="look_at", value=args.look_at)
     else:
         camera = _camera(args)
+    api.check_render_cost(camera, args.wavelengths, args.solver, args.samples,
+                          args.allow_large)  # memory and time, before any allocation
     ground = _ground(args, radius)
     objects = _sky_objects(args)  # checked before the tables are computed
     with _solver_options(args, atmosphere) as options, progress(
@@ -499,12 +616,14 @@ def _render(args: argparse.Namespace) -> None:
         if observer is not None:
             image = api.render_at(atmosphere, camera, observer, objects,
                                   args.wavelengths, args.solver, options, bar.update,
-                                  orbit_altitude_m=altitude if orbit else None, ground=ground)
+                                  orbit_altitude_m=altitude if orbit else None, ground=ground,
+                                  allow_large=args.allow_large)
         else:
             image = api.render(atmosphere, camera, zenith, args.sun_azimuth, altitude,
                                args.wavelengths, args.solver, options, bar.update,
                                orbit_latitude_deg=latitude if orbit else None,
-                               orbit_longitude_deg=longitude, ground=ground)
+                               orbit_longitude_deg=longitude, ground=ground,
+                               allow_large=args.allow_large)
     ev100 = api.save_image(image, image_target, args.exr, args.exposure,
                            args.exposure_compensation, args.tonemap, args.colour_space,
                            args.white_balance == "star", args.exr_content,
@@ -569,6 +688,7 @@ def _timelapse(args: argparse.Namespace) -> None:
     from skyscatter import api
     from skyscatter.astro.time import parse_time
     from skyscatter.errors import InputError
+    from skyscatter.render.budget import MAX_FRAMES
     from skyscatter.render.progress import progress
 
     api.check_image_options(args.tonemap, args.colour_space)
@@ -577,18 +697,21 @@ def _timelapse(args: argparse.Namespace) -> None:
         raise InputError(f"--end {args.end} must come after --start {args.start}", key="end",
                          value=args.end)
     span = (end - start).total_seconds()
+    if args.step is not None and span / args.step >= MAX_FRAMES:
+        raise InputError(f"--step {args.step:g} s over {span:g} s would make more than "
+                         f"{MAX_FRAMES} frames; give a longer --step", key="step",
+                         value=args.step, allowed=f"at most {MAX_FRAMES} frames")
     if args.step is not None:
         count = int(span // args.step) + 1
     else:
         count = args.frames if args.frames is not None else 60
-    if count > 100_000:
-        raise InputError(f"{count} frames is too many; give a longer --step or --frames",
-                         key="step", value=args.step)
     step = args.step if args.step is not None else span / max(count - 1, 1)
     times = [start + datetime.timedelta(seconds=i * step) for i in range(count)]
     atmosphere = api.load_atmosphere(args.atmosphere)
     api.sky_ephemeris(atmosphere, _observer(args, args.start))  # checks before the tables
     camera = _camera(args)
+    api.check_render_cost(camera, args.wavelengths, args.solver, args.samples,
+                          args.allow_large, count)
     frames_dir = args.frames_dir or args.output.with_name(f"{args.output.stem}_frames")
     objects = _sky_objects(args)
     with _solver_options(args, atmosphere) as options, progress(count, "time-lapse",
@@ -597,7 +720,8 @@ def _timelapse(args: argparse.Namespace) -> None:
             atmosphere, camera, times, args.lat, args.lon, args.output, frames_dir,
             args.altitude, args.fps, objects, args.wavelengths,
             args.solver, options, args.exposure_compensation, args.tonemap, args.colour_space,
-            args.adaptation_minutes * 60.0, on_frame=lambda *_: bar.update(1))
+            args.adaptation_minutes * 60.0, on_frame=lambda *_: bar.update(1),
+            allow_large=args.allow_large)
     print(f"wrote {result.video} and {len(result.frames)} frames in {frames_dir} (EV100 "
           f"{min(result.ev100):.1f} to {max(result.ev100):.1f})", file=sys.stderr)
 
@@ -681,9 +805,9 @@ def _radiance(args: argparse.Namespace) -> None:
     with _solver_options(args, atmosphere) as options:
         rows = api.sky_radiance_rows(atmosphere, sun_zenith, args.view_zenith,
                                      args.view_azimuth, args.wavelengths, args.altitude,
-                                     args.solver, options)
+                                     args.solver, options, allow_large=args.allow_large)
     if args.format == "json":
-        json.dump(rows, sys.stdout, indent=1)
+        json.dump(rows, sys.stdout, indent=1, allow_nan=False)  # strict JSON: jq, JSON.parse
         sys.stdout.write("\n")
     else:
         writer = csv.DictWriter(sys.stdout, fieldnames=list(rows[0]), lineterminator="\n")
@@ -698,7 +822,7 @@ def _precompute(args: argparse.Namespace) -> None:
     from skyscatter.errors import InputError
     atmosphere = api.load_atmosphere(args.atmosphere)
     if args.wavelengths is not None:
-        parse = _float_list if args.monochromatic else _wavelengths
+        parse = _wavelength_list(monochromatic=True) if args.monochromatic else _wavelengths
         try:
             args.wavelengths = parse(args.wavelengths)
         except argparse.ArgumentTypeError as error:

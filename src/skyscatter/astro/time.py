@@ -89,7 +89,8 @@ def parse_time(text: str) -> datetime.datetime:
     Raises
     ------
     InputError
-        The text has no time zone, or is not an ISO 8601 date-time; the message shows a fix.
+        The text has no time zone, is not an ISO 8601 date-time, or lies outside the years
+        1-9999 in UTC; the message shows a fix.
     """
     if not isinstance(text, str):
         raise InputError(f"--time {text!r} must be text such as 2024-06-21T21:30+02:00",
@@ -103,7 +104,18 @@ def parse_time(text: str) -> datetime.datetime:
     if parsed.tzinfo is None or parsed.utcoffset() is None:
         raise InputError(f"--time {text!r} has no time zone; add one, {_EXAMPLE}", key="time",
                          value=text, allowed="ISO 8601 date-time with a time zone")
-    return parsed.astimezone(_UTC)
+    return _in_utc(parsed, f"--time {text!r}", "time")
+
+
+def _in_utc(time: datetime.datetime, what: str, name: str) -> datetime.datetime:
+    """An aware `time` in UTC; InputError when that falls outside the years 1-9999 that
+    Python's datetime holds (0001-01-01T00:00+05:00 is in the year 0 in UTC)."""
+    try:
+        return time.astimezone(_UTC)
+    except OverflowError:
+        raise InputError(f"{what} is outside the years 1-9999 once converted to UTC; give a "
+                         "time from 0001-01-01T00:00Z to 9999-12-31T23:59Z", key=name,
+                         value=time, allowed="0001-01-01T00:00Z to 9999-12-31T23:59:59Z") from None
 
 
 def check_utc(utc: datetime.datetime, name: str = "utc") -> datetime.datetime:
@@ -116,7 +128,7 @@ def check_utc(utc: datetime.datetime, name: str = "utc") -> datetime.datetime:
         raise InputError(f"{name} = {utc.isoformat()} has no time zone; add one, e.g. "
                          f"{name}.replace(tzinfo=datetime.timezone.utc) or parse_time('...Z')",
                          key=name, value=utc, allowed="aware datetime.datetime")
-    return utc.astimezone(_UTC)
+    return _in_utc(utc, f"{name} = {utc.isoformat()}", name)
 
 
 def _finite_float(value: float, name: str, unit: str) -> float:

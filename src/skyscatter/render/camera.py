@@ -43,6 +43,13 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skyscatter.checks import (
+    ANGLE_DEG,
+    ELEVATION_ANGLE_DEG,
+    PERSPECTIVE_FOV_DEG,
+    Bounds,
+    checked_integer,
+)
 from skyscatter.errors import InputError
 
 __all__ = [
@@ -69,19 +76,14 @@ class Camera(Protocol):
     def pixel_solid_angles(self) -> np.ndarray: ...
 
 
+# Pixels along one side of an image: 2^20 (a million) is far past any display; the memory an
+# image needs is checked before rendering (`render.budget`).
+MAX_SIDE_PIXELS = 1 << 20
+FISHEYE_FOV_DEG = Bounds(0.0, 360.0, low_open=True)
+
+
 def _check_size(name: str, value: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise InputError(f"{name} = {value!r} must be a positive integer (pixels)",
-                         key=name, value=value, allowed="integer >= 1")
-
-
-def _check_angle(name: str, value: float, low: float, high: float, *,
-                 low_inclusive: bool = False) -> None:
-    ok = math.isfinite(value) and (low <= value if low_inclusive else low < value) and value <= high
-    if not ok:
-        bracket = "[" if low_inclusive else "("
-        raise InputError(f"{name} = {value!r} must be in {bracket}{low:g}, {high:g}] degrees",
-                         key=name, value=value, allowed=f"{bracket}{low:g}, {high:g}]")
+    checked_integer(name, value, 1, MAX_SIDE_PIXELS)
 
 
 def _pixel_centres(height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
@@ -124,7 +126,7 @@ class FisheyeCamera:
 
     def __post_init__(self) -> None:
         _check_size("size", self.size)
-        _check_angle("field_of_view_deg", self.field_of_view_deg, 0.0, 360.0)
+        FISHEYE_FOV_DEG.check("field_of_view_deg", self.field_of_view_deg)
 
     @property
     def width(self) -> int:
@@ -220,9 +222,7 @@ class EquirectangularCamera:
     def __post_init__(self) -> None:
         _check_size("width", self.width)
         _check_size("height", self.height)
-        if not math.isfinite(self.heading_deg):
-            raise InputError(f"heading_deg = {self.heading_deg!r} must be finite",
-                             key="heading_deg", value=self.heading_deg)
+        ANGLE_DEG.check("heading_deg", self.heading_deg)
 
     def directions(self) -> tuple[np.ndarray, np.ndarray]:
         """Unit view directions (h, w, 3) in ENU and an all-True mask (h, w)."""
@@ -299,15 +299,10 @@ class PerspectiveCamera:
     def __post_init__(self) -> None:
         _check_size("width", self.width)
         _check_size("height", self.height)
-        if not (0.0 < self.vertical_fov_deg < 180.0):
-            raise InputError(
-                f"vertical_fov_deg = {self.vertical_fov_deg!r} must be in (0, 180) degrees",
-                key="vertical_fov_deg", value=self.vertical_fov_deg, allowed="(0, 180)")
-        _check_angle("pitch_deg", self.pitch_deg, -90.0, 90.0, low_inclusive=True)
-        for name in ("heading_deg", "roll_deg"):
-            value = getattr(self, name)
-            if not math.isfinite(value):
-                raise InputError(f"{name} = {value!r} must be finite", key=name, value=value)
+        PERSPECTIVE_FOV_DEG.check("vertical_fov_deg", self.vertical_fov_deg)
+        ELEVATION_ANGLE_DEG.check("pitch_deg", self.pitch_deg)
+        ANGLE_DEG.check("heading_deg", self.heading_deg)
+        ANGLE_DEG.check("roll_deg", self.roll_deg)
 
     @classmethod
     def from_forward_up(cls, width: int, height: int, vertical_fov_deg: float,

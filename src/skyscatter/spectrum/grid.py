@@ -10,8 +10,17 @@ point values at 400 nm differ by up to 10 % between solar atlases, band means by
 The default grid follows Bruneton & Neyret (2008) / Elek (2010): `count` equal bins over
 360–830 nm, each represented by its centre.
 
+The shipped data bound the wavelengths a user may ask for (`checked_data_wavelengths`): images
+need the CIE 1931 colour-matching functions, tabulated over `COLOUR_RANGE_NM` = 360–830 nm
+(data/colour_cie.npz); monochromatic radiance needs the solar spectrum (ASTM G173, from 280 nm:
+the 1 nm cell around a wavelength must lie inside it, hence 280.5 nm) and the refractive-index
+fits of the gases, measured to 1690 nm (Peck & Reeder 1972 for air, 230–1690 nm; Bideau-Mehu
+et al. 1973 for CO2, 181–1695 nm): `MONOCHROMATIC_RANGE_NM` = 280.5–1690 nm. The ozone
+cross-sections end at 830 nm; past it they are taken as 0 (`optics.absorption`, optical depth
+~0.001 in the Wulf bands).
+
 Public names: `wavelength_grid`, `cell_edges`, `cell_widths`, `cell_average`, `checked_grid`,
-`checked_wavelengths`.
+`checked_wavelengths`, `checked_data_wavelengths`, `COLOUR_RANGE_NM`, `MONOCHROMATIC_RANGE_NM`.
 """
 
 from __future__ import annotations
@@ -22,15 +31,20 @@ from numpy.typing import ArrayLike
 from skyscatter.errors import InputError
 
 __all__ = [
+    "COLOUR_RANGE_NM",
+    "MONOCHROMATIC_RANGE_NM",
     "cell_average",
     "cell_edges",
     "cell_widths",
+    "checked_data_wavelengths",
     "checked_grid",
     "checked_wavelengths",
     "wavelength_grid",
 ]
 
 SINGLE_WAVELENGTH_CELL_NM = 1.0  # nm; width given to a one-wavelength grid (monochromatic use)
+COLOUR_RANGE_NM = (360.0, 830.0)  # nm; the CIE 1931 colour-matching functions (colour_cie.npz)
+MONOCHROMATIC_RANGE_NM = (280.5, 1690.0)  # nm; solar spectrum + gas refractive indices (above)
 
 
 def checked_wavelengths(wavelengths_nm: ArrayLike, name: str = "wavelengths_nm") -> np.ndarray:
@@ -51,6 +65,26 @@ def checked_wavelengths(wavelengths_nm: ArrayLike, name: str = "wavelengths_nm")
         raise InputError(
             f"{name} must be positive and finite (in nm); got {value!r}{where}",
             key=name, value=value, allowed="0 < wavelength < inf [nm]")
+    return wl
+
+
+def checked_data_wavelengths(wavelengths_nm: ArrayLike, monochromatic: bool = False,
+                             name: str = "wavelengths_nm") -> np.ndarray:
+    """`checked_wavelengths`, and each within the range the shipped data cover:
+    `COLOUR_RANGE_NM` for images, `MONOCHROMATIC_RANGE_NM` with `monochromatic` (radiance).
+
+    Raises `InputError` naming the first wavelength outside, the range and why it ends there.
+    """
+    wl = checked_wavelengths(wavelengths_nm, name)
+    low, high = MONOCHROMATIC_RANGE_NM if monochromatic else COLOUR_RANGE_NM
+    outside = (wl < low) | (wl > high)
+    if np.any(outside):
+        value = float(wl[tuple(np.argwhere(outside)[0])])
+        reason = ("the solar spectrum and the gases' refractive indices" if monochromatic
+                  else "the CIE colour-matching functions that make colour")
+        raise InputError(f"{name}: {value:g} nm is outside {low:g}-{high:g} nm, the range of "
+                         f"{reason}; choose wavelengths inside it", key=name, value=value,
+                         allowed=f"{low:g} <= wavelength <= {high:g} [nm]")
     return wl
 
 
