@@ -581,7 +581,6 @@ def _gas_summary(gas: dict, indent: str) -> str:
 
 def _render(args: argparse.Namespace) -> None:
     from skyscatter import api
-    from skyscatter.errors import InputError
     from skyscatter.render.progress import progress
 
     image_target = _image_target(args.output)
@@ -638,7 +637,6 @@ def _render(args: argparse.Namespace) -> None:
 def _image_target(output: Path):
     """Where `-o` sends the display image: the path, or for `-` standard output (refused on a
     terminal, which binary PNG data would garble)."""
-    from skyscatter.errors import InputError
 
     if str(output) != "-":
         return output
@@ -651,7 +649,6 @@ def _image_target(output: Path):
 def _observer(args: argparse.Namespace, time: str | None = None):
     """The Observer of --time (or `time`), --lat, --lon, --elevation-m."""
     from skyscatter import api
-    from skyscatter.errors import InputError
 
     if args.lat is None or args.lon is None:
         raise InputError("--time needs the place too: give --lat and --lon in degrees (north "
@@ -687,7 +684,6 @@ def _timelapse(args: argparse.Namespace) -> None:
 
     from skyscatter import api
     from skyscatter.astro.time import parse_time
-    from skyscatter.errors import InputError
     from skyscatter.render.budget import MAX_FRAMES
     from skyscatter.render.progress import progress
 
@@ -819,7 +815,6 @@ def _precompute(args: argparse.Namespace) -> None:
     import time
 
     from skyscatter import api
-    from skyscatter.errors import InputError
     atmosphere = api.load_atmosphere(args.atmosphere)
     if args.wavelengths is not None:
         parse = _wavelength_list(monochromatic=True) if args.monochromatic else _wavelengths
@@ -860,7 +855,6 @@ def _view(args: argparse.Namespace) -> None:
 def _cache(args: argparse.Namespace) -> None:
     from skyscatter.checks import checked_number
     from skyscatter.disk_cache import TableCache
-    from skyscatter.errors import InputError
     if args.older_than is not None and args.action != "clear":
         raise InputError(f"--older-than applies to `skyscatter cache clear`, not to "
                          f"`{args.action}`", key="older_than", value=args.older_than)
@@ -897,7 +891,6 @@ def _cache(args: argparse.Namespace) -> None:
 
 
 def _validate(args: argparse.Namespace) -> int:
-    from skyscatter.errors import InputError
     from skyscatter.output_files import check_writable_file
     from skyscatter.transport.cache import TableCache
     from skyscatter.validate.report import ValidationSettings
