@@ -278,10 +278,10 @@ HAZE_DENSITY = 'density = { type = "exponential", scale_height_m = 2000.0 }'
     ("g = 0.7", "g = 0.7, colour = 'red'", "constituent[0].optics.phase.colour", None, None),
     # out of range
     ("scale_height_m = 2000.0", "scale_height_m = -2000.0",
-     "constituent[0].density.scale_height_m", "-2000.0", "> 0"),
+     "constituent[0].density.scale_height_m", "-2000.0", ">= 1 and <= 1e+09"),
     ("ground_albedo = 0.2", "ground_albedo = 1.2", "planet.ground_albedo", "1.2", "<= 1"),
     ("ground_albedo = 0.2", "ground_albedo = { wavelength_nm = [400, 700], value = [0.2, 1.5] }",
-     "planet.ground_albedo", "1.5", "values in [0.0, 1.0]"),
+     "planet.ground_albedo.value", "1.5", ">= 0 and <= 1"),
     ("g = 0.7", "g = 1.5", "constituent[0].optics.phase.g", "1.5", "<= 0.999999"),
     # missing, wrong type, unknown choice
     ("[planet]\nradius_m = 6_371_000.0\nground_albedo = 0.2\n", "", "[planet]", None,
@@ -323,7 +323,7 @@ def test_missing_csv_file_names_the_config_key_and_file(tmp_path):
     path = _config(tmp_path, BASE.replace(HAZE_DENSITY,
                                           'density = { type = "table", file = "nope.csv" }'))
     with pytest.raises(ConfigError, match=r"constituent\[0\]\.density\.file = 'nope\.csv' .*"
-                                          r"readable CSV file \(No such file"):
+                                          r"readable UTF-8 CSV file .*\(No such file"):
         load_atmosphere(path)
 
 
@@ -438,7 +438,10 @@ def test_tables_that_is_not_a_table_and_misspelt_tables_are_rejected(tmp_path):
         load_atmosphere(path)
 
 
-def test_atmosphere_rejects_scattering_orders_below_one():
+def test_atmosphere_rejects_scattering_orders_outside_1_to_1000():
     atmosphere = load_atmosphere("earth")
-    with pytest.raises(InputError, match="scattering_orders = 0 must be an integer >= 1"):
+    with pytest.raises(InputError, match="scattering_orders = 0 must be an integer from 1 to "
+                                         "1000"):
         dataclasses.replace(atmosphere, scattering_orders=0)
+    with pytest.raises(InputError, match="scattering_orders = 1001 must be an integer from 1"):
+        dataclasses.replace(atmosphere, scattering_orders=1001)

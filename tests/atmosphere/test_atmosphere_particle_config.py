@@ -79,5 +79,6 @@ def test_spectral_polynomial_is_evaluated_inside_its_range_and_held_outside(tmp_
 def test_polynomial_out_of_range_values_are_a_config_error(tmp_path):
     blend = ('blend = { type = "henyey-greenstein", g = { polynomial_nm = [0.0, 0.01], '
              'range_nm = [360.0, 830.0] } }\n')
-    with pytest.raises(ConfigError, match="polynomial with values in"):
+    with pytest.raises(ConfigError, match="a polynomial whose values over 360-830 nm are each "
+                                          "a finite number >= -0.999999 and <= 0.999999"):
         _load(tmp_path, OPTICS + blend)

@@ -1,9 +1,11 @@
 """One table of a TOML config being read: checked values with messages that name the key.
 
-`ConfigTable` hands out numbers, strings, flags, spectral values and sub-tables, each checked
-(type and range), and `finish()` rejects the keys nobody asked for, suggesting the closest
-known one. Every problem is a `ConfigError` naming the file, the key, the value and what is
-allowed. `atmosphere.config` reads whole files with it.
+`ConfigTable` hands out numbers, strings, flags, spectral values, sub-tables and arrays of
+tables, each checked (type, range from `atmosphere.config_ranges`, length), and `finish()`
+rejects the keys nobody asked for, suggesting the closest known one. Every problem is a
+`ConfigError` naming the file, the key, the value (shortened: a message stays one readable
+line, whatever the file holds) and what is allowed. `atmosphere.config` reads whole files with
+it.
 """
 
 from __future__ import annotations
@@ -11,20 +13,43 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import reprlib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from skyscatter.atmosphere.config_ranges import (
+    MAX_LIST_LENGTH,
+    MAX_POLYNOMIAL_COEFFICIENTS,
+    MAX_TEXT_LENGTH,
+    WAVELENGTH_NM,
+)
+from skyscatter.checks import Bounds
 from skyscatter.errors import ConfigError, InputError
 from skyscatter.spectrum.tabulated import SpectralParameter
 
-__all__ = ["POLYNOMIAL_STEP_NM", "ConfigTable"]
+__all__ = ["POLYNOMIAL_STEP_NM", "ConfigTable", "shown"]
 
 # A spectral polynomial is tabulated in steps of at most this [nm] over its range_nm and held
 # constant beyond: a quadratic with |c2| < 1e-5 nm^-2 is then interpolated to within
-# |c2| (10 nm)^2 / 8 < 1.3e-4.
+# |c2| (10 nm)^2 / 8 < 1.3e-4. range_nm lies within `WAVELENGTH_NM`: at most 1e4 points.
 POLYNOMIAL_STEP_NM = 10.0
+
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxdict = 3, 8, 4
+_SHORT.maxstring, _SHORT.maxlong, _SHORT.maxother = 60, 40, 60
+# Characters that make a string print as something else: controls (newline, NUL, escape) and
+# the bidirectional overrides of "Trojan source" text.
+_HIDDEN = {chr(c) for c in range(32)} | {"\x7f"} | set("\u202a\u202b\u202c\u202d\u202e"
+                                                       "\u2066\u2067\u2068\u2069")
+
+
+def shown(value: Any) -> str:
+    """`repr(value)` shortened to about 100 characters (nested lists and long strings cut with
+    '...'), escaped, for one-line messages."""
+    return _SHORT.repr(value)
+
 
 @dataclasses.dataclass
 class ConfigTable:
@@ -46,32 +71,33 @@ class ConfigTable:
                            allowed=error.allowed)
 
     def error(self, key: str, value: Any, allowed: str) -> ConfigError:
-        return ConfigError(f"{self._key(key)} = {value!r} is not allowed: {allowed}",
+        return ConfigError(f"{self._key(key)} = {shown(value)} is not allowed: {allowed}",
                            path=self.path, key=self._key(key), value=value, allowed=allowed)
 
     def has(self, key: str) -> bool:
         self.asked.add(key)
         return key in self.data
 
-    def number(self, key: str, default: float | None = None, *, low: float | None = None,
-               high: float | None = None, low_open: bool = False) -> float:
+    def _checked(self, key: str, value: Any, bounds: Bounds) -> float:
+        """`value` as a float within `bounds`, else the error naming `key`."""
+        if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 1e300:
+            raise self.error(key, value, bounds.allowed)  # float() would overflow
+        try:
+            return bounds.check(self._key(key), value)
+        except InputError:
+            raise self.error(key, value, bounds.allowed) from None
+
+    def number(self, key: str, bounds: Bounds, default: float | None = None) -> float:
+        """A finite number within `bounds` (`config_ranges`); `default` when absent, or a
+        ConfigError when there is none."""
         self.asked.add(key)
         if key not in self.data:
             if default is None:
-                raise ConfigError(f"{self._key(key)} is missing (a number is required)",
-                                  path=self.path, key=self._key(key))
+                raise ConfigError(f"{self._key(key)} is missing (a number is required: "
+                                  f"{bounds.allowed})", path=self.path, key=self._key(key),
+                                  allowed=bounds.allowed)
             return default
-        value = self.data.pop(key)
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(
-                value):
-            raise self.error(key, value, "a finite number")
-        if (low is not None and (value < low or (low_open and value == low))) or (
-                high is not None and value > high):
-            relation = ">" if low_open else ">="
-            parts = ([f"{relation} {low}"] if low is not None else []) + (
-                [f"<= {high}"] if high is not None else [])
-            raise self.error(key, value, "must be " + " and ".join(parts))
-        return float(value)
+        return self._checked(key, self.data.pop(key), bounds)
 
     def integer(self, key: str, default: int, *, low: int, high: int) -> int:
         """An integer in [low, high]; floats (even 4.0), booleans and strings are rejected."""
@@ -86,6 +112,8 @@ class ConfigTable:
         return value
 
     def text(self, key: str, default: str | None = None, choices: tuple[str, ...] = ()) -> str:
+        """A string of at most `MAX_TEXT_LENGTH` characters without control characters, one of
+        `choices` when given."""
         self.asked.add(key)
         if key not in self.data:
             if default is None:
@@ -98,6 +126,9 @@ class ConfigTable:
             raise self.error(key, value, "a string")
         if choices and value not in choices:
             raise self.error(key, value, "one of: " + ", ".join(choices))
+        if len(value) > MAX_TEXT_LENGTH or not _HIDDEN.isdisjoint(value):
+            raise self.error(key, value, f"a string of at most {MAX_TEXT_LENGTH} characters "
+                             "without control characters (newlines, tabs, escapes)")
         return value
 
     def flag(self, key: str, default: bool) -> bool:
@@ -121,23 +152,40 @@ class ConfigTable:
             raise self.error(key, value, "a table")
         return ConfigTable(dict(value), self.path, self._key(key))
 
-    def numbers(self, key: str, *, low: float | None = None) -> np.ndarray:
+    def tables(self, key: str, max_length: int, what: str) -> list[ConfigTable]:
+        """An array of at most `max_length` tables (`what` says why the cap), each a
+        ConfigTable named `key[i]`; [] when absent."""
+        self.asked.add(key)
+        items = self.data.pop(key, [])
+        if not isinstance(items, list) or not all(isinstance(item, dict) for item in items):
+            raise self.error(key, items, "an array of tables")
+        if len(items) > max_length:
+            raise ConfigError(f"{self._key(key)} has {len(items)} entries, more than "
+                              f"{max_length}: {what}", path=self.path, key=self._key(key),
+                              value=len(items), allowed=f"<= {max_length} entries")
+        return [ConfigTable(dict(item), self.path, f"{self._key(key)}[{index}]")
+                for index, item in enumerate(items)]
+
+    def numbers(self, key: str, bounds: Bounds) -> np.ndarray:
+        """A non-empty list of at most `MAX_LIST_LENGTH` numbers, each within `bounds`."""
         self.asked.add(key)
         value = self.data.pop(key, None)
-        if (not isinstance(value, list) or not value or not all(
-                isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-                for v in value)):
-            raise self.error(key, value, "a non-empty list of finite numbers")
-        array = np.asarray(value, dtype=np.float64)
-        if low is not None and np.any(array < low):
-            raise self.error(key, value, f"every value must be >= {low}")
-        return array
+        allowed = f"a non-empty list of at most {MAX_LIST_LENGTH} numbers, each {bounds.allowed}"
+        if not isinstance(value, list) or not value or len(value) > MAX_LIST_LENGTH:
+            raise self.error(key, value, allowed)
+        for element in value:
+            try:
+                self._checked(key, element, bounds)
+            except ConfigError:
+                raise self.error(key, value, f"{allowed}; {shown(element)} is not") from None
+        return np.asarray(value, dtype=np.float64)
 
-    def spectral(self, key: str, default: float | None = None, *, low: float = -math.inf,
-                 high: float = math.inf) -> SpectralParameter:
+    def spectral(self, key: str, bounds: Bounds, default: float | None = None
+                 ) -> SpectralParameter:
         """A number, {wavelength_nm = [...], value = [...]}, or {polynomial_nm = [c0, c1, ...],
         range_nm = [low, high]}: c0 + c1 lambda + c2 lambda^2 ... with lambda in nm inside the
-        range, held constant outside."""
+        range, held constant outside. Values within `bounds`, wavelengths within
+        `config_ranges.WAVELENGTH_NM`."""
         self.asked.add(key)
         if key not in self.data:
             if default is None:
@@ -145,39 +193,54 @@ class ConfigTable:
                                   key=self._key(key))
             return SpectralParameter.constant(default)
         if isinstance(self.data[key], dict) and "polynomial_nm" in self.data[key]:
-            sub = self.table(key)
-            coefficients = sub.numbers("polynomial_nm")
-            bounds = sub.numbers("range_nm", low=1e-9)
-            sub.finish()
-            if bounds.size != 2 or not bounds[0] < bounds[1]:
-                raise self.error(key, {"range_nm": bounds.tolist()},
-                                 "range_nm = [low, high] with low < high [nm]")
-            count = int(np.ceil((bounds[1] - bounds[0]) / POLYNOMIAL_STEP_NM)) + 1
-            grid = np.linspace(bounds[0], bounds[1], count)
-            values = np.polynomial.polynomial.polyval(grid, coefficients)
-            if np.any(values < low) or np.any(values > high):
-                raise self.error(key, {"polynomial_nm": coefficients.tolist()},
-                                 f"a polynomial with values in [{low}, {high}] over "
-                                 f"{bounds[0]:g}-{bounds[1]:g} nm")
-            return SpectralParameter.table(grid, values)
+            return self._polynomial(key, bounds)
         if isinstance(self.data[key], dict):
             sub = self.table(key)
-            wavelengths = sub.numbers("wavelength_nm", low=1e-9)
-            values = sub.numbers("value")
+            wavelengths = sub.numbers("wavelength_nm", WAVELENGTH_NM)
+            values = sub.numbers("value", bounds)
             sub.finish()
-            if wavelengths.size != values.size:
+            if wavelengths.size != values.size or np.unique(wavelengths).size != values.size:
                 raise self.error(key, {"wavelength_nm": wavelengths.tolist(),
                                        "value": values.tolist()},
-                                 "wavelength_nm and value of the same length")
-            if np.any(values < low) or np.any(values > high):
-                raise self.error(key, values.tolist(), f"values in [{low}, {high}]")
+                                 "wavelength_nm (all different) and value of the same length")
             return SpectralParameter.table(wavelengths, values)
-        return SpectralParameter.constant(self.number(key, low=low, high=high))
+        return SpectralParameter.constant(self.number(key, bounds))
+
+    def _polynomial(self, key: str, bounds: Bounds) -> SpectralParameter:
+        sub = self.table(key)
+        coefficients = sub.numbers("polynomial_nm", Bounds())
+        limits = sub.numbers("range_nm", WAVELENGTH_NM)
+        sub.finish()
+        if coefficients.size > MAX_POLYNOMIAL_COEFFICIENTS:
+            raise sub.error("polynomial_nm", coefficients.tolist(),
+                            f"at most {MAX_POLYNOMIAL_COEFFICIENTS} coefficients (degree "
+                            f"{MAX_POLYNOMIAL_COEFFICIENTS - 1}: higher powers of lambda [nm] "
+                            "cancel below float64 precision; give a table instead)")
+        if limits.size != 2 or not limits[0] < limits[1]:
+            raise sub.error("range_nm", limits.tolist(),
+                            f"[low, high] with low < high, within {WAVELENGTH_NM.allowed} [nm]")
+        count = int(math.ceil((limits[1] - limits[0]) / POLYNOMIAL_STEP_NM)) + 1
+        grid = np.linspace(limits[0], limits[1], count)
+        with np.errstate(over="ignore", invalid="ignore"):
+            values = np.polynomial.polynomial.polyval(grid, coefficients)
+            inside = np.isfinite(values)
+            if bounds.low is not None:
+                inside &= values > bounds.low if bounds.low_open else values >= bounds.low
+            if bounds.high is not None:
+                inside &= values < bounds.high if bounds.high_open else values <= bounds.high
+        outside = ~inside
+        if np.any(outside):
+            wavelength = float(grid[np.argmax(outside)])
+            raise self.error(key, {"polynomial_nm": coefficients.tolist()},
+                             f"a polynomial whose values over {limits[0]:g}-{limits[1]:g} "
+                             f"nm are each {bounds.allowed} (at {wavelength:g} nm it is "
+                             f"{float(values[np.argmax(outside)]):g})")
+        return SpectralParameter.table(grid, values)
 
     def finish(self) -> None:
         """Reject keys nobody asked for, suggesting the closest known one."""
         for key in self.data:
             close = difflib.get_close_matches(key, sorted(self.asked), n=1)
             hint = f"; did you mean '{self._key(close[0])}'?" if close else ""
-            raise ConfigError(f"unknown key {self._key(key)!r}{hint}", path=self.path,
+            raise ConfigError(f"unknown key {shown(self._key(key))}{hint}", path=self.path,
                               key=self._key(key), value=self.data[key])

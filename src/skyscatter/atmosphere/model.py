@@ -23,6 +23,7 @@ from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = [
     "DEFAULT_SCATTERING_ORDERS",
+    "MAX_SCATTERING_ORDERS",
     "Atmosphere",
     "Constituent",
     "ConstituentOptics",
@@ -35,6 +36,13 @@ __all__ = [
 # (model.h, `Model::Init(num_scattering_orders = 4)`; shared/research/anchor-bruneton.md §1.2);
 # docs/physics/orders.md measures what thicker atmospheres need.
 DEFAULT_SCATTERING_ORDERS = 4
+# The most scattering orders the tables may iterate ([tables] orders, --orders, the API's
+# `orders`): 1 is single scattering only. Each order costs about as much as the single-
+# scattering table (seconds at the default size); the presets need 6-21
+# (docs/physics/orders.md), and diffuse light through a vertical optical depth tau takes about
+# tau^2 orders, so the thickest atmosphere a config may describe (tau up to 1000, Venus-like
+# decks ~30) can use hundreds. Past 1000 a typo is likelier than a need.
+MAX_SCATTERING_ORDERS = 1000
 
 
 class DensityProfile(Protocol):
@@ -100,9 +108,11 @@ class Atmosphere:
 
     def __post_init__(self) -> None:
         orders = self.scattering_orders
-        if isinstance(orders, bool) or not isinstance(orders, int | np.integer) or orders < 1:
-            raise InputError(f"Atmosphere.scattering_orders = {orders!r} must be an integer >= 1",
-                             key="scattering_orders", value=orders, allowed="integer >= 1")
+        if isinstance(orders, bool) or not isinstance(orders, int | np.integer) or not (
+                1 <= orders <= MAX_SCATTERING_ORDERS):
+            allowed = f"an integer from 1 to {MAX_SCATTERING_ORDERS}"
+            raise InputError(f"Atmosphere.scattering_orders = {orders!r} must be {allowed}",
+                             key="scattering_orders", value=orders, allowed=allowed)
 
     @property
     def bottom_radius_m(self) -> float:

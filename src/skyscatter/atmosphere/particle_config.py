@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from skyscatter.atmosphere import config_ranges as ranges
 from skyscatter.atmosphere.config_table import ConfigTable
+from skyscatter.checks import Bounds
 from skyscatter.optics.mie import METHODS, PHASE_AVERAGES, MieOptics, particle_optics
 from skyscatter.optics.particle_index import (
     MATERIALS,
@@ -31,6 +33,7 @@ __all__ = ["MIE_WAVELENGTHS_NM", "parse_mie_optics"]
 # Wavelengths [nm] of the Mie table of a config: seed-004's 10 nm grid from 360 nm, extended to
 # 900 nm so that the 880 nm filter of the Mars rovers is inside it.
 MIE_WAVELENGTHS_NM = np.arange(360.0, 901.0, 10.0)
+MIE_REFERENCE_NM = Bounds(float(MIE_WAVELENGTHS_NM[0]), float(MIE_WAVELENGTHS_NM[-1]))
 MICROMETRE_M = 1e-6
 DISTRIBUTIONS = ("log-normal", "gamma", "modified-gamma", "junge")
 
@@ -46,7 +49,7 @@ def parse_mie_optics(table: ConfigTable, blend: PhaseFunction | None
     index_table.finish()
     inclusion_table = table.table("inclusion", required=False)
     if inclusion_table is not None:
-        fraction = inclusion_table.number("volume_fraction", low=0.0, high=1.0)
+        fraction = inclusion_table.number("volume_fraction", ranges.FRACTION)
         index = maxwell_garnett(index, _parse_index(inclusion_table), fraction)
         inclusion_table.finish()
     n_radii = table.integer("radii", 5000, low=16, high=100_000)
@@ -54,9 +57,8 @@ def parse_mie_optics(table: ConfigTable, blend: PhaseFunction | None
     method = table.text("method", "mie", METHODS)
     optical_depth = None
     if table.has("optical_depth"):
-        optical_depth = table.number("optical_depth", low=0.0)
-        reference_nm = table.number("reference_wavelength_nm", 550.0, low=MIE_WAVELENGTHS_NM[0],
-                                    high=MIE_WAVELENGTHS_NM[-1])
+        optical_depth = table.number("optical_depth", ranges.OPTICAL_DEPTH)
+        reference_nm = table.number("reference_wavelength_nm", MIE_REFERENCE_NM, 550.0)
     particles = particle_optics(distribution, index, MIE_WAVELENGTHS_NM, n_radii=n_radii,
                                 phase_average=phase_average, method=method)
     optics = MieOptics(particles, blend=blend)
@@ -68,27 +70,26 @@ def parse_mie_optics(table: ConfigTable, blend: PhaseFunction | None
 
 def _parse_distribution(table: ConfigTable) -> SizeDistribution:
     kind = table.text("type", choices=DISTRIBUTIONS)
-    positive = {"low": 0.0, "low_open": True}
+    radius = ranges.PARTICLE_RADIUS_UM
     if kind == "log-normal":
         if table.has("effective_radius_um"):
             distribution = LogNormal.from_effective(
-                table.number("effective_radius_um", **positive) * MICROMETRE_M,
-                table.number("effective_variance", **positive))
+                table.number("effective_radius_um", radius) * MICROMETRE_M,
+                table.number("effective_variance", ranges.LOG_NORMAL_VARIANCE))
         else:
-            distribution = LogNormal(table.number("median_radius_um", **positive) * MICROMETRE_M,
-                                     table.number("geometric_std", low=1.0, low_open=True))
+            distribution = LogNormal(table.number("median_radius_um", radius) * MICROMETRE_M,
+                                     table.number("geometric_std", ranges.GEOMETRIC_STD))
     elif kind == "gamma":
-        distribution = Gamma(table.number("shape", **positive),
-                             table.number("scale_um", **positive) * MICROMETRE_M)
+        distribution = Gamma(table.number("shape", ranges.GAMMA_SHAPE),
+                             table.number("scale_um", radius) * MICROMETRE_M)
     elif kind == "modified-gamma":
-        distribution = ModifiedGamma(table.number("effective_radius_um", **positive)
-                                     * MICROMETRE_M,
-                                     table.number("effective_variance", low=0.0, low_open=True,
-                                                  high=0.4999))
+        distribution = ModifiedGamma(table.number("effective_radius_um", radius) * MICROMETRE_M,
+                                     table.number("effective_variance",
+                                                  ranges.MODIFIED_GAMMA_VARIANCE))
     else:
-        distribution = JungePowerLaw(table.number("exponent"),
-                                     table.number("min_radius_um", **positive) * MICROMETRE_M,
-                                     table.number("max_radius_um", **positive) * MICROMETRE_M)
+        distribution = JungePowerLaw(table.number("exponent", ranges.JUNGE_EXPONENT),
+                                     table.number("min_radius_um", radius) * MICROMETRE_M,
+                                     table.number("max_radius_um", radius) * MICROMETRE_M)
     table.finish()
     return distribution
 
@@ -99,12 +100,13 @@ def _parse_index(table: ConfigTable) -> ComplexIndex:
     if table.has("material"):
         return load_material(table.text("material", choices=MATERIALS))
     if table.has("wavelength_nm"):
-        wavelengths = table.numbers("wavelength_nm", low=1e-9)
-        real = table.numbers("real", low=0.0)
-        imaginary = table.numbers("imaginary", low=0.0)
+        wavelengths = table.numbers("wavelength_nm", ranges.WAVELENGTH_NM)
+        real = table.numbers("real", ranges.REFRACTIVE_INDEX_REAL)
+        imaginary = table.numbers("imaginary", ranges.REFRACTIVE_INDEX_IMAGINARY)
         if not wavelengths.size == real.size == imaginary.size:
             raise table.error("real", real.tolist(),
                               "wavelength_nm, real and imaginary of the same length")
         return ComplexIndex.table(wavelengths, real, imaginary)
-    return ComplexIndex.constant(table.number("real", low=0.0, low_open=True),
-                                 table.number("imaginary", 0.0, low=0.0))
+    return ComplexIndex.constant(table.number("real", ranges.REFRACTIVE_INDEX_REAL),
+                                 table.number("imaginary", ranges.REFRACTIVE_INDEX_IMAGINARY,
+                                              0.0))
