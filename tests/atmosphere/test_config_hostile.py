@@ -24,7 +24,8 @@ from skyscatter.atmosphere.config import (
     PRESETS_DIR,
     load_atmosphere,
 )
-from skyscatter.errors import ConfigError
+from skyscatter.atmosphere.variants import scaled_constituent
+from skyscatter.errors import ConfigError, InputError
 from skyscatter.transport.single_scattering import SingleScatteringSolver
 
 EARTH = (PRESETS_DIR / "earth.toml").read_text(encoding="utf-8")
@@ -231,6 +232,14 @@ def test_layer_that_grows_past_float64_is_refused(tmp_path):
 def test_text_with_control_characters_is_refused(tmp_path):
     text = _haze().replace('name = "haze"\n', 'name = "sky\\u001b[2J\\nfake: line"\n', 1)
     _refused(_write(tmp_path, text), "name = 'sky\\x1b[2J\\nfake: line'", "control characters")
+
+
+@pytest.mark.parametrize("factor", [math.inf, math.nan, -1.0, 1e7])
+def test_scaled_constituent_refuses_factors_that_are_no_amount(factor):
+    # inf passed `factor >= 0` and reached the solvers as NaN optics
+    with pytest.raises(InputError, match=r"the factor of aerosol = .* is not allowed: a finite "
+                                         r"number >= 0 and <= 1e\+06"):
+        scaled_constituent(load_atmosphere("earth"), "aerosol", factor)
 
 
 # --- 3. spectral polynomials ------------------------------------------------------------------

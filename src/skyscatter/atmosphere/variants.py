@@ -12,9 +12,14 @@ from dataclasses import replace
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.atmosphere.model import Atmosphere
 from skyscatter.atmosphere.profiles import ScaledProfile
+from skyscatter.checks import Bounds
 from skyscatter.errors import InputError
 
-__all__ = ["load_variant", "only_constituents", "scaled_constituent"]
+__all__ = ["SCALE_FACTOR", "load_variant", "only_constituents", "scaled_constituent"]
+
+# A constituent's amount times 0 (removed) to 1e6: a million times any constituent's amount is
+# beyond every comparison; inf or NaN would reach the solvers as NaN optics.
+SCALE_FACTOR = Bounds(0.0, 1e6)
 
 
 def _check_names(atmosphere: Atmosphere, names: Sequence[str]) -> None:
@@ -39,11 +44,9 @@ def only_constituents(atmosphere: Atmosphere, names: Sequence[str],
 def scaled_constituent(atmosphere: Atmosphere, name: str, factor: float,
                        label: str | None = None) -> Atmosphere:
     """`atmosphere` with the density (or the prescribed column) of constituent `name` times
-    `factor` >= 0, called `label` (default: 'NAME:CONSTITUENT*FACTOR')."""
+    `factor` (`SCALE_FACTOR`: 0 to 1e6), called `label` (default: 'NAME:CONSTITUENT*FACTOR')."""
     _check_names(atmosphere, [name])
-    if not factor >= 0.0:
-        raise InputError(f"the factor of {name} must be >= 0, got {factor}", key="factor",
-                         value=factor, allowed=">= 0")
+    factor = SCALE_FACTOR.check(f"the factor of {name}", factor)
     scaled = tuple(
         c if c.name != name else
         replace(c, vertical_column=c.vertical_column * factor) if c.vertical_column is not None
