@@ -64,7 +64,7 @@ def _allowed(text: str, low: float, high: float, low_open: bool, whole: bool) ->
         value = int(text) if whole else float(text)
     except ValueError:
         return False
-    if not math.isfinite(value):
+    if not whole and not math.isfinite(value):
         return False
     return (value > low if low_open else value >= low) and value <= high
 
@@ -154,7 +154,7 @@ def test_hostile_option_gets_one_line_naming_it(capsys, quiet_folder, argv, expe
 
 def test_orders_cap_is_the_configs_cap():
     # One constant: the command line refuses exactly what a config file refuses.
-    from skyscatter.atmosphere.config import MAX_SCATTERING_ORDERS
+    from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS
     parser = build_parser()
     ok = parser.parse_args(["precompute", "earth", "--orders", str(MAX_SCATTERING_ORDERS)])
     assert ok.orders == MAX_SCATTERING_ORDERS

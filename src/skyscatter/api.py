@@ -34,9 +34,9 @@ import numpy as np
 
 from skyscatter.astro.mars_time import utc_from_mars_sol_date
 from skyscatter.astro.time import check_utc, parse_time
-from skyscatter.atmosphere.config import MAX_SCATTERING_ORDERS, list_presets, load_atmosphere
+from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.gas import describe_gas
-from skyscatter.atmosphere.model import Atmosphere
+from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS, Atmosphere
 from skyscatter.checks import (
     ALTITUDE_M,
     ANGLE_DEG,

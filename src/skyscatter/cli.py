@@ -125,7 +125,7 @@ def _size(text: str) -> int:
 
 def _orders(text: str) -> int:
     """Scattering orders, 1 to the config's `MAX_SCATTERING_ORDERS` (argparse type)."""
-    from skyscatter.atmosphere.config import MAX_SCATTERING_ORDERS
+    from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS
     return _whole(1, MAX_SCATTERING_ORDERS)(text)
 
 
