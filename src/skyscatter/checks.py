@@ -10,6 +10,7 @@ A base module: it imports no layer.
 from __future__ import annotations
 
 import math
+import reprlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +36,12 @@ __all__ = [
 ]
 
 
+def _shown(value: Any) -> str:
+    """`value` as a message shows it: repr, shortened (a 400-digit integer or a long text stays
+    one readable line)."""
+    return reprlib.repr(value)
+
+
 def _bounds_text(low: float | None, high: float | None, low_open: bool,
                  high_open: bool) -> str:
     parts = []
@@ -51,14 +58,17 @@ def checked_number(name: str, value: Any, low: float | None = None, high: float 
     naming `name`, the value and the allowed range. Booleans and strings are refused."""
     allowed = _bounds_text(low, high, low_open, high_open)
     if isinstance(value, bool | str | bytes) or not isinstance(value, int | float | np.number):
-        raise InputError(f"{name} = {value!r} is not allowed: {allowed}", key=name,
+        raise InputError(f"{name} = {_shown(value)} is not allowed: {allowed}", key=name,
                          value=value, allowed=allowed)
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond float range
+        number = math.inf
     inside = math.isfinite(number) and (
         low is None or (number > low if low_open else number >= low)) and (
         high is None or (number < high if high_open else number <= high))
     if not inside:
-        raise InputError(f"{name} = {value!r} is not allowed: {allowed}", key=name,
+        raise InputError(f"{name} = {_shown(value)} is not allowed: {allowed}", key=name,
                          value=value, allowed=allowed)
     return number
 
@@ -68,7 +78,7 @@ def checked_integer(name: str, value: Any, low: int, high: int) -> int:
     allowed = f"a whole number from {low} to {high}"
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or not (
             low <= value <= high):
-        raise InputError(f"{name} = {value!r} is not allowed: {allowed}", key=name,
+        raise InputError(f"{name} = {_shown(value)} is not allowed: {allowed}", key=name,
                          value=value, allowed=allowed)
     return int(value)
 
@@ -93,7 +103,7 @@ def checked_array(name: str, values: Any, low: float | None = None, high: float 
     except (TypeError, ValueError):
         raw = np.asarray([None])
     if raw.dtype.kind not in "iuf" or not _all_numbers(values):
-        raise InputError(f"{name} = {values!r} is not allowed: numbers", key=name,
+        raise InputError(f"{name} = {_shown(values)} is not allowed: numbers", key=name,
                          value=values, allowed="numbers")
     array = raw.astype(np.float64)
     for element in array.reshape(-1):

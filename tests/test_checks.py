@@ -1,0 +1,47 @@
+"""The validation layer's primitives (checks.py): what they refuse and how the refusal reads."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from skyscatter.checks import checked_array, checked_integer, checked_number
+from skyscatter.errors import InputError
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf, 10**400, -(10**400), True,
+                                   "0.5", b"0.5", None, [0.5]])
+def test_checked_number_refuses_what_is_not_a_finite_number_in_range(value):
+    with pytest.raises(InputError) as error:
+        checked_number("sun_zenith_deg", value, 0.0, 180.0)
+    message = str(error.value)
+    # One short line naming the input and the range, whatever the value (a 400-digit integer
+    # is shortened, not printed whole).
+    assert message.startswith("sun_zenith_deg = ")
+    assert "\n" not in message and len(message) < 200
+    assert error.value.key == "sun_zenith_deg"
+
+
+def test_checked_number_keeps_the_bounds_open_or_closed_as_asked():
+    assert checked_number("x", 0.0, 0.0, 1.0) == 0.0
+    with pytest.raises(InputError, match="> 0"):
+        checked_number("x", 0.0, 0.0, 1.0, low_open=True)
+    assert checked_number("x", np.float32(0.25), 0.0, 1.0) == 0.25
+
+
+def test_checked_integer_refuses_floats_bools_and_out_of_range():
+    assert checked_integer("orders", np.int64(4), 1, 1000) == 4
+    for value in (4.0, True, 0, 1001, "4"):
+        with pytest.raises(InputError, match="a whole number from 1 to 1000"):
+            checked_integer("orders", value, 1, 1000)
+
+
+def test_checked_array_names_the_first_bad_element_and_refuses_text_and_bools():
+    assert checked_array("wavelengths_nm", [440, 550.0], 280.0, 1690.0).dtype == np.float64
+    with pytest.raises(InputError, match="wavelengths_nm = nan"):
+        checked_array("wavelengths_nm", [440.0, math.nan], 280.0, 1690.0)
+    for values in (["440"], [440.0, True], [[440.0], "x"]):
+        with pytest.raises(InputError, match="is not allowed: numbers"):
+            checked_array("wavelengths_nm", values, 280.0, 1690.0)
