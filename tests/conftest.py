@@ -1,7 +1,19 @@
 """Test-session settings: precomputed tables go to one temporary cache directory shared by the
-whole session (never the user's cache), so each atmosphere/wavelength set is computed once."""
+whole session (never the user's cache), so each atmosphere/wavelength set is computed once.
+
+The property-based tests (hypothesis) draw new hostile values on every local run, to keep
+finding what nobody thought of; under CI (CI=true) they replay one fixed sequence, so that a
+landing is decided by the code, not by the draw.
+"""
+
+import os
 
 import pytest
+from hypothesis import settings
+
+settings.register_profile("ci", derandomize=True, database=None)
+if os.environ.get("CI", "").lower() in ("1", "true", "yes"):
+    settings.load_profile("ci")
 
 
 @pytest.fixture(scope="session", autouse=True)

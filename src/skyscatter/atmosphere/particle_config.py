@@ -12,6 +12,7 @@ import numpy as np
 from skyscatter.atmosphere import config_ranges as ranges
 from skyscatter.atmosphere.config_table import ConfigTable
 from skyscatter.checks import Bounds
+from skyscatter.errors import ConfigError, InputError
 from skyscatter.optics.mie import METHODS, PHASE_AVERAGES, MieOptics, particle_optics
 from skyscatter.optics.particle_index import (
     MATERIALS,
@@ -43,7 +44,8 @@ def parse_mie_optics(table: ConfigTable, blend: PhaseFunction | None
     """(optics, vertical column [m^-2] or None) from an optics table of `type = "mie"`; the
     column is optical_depth / C_ext(reference wavelength) when `optical_depth` is given.
     `blend` is the already parsed `blend` phase table (or None)."""
-    distribution = _parse_distribution(table.table("size_distribution"))
+    size_table = table.table("size_distribution")
+    distribution = _parse_distribution(size_table)
     index_table = table.table("refractive_index")
     index = _parse_index(index_table)
     index_table.finish()
@@ -59,13 +61,27 @@ def parse_mie_optics(table: ConfigTable, blend: PhaseFunction | None
     if table.has("optical_depth"):
         optical_depth = table.number("optical_depth", ranges.OPTICAL_DEPTH)
         reference_nm = table.number("reference_wavelength_nm", MIE_REFERENCE_NM, 550.0)
-    particles = particle_optics(distribution, index, MIE_WAVELENGTHS_NM, n_radii=n_radii,
-                                phase_average=phase_average, method=method)
+    try:
+        particles = particle_optics(distribution, index, MIE_WAVELENGTHS_NM, n_radii=n_radii,
+                                    phase_average=phase_average, method=method)
+    except InputError as error:
+        if error.key != "distribution":
+            raise
+        raise _too_large(size_table, error) from None
     optics = MieOptics(particles, blend=blend)
     column = None
     if optical_depth is not None:
         column = optical_depth / float(optics.extinction_per_density(np.array([reference_nm]))[0])
     return optics, column
+
+
+def _too_large(size_table: ConfigTable, error: InputError) -> ConfigError:
+    """The size-parameter limit of the Mie code, said in the config's own keys: the radii that
+    made the particles too large."""
+    radius_keys = sorted(key for key in size_table.asked if key.endswith("_um"))
+    return ConfigError(f"{size_table.prefix}: {error}: make {' or '.join(radius_keys)} smaller",
+                       path=size_table.path, key=f"{size_table.prefix}.{radius_keys[0]}",
+                       value=error.value, allowed=error.allowed)
 
 
 def _parse_distribution(table: ConfigTable) -> SizeDistribution:
