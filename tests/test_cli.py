@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from cli_runner import run_cli
 from skyscatter.atmosphere.config import PRESETS_DIR
 from skyscatter.cli import main
 from skyscatter.render.image_io import read_exr
@@ -23,16 +24,6 @@ RADIANCE_KEYS = ["sun_zenith_deg", "view_zenith_deg", "relative_azimuth_deg", "w
                  "radiance", "toa_irradiance"]
 RADIANCE_ARGS = ["radiance", "earth", "--sun-zenith", "30", "--view-zenith", "0,60",
                  "--view-azimuth", "0,180", "--wavelengths", "450,550", "--solver", "single"]
-
-
-def _run(capsys, argv):
-    """(exit code, stdout, stderr) of `skyscatter argv`."""
-    try:
-        code = main(argv)
-    except SystemExit as exit_:
-        code = 0 if exit_.code is None else exit_.code
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def _error_line(stderr: str) -> str:
@@ -49,7 +40,7 @@ def _error_line(stderr: str) -> str:
 # --- presets ----------------------------------------------------------------------------------
 
 def test_presets_lists_each_shipped_preset_with_its_description(capsys):
-    code, out, err = _run(capsys, ["presets"])
+    code, out, err = run_cli(capsys, ["presets"])
     assert code == 0 and err == ""
     lines = out.splitlines()
     shipped = sorted(PRESETS_DIR.glob("*.toml"))
@@ -64,7 +55,7 @@ def test_presets_lists_each_shipped_preset_with_its_description(capsys):
 def test_presets_verbose_prints_the_derived_numbers_of_each_gas_table(capsys):
     # earth-physical's [gas]: H = R T / (M g) = 8434 m, N0 = P / (k T) = 2.547e25 m^-3,
     # tau_R(550 nm) = 0.0969 (tests/atmosphere/test_atmosphere_gas.py checks the numbers).
-    code, out, err = _run(capsys, ["presets", "--verbose"])
+    code, out, err = run_cli(capsys, ["presets", "--verbose"])
     assert code == 0 and err == ""
     lines = out.splitlines()
     start = next(i for i, line in enumerate(lines) if line.startswith("earth-physical "))
@@ -103,7 +94,7 @@ def test_radiance_json_has_one_row_per_combination_with_the_documented_keys(radi
 
 
 def test_radiance_csv_has_the_same_columns_and_rows_as_json(capsys, radiance_json):
-    code, out, err = _run(capsys, [*RADIANCE_ARGS, "--format", "csv"])
+    code, out, err = run_cli(capsys, [*RADIANCE_ARGS, "--format", "csv"])
     assert code == 0
     reader = csv.DictReader(io.StringIO(out))
     assert reader.fieldnames == RADIANCE_KEYS
@@ -125,7 +116,7 @@ def test_radiance_toa_irradiance_at_550nm_is_astm_g173(radiance_json):
 def test_radiance_is_mirror_symmetric_about_the_sun_vertical(capsys):
     # A horizontally uniform atmosphere is symmetric under reflection in the vertical plane
     # through the sun: relative azimuth +90 and -90 (= 270) see the same sky. Tolerance: rounding.
-    code, out, _ = _run(capsys, ["radiance", "earth", "--sun-zenith", "50", "--view-zenith",
+    code, out, _ = run_cli(capsys, ["radiance", "earth", "--sun-zenith", "50", "--view-zenith",
                                  "40,80", "--view-azimuth", "0,90,-90,270", "--wavelengths",
                                  "450,650", "--orders", "2", "--format", "json"])
     assert code == 0
@@ -155,7 +146,7 @@ def test_radiance_is_mirror_symmetric_about_the_sun_vertical(capsys):
                      "--twinkle", "--milky-way", "--frames-dir", "--adaptation-minutes"]),
 ])
 def test_help_of_each_command_exits_0_and_lists_its_options(capsys, command, options):
-    code, out, err = _run(capsys, [*command, "--help"])
+    code, out, err = run_cli(capsys, [*command, "--help"])
     assert code == 0 and err == ""
     assert out.startswith("usage: skyscatter" + "".join(f" {c}" for c in command))
     for option in options:
@@ -193,14 +184,14 @@ def test_help_of_each_command_exits_0_and_lists_its_options(capsys, command, opt
       "--lat", "0", "--lon", "0", "-o", "sky.avi"], ".mp4 or .gif"),
 ])
 def test_bad_argument_exits_2_with_one_clear_line(capsys, argv, expected):
-    code, out, err = _run(capsys, argv)
+    code, out, err = run_cli(capsys, argv)
     assert code == 2
     assert out == ""
     assert expected in _error_line(err)
 
 
 def test_negative_wavelength_message_names_the_value(capsys):
-    code, _, err = _run(capsys, ["radiance", "earth", "--sun-zenith", "30", "--wavelengths",
+    code, _, err = run_cli(capsys, ["radiance", "earth", "--sun-zenith", "30", "--wavelengths",
                                  "-5"])
     assert code == 2
     line = _error_line(err)
@@ -209,7 +200,7 @@ def test_negative_wavelength_message_names_the_value(capsys):
 
 def test_missing_config_file_exits_2_naming_the_file(capsys, tmp_path):
     missing = tmp_path / "missing.toml"
-    code, _, err = _run(capsys, ["radiance", str(missing), "--sun-zenith", "30"])
+    code, _, err = run_cli(capsys, ["radiance", str(missing), "--sun-zenith", "30"])
     assert code == 2
     assert _error_line(err) == f"skyscatter: config file '{missing}' does not exist"
 
@@ -221,7 +212,7 @@ def test_config_file_with_a_bad_value_exits_2_naming_file_key_and_value(capsys, 
                    encoding="utf-8")
     for command in (["radiance", str(bad), "--sun-zenith", "30"],
                     ["render", str(bad), "--size", "8", "-o", str(tmp_path / "x.png")]):
-        code, _, err = _run(capsys, command)
+        code, _, err = run_cli(capsys, command)
         assert code == 2
         line = _error_line(err)
         assert line.startswith(f"skyscatter: {bad}: planet.ground_albedo = 1.5")
@@ -233,7 +224,7 @@ def test_config_file_with_a_bad_value_exits_2_naming_file_key_and_value(capsys, 
 
 def test_render_fisheye_writes_png_and_linear_exr(capsys, tmp_path):
     png, exr = tmp_path / "out" / "x.png", tmp_path / "out" / "x.exr"
-    code, out, err = _run(capsys, ["render", "earth", "--size", "32", "--camera", "fisheye",
+    code, out, err = run_cli(capsys, ["render", "earth", "--size", "32", "--camera", "fisheye",
                                    "--solver", "single", "-o", str(png), "--exr", str(exr)])
     assert code == 0, err
     assert str(png) in err and str(exr) in err
@@ -255,7 +246,7 @@ def test_render_fisheye_writes_png_and_linear_exr(capsys, tmp_path):
 ])
 def test_render_other_cameras_at_small_sizes(capsys, tmp_path, camera, size, expected_wh):
     png = tmp_path / f"{camera}.png"
-    code, _, err = _run(capsys, ["render", "earth", "--size", str(size), "--camera", camera,
+    code, _, err = run_cli(capsys, ["render", "earth", "--size", str(size), "--camera", camera,
                                  "--sun-elevation", "20", "--wavelengths", "8", "--samples", "16",
                                  "--solver", "single", "-o", str(png)])
     assert code == 0, err
@@ -268,7 +259,7 @@ def test_orbit_camera_sees_the_lit_side_towards_the_sun(capsys, tmp_path):
     # Sun low in the east of the point below the camera: looking down with north up, east is
     # on the right of the image, so the right half must be brighter than the left.
     exr = tmp_path / "orbit.exr"
-    code, _, err = _run(capsys, ["render", "earth", "--camera", "orbit", "--distance-km",
+    code, _, err = run_cli(capsys, ["render", "earth", "--camera", "orbit", "--distance-km",
                                  "20000", "--lat", "0", "--sun-elevation", "10",
                                  "--sun-azimuth", "90", "--size", "24", "-o",
                                  str(tmp_path / "orbit.png"), "--exr", str(exr),
@@ -286,20 +277,20 @@ PRECOMPUTE_ARGS = ["--wavelengths", "550", "--orders", "1"]
 
 def test_precompute_stores_tables_that_radiance_then_reuses(capsys, tmp_path):
     cache = tmp_path / "cache"
-    code, _, err = _run(capsys, ["precompute", "earth", "--monochromatic", *PRECOMPUTE_ARGS,
+    code, _, err = run_cli(capsys, ["precompute", "earth", "--monochromatic", *PRECOMPUTE_ARGS,
                                  "--cache-dir", str(cache)])
     assert code == 0, err
     assert "precomputing 1 orders for 1 wavelengths (not cached yet" in err
     assert "earth: 1 orders, 1 wavelengths" in err
     (entry,) = cache.glob("*.npz")
-    code, out, err = _run(capsys, ["radiance", "earth", "--sun-zenith", "30", *PRECOMPUTE_ARGS,
+    code, out, err = run_cli(capsys, ["radiance", "earth", "--sun-zenith", "30", *PRECOMPUTE_ARGS,
                                    "--cache-dir", str(cache)])
     assert code == 0, err
     assert f"using {entry}" in err
     lut_radiance = float(out.splitlines()[1].split(",")[4])
     # order 1 from the tables is the single-scattering solver's answer (0.5 %: table
     # interpolation, measured 0.05 % median in tests/transport)
-    code, out, _ = _run(capsys, ["radiance", "earth", "--sun-zenith", "30", "--wavelengths",
+    code, out, _ = run_cli(capsys, ["radiance", "earth", "--sun-zenith", "30", "--wavelengths",
                                  "550", "--solver", "single"])
     assert lut_radiance == pytest.approx(float(out.splitlines()[1].split(",")[4]),
                                          rel=0.5 * PERCENT)
@@ -309,20 +300,20 @@ def test_a_corrupt_cache_entry_is_rebuilt_not_used(capsys, tmp_path):
     cache = tmp_path / "cache"
     argv = ["precompute", "earth", "--monochromatic", *PRECOMPUTE_ARGS, "--cache-dir",
             str(cache)]
-    assert _run(capsys, argv)[0] == 0
+    assert run_cli(capsys, argv)[0] == 0
     (entry,) = cache.glob("*.npz")
     entry.write_bytes(entry.read_bytes()[:1000])  # truncated, as by a full disk
-    code, _, err = _run(capsys, argv)
+    code, _, err = run_cli(capsys, argv)
     assert code == 0, err
     assert "unreadable cache file" in err and "precomputing" in err
-    code, _, err = _run(capsys, argv)
+    code, _, err = run_cli(capsys, argv)
     assert "using" in err
     assert not list(cache.glob(".*tmp"))  # no temporary files left behind
 
 
 def test_no_cache_writes_nothing(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(tmp_path / "cache"))
-    code, _, err = _run(capsys, ["radiance", "earth", "--sun-zenith", "30", *PRECOMPUTE_ARGS,
+    code, _, err = run_cli(capsys, ["radiance", "earth", "--sun-zenith", "30", *PRECOMPUTE_ARGS,
                                  "--no-cache"])
     assert code == 0, err
     assert not (tmp_path / "cache").exists()
@@ -338,7 +329,7 @@ def test_no_cache_writes_nothing(capsys, tmp_path, monkeypatch):
     (["precompute", "earth", "--orders", "0"], "--orders: 0 is not allowed"),
 ])
 def test_bad_scene_arguments_get_one_clear_line(capsys, tmp_path, argv, message):
-    code, _, err = _run(capsys, [*argv, "-o", str(tmp_path / "x.png")] if argv[0] == "render"
+    code, _, err = run_cli(capsys, [*argv, "-o", str(tmp_path / "x.png")] if argv[0] == "render"
                         else argv)
     assert code == 2
     assert message in _error_line(err)
@@ -365,7 +356,7 @@ def test_bad_image_option_is_rejected_before_any_table_is_computed(capsys, tmp_p
                                                                     value, message):
     # The image options were checked only when saving, after tens of seconds of tables.
     cache = tmp_path / "cache"
-    code, _, err = _run(capsys, ["render", "earth", option, value, "--cache-dir", str(cache),
+    code, _, err = run_cli(capsys, ["render", "earth", option, value, "--cache-dir", str(cache),
                                  "-o", str(tmp_path / "x.png")])
     assert code == 2
     assert message in _error_line(err)
@@ -379,7 +370,7 @@ def test_render_at_a_time_and_place_reports_the_sun_and_moon(capsys, tmp_path):
     # altitude -0.45 deg, azimuth 311.6 deg; the test of astro/earth_sky checks it against
     # astropy); the summary line reports it.
     png = tmp_path / "berlin.png"
-    code, _, err = _run(capsys, ["render", "earth", "--time", "2024-06-21T21:30+02:00", "--lat",
+    code, _, err = run_cli(capsys, ["render", "earth", "--time", "2024-06-21T21:30+02:00", "--lat",
                                  "52.52", "--lon", "13.40", "--size", "24", "--wavelengths",
                                  "4", "--orders", "2", "-o", str(png)])
     assert code == 0, err
@@ -394,19 +385,19 @@ def test_radiance_at_a_time_uses_the_suns_zenith_then(capsys):
     # The same numbers as asking for that sun zenith directly.
     common = ["--wavelengths", "550", "--solver", "single", "--samples", "16",
               "--format", "json"]
-    code, out, err = _run(capsys, ["radiance", "earth", "--time", "2024-03-20T12:00Z", "--lat",
+    code, out, err = run_cli(capsys, ["radiance", "earth", "--time", "2024-03-20T12:00Z", "--lat",
                                    "0", "--lon", "0", *common])
     assert code == 0, err
     rows = json.loads(out)
     zenith = rows[0]["sun_zenith_deg"]
     assert 0.0 < zenith < 3.0  # equinox noon on the equator: the sun near the zenith
-    code, out, _ = _run(capsys, ["radiance", "earth", "--sun-zenith", str(zenith), *common])
+    code, out, _ = run_cli(capsys, ["radiance", "earth", "--sun-zenith", str(zenith), *common])
     assert json.loads(out)[0]["radiance"] == pytest.approx(rows[0]["radiance"], rel=1e-12)
 
 
 def test_timelapse_writes_frames_and_a_video(capsys, tmp_path):
     video = tmp_path / "dusk.mp4"
-    code, _, err = _run(capsys, ["timelapse", "earth", "--start", "2024-06-21T19:00Z", "--end",
+    code, _, err = run_cli(capsys, ["timelapse", "earth", "--start", "2024-06-21T19:00Z", "--end",
                                  "2024-06-21T20:00Z", "--frames", "3", "--lat", "52.52",
                                  "--lon", "13.40", "--size", "16", "--wavelengths", "4",
                                  "--orders", "2", "--twinkle", "3", "-o", str(video)])
@@ -430,6 +421,6 @@ def test_bad_sky_options_are_refused_before_any_table_work(capsys, tmp_path, mon
                                                             argv, expected):
     cache = tmp_path / "cache"
     monkeypatch.setenv("SKYSCATTER_CACHE_DIR", str(cache))
-    code, _, err = _run(capsys, [*argv, "-o", str(tmp_path / "x.gif")])
+    code, _, err = run_cli(capsys, [*argv, "-o", str(tmp_path / "x.gif")])
     assert code == 2 and expected in _error_line(err)
     assert not cache.exists()  # nothing computed or stored

@@ -6,7 +6,6 @@ have filled it); kills run the CLI in a child process.
 """
 
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -16,6 +15,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from cli_runner import run_cli, unprivileged_prefix
 from skyscatter import api
 from skyscatter.cli import main
 from skyscatter.render.image_io import read_exr
@@ -23,16 +23,6 @@ from skyscatter.render.image_io import read_exr
 SMALL = ["--solver", "single", "--size", "8", "--wavelengths", "3", "--no-cache"]
 TIMELAPSE = ["timelapse", "earth", "--start", "2024-06-21T19:00Z", "--end", "2024-06-21T20:00Z",
              "--lat", "52.52", "--lon", "13.40"]
-
-
-def _run(capsys, argv):
-    """(exit code, stdout, stderr) of `skyscatter argv`, in this process."""
-    try:
-        code = main(argv)
-    except SystemExit as exit_:
-        code = 0 if exit_.code is None else exit_.code
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def _one_line(stderr: str) -> str:
@@ -74,20 +64,10 @@ def test_unwritable_outputs_are_refused_before_any_table_work(capsys, tmp_path, 
     cache = tmp_path / "cache"
     before = sorted(os.listdir(tmp_path))
     argv = [arg.replace("{t}", str(tmp_path)) for arg in argv]
-    code, _, err = _run(capsys, [*argv, "--cache-dir", str(cache), "--size", "8"])
+    code, _, err = run_cli(capsys, [*argv, "--cache-dir", str(cache), "--size", "8"])
     assert code == 2
     assert message.replace("{t}", str(tmp_path)) in _one_line(err)
     assert sorted(os.listdir(tmp_path)) == before  # no cache, no output, no temporary
-
-
-def _unprivileged() -> list[str]:
-    """A command prefix under which folder permissions apply (root ignores them)."""
-    if os.geteuid() != 0:
-        return []
-    prefix = ["setpriv", "--inh-caps=-all", "--bounding-set=-all"]
-    if shutil.which("setpriv") is None or subprocess.run([*prefix, "true"]).returncode != 0:
-        pytest.skip("running as root without setpriv: read-only folders are writable")
-    return prefix
 
 
 @pytest.mark.parametrize(("argv", "refused"), [
@@ -104,7 +84,7 @@ def test_a_read_only_folder_is_refused_before_any_table_work(tmp_path, argv, ref
     (tmp_path / "locked.png").chmod(0o444)
     cache = tmp_path / "cache"
     argv = [a.replace("{ro}", str(read_only)).replace("{t}", str(tmp_path)) for a in argv]
-    result = subprocess.run([*_unprivileged(), sys.executable, "-m", "skyscatter.cli", *argv,
+    result = subprocess.run([*unprivileged_prefix(), sys.executable, "-m", "skyscatter.cli", *argv,
                              "--cache-dir", str(cache), "--size", "8"],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 2
@@ -120,7 +100,7 @@ def test_a_read_only_folder_is_refused_before_any_table_work(tmp_path, argv, ref
 def test_jpg_name_writes_a_jpeg_with_the_pngs_pixels(capsys, tmp_path):
     # Before: PNG bytes under the .jpg name.
     for name in ("sky.png", "sky.jpg"):
-        code, _, err = _run(capsys, ["render", "earth", *SMALL, "-o", str(tmp_path / name)])
+        code, _, err = run_cli(capsys, ["render", "earth", *SMALL, "-o", str(tmp_path / name)])
         assert code == 0, err
     with Image.open(tmp_path / "sky.jpg") as jpeg, Image.open(tmp_path / "sky.png") as png:
         assert jpeg.format == "JPEG" and png.format == "PNG"
@@ -143,7 +123,7 @@ def test_dash_writes_the_png_to_standard_output(capsysbinary, tmp_path, monkeypa
 # --- time-lapse frames ---------------------------------------------------------------------------
 
 def _timelapse(capsys, tmp_path, frames: int) -> int:
-    code, _, err = _run(capsys, [*TIMELAPSE, *SMALL, "--no-stars", "--no-moon", "--no-airglow",
+    code, _, err = run_cli(capsys, [*TIMELAPSE, *SMALL, "--no-stars", "--no-moon", "--no-airglow",
                                  "--frames", str(frames), "-o", str(tmp_path / "t.gif")])
     assert code in (0, 130), err
     return code
@@ -209,7 +189,7 @@ sys.exit(main(sys.argv[2:]))
 def old_pair(capsys, tmp_path):
     """out/sky.png + out/sky.exr from a first render (sun 30 deg up) and their bytes."""
     png, exr = tmp_path / "out" / "sky.png", tmp_path / "out" / "sky.exr"
-    code, _, err = _run(capsys, ["render", "earth", *SMALL, "-o", str(png), "--exr", str(exr)])
+    code, _, err = run_cli(capsys, ["render", "earth", *SMALL, "-o", str(png), "--exr", str(exr)])
     assert code == 0, err
     return png, exr, png.read_bytes(), exr.read_bytes()
 
@@ -236,7 +216,7 @@ def test_a_render_killed_while_writing_leaves_the_old_pair(capsys, tmp_path, old
     else:
         assert code == -signal.SIGKILL and len(_hidden(png.parent)) == 2
     # the next run sweeps the dead writer's temporaries and replaces both files
-    code, _, err = _run(capsys, ["render", "earth", *SMALL, "--sun-elevation", "10",
+    code, _, err = run_cli(capsys, ["render", "earth", *SMALL, "--sun-elevation", "10",
                                  "-o", str(png), "--exr", str(exr)])
     assert code == 0, err
     assert sorted(os.listdir(png.parent)) == ["sky.exr", "sky.png"]
@@ -247,7 +227,7 @@ def test_a_render_killed_while_writing_leaves_the_old_pair(capsys, tmp_path, old
 def test_validate_refuses_a_read_only_report_folder_before_the_suite(tmp_path):
     read_only = tmp_path / "ro"
     read_only.mkdir(mode=0o555)
-    result = subprocess.run([*_unprivileged(), sys.executable, "-m", "skyscatter.cli",
+    result = subprocess.run([*unprivileged_prefix(), sys.executable, "-m", "skyscatter.cli",
                              "validate", "--quick", "--output", str(read_only / "report"),
                              "--cache-dir", str(tmp_path / "cache")],
                             capture_output=True, text=True, timeout=120)

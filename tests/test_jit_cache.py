@@ -16,6 +16,7 @@ import numba
 import pytest
 
 import skyscatter
+from cli_runner import unprivileged_prefix
 from skyscatter.jit_cache import use_writable_cache_folder
 
 
@@ -71,16 +72,6 @@ def test_a_temporary_folder_others_can_write_is_not_trusted(clean_environment, t
     assert chosen.name.startswith("skyscatter-numba-") and os.listdir(chosen) == []
 
 
-def _unprivileged() -> list[str]:
-    """A command prefix under which file permissions apply (root ignores them)."""
-    if os.geteuid() != 0:
-        return []
-    prefix = ["setpriv", "--inh-caps=-all", "--bounding-set=-all"]
-    if shutil.which("setpriv") is None or subprocess.run([*prefix, "true"]).returncode != 0:
-        pytest.skip("running as root without setpriv: read-only folders are writable")
-    return prefix
-
-
 def test_kernels_import_from_a_read_only_install_with_a_read_only_home(tmp_path):
     source = tmp_path / "site"
     shutil.copytree(Path(skyscatter.__file__).parent, source / "skyscatter",
@@ -95,7 +86,7 @@ def test_kernels_import_from_a_read_only_install_with_a_read_only_home(tmp_path)
                        PYTHONDONTWRITEBYTECODE="1")
     try:
         result = subprocess.run(
-            [*_unprivileged(), sys.executable, "-c",
+            [*unprivileged_prefix(), sys.executable, "-c",
              "import os, skyscatter.optics.phase as p; print(p.__file__);"
              "print(os.environ['NUMBA_CACHE_DIR'])"],
             env=environment, capture_output=True, text=True, timeout=120)
