@@ -77,6 +77,13 @@ def _new_files(result: Result, inputs: dict[str, bytes]) -> list[str]:
                   if p.is_file() and str(p.relative_to(result.folder)) not in inputs)
 
 
+def _messages(result: Result) -> list[str]:
+    """The message lines of stderr (argparse's usage block left out)."""
+    return [line for line in result.stderr.splitlines()
+            if line.startswith("skyscatter") and "error" in line or
+            line.startswith("skyscatter:")]
+
+
 def refused(case: Case) -> Callable[[Result], str | None]:
     """The right outcome: exit 2, one message line, no traceback, no file written."""
 
@@ -87,9 +94,7 @@ def refused(case: Case) -> Callable[[Result], str | None]:
             return "internal error"
         if result.code == 0:
             return "accepted: nonsense output, exit 0"
-        messages = [line for line in result.stderr.splitlines()
-                    if line.startswith("skyscatter") and "error" in line or
-                    line.startswith("skyscatter:")]
+        messages = _messages(result)
         if result.code != 2 or len(messages) != 1:
             return f"unclear (exit {result.code}, {len(messages)} message lines)"
         if "precomputing" in result.stderr or "wrote" in result.stderr:
@@ -104,6 +109,9 @@ def refused(case: Case) -> Callable[[Result], str | None]:
 
 
 def strict_json(result: Result) -> str | None:
+    """Right: strict JSON on stdout (no bare NaN or Infinity), or a clear refusal."""
+    if result.code == 2 and "Traceback" not in result.stderr and len(_messages(result)) == 1:
+        return None
     if result.code != 0:
         return f"failed (exit {result.code})"
     try:
@@ -111,6 +119,15 @@ def strict_json(result: Result) -> str | None:
             ValueError(name)))
     except ValueError as error:
         return f"not strict JSON ({error})"
+    return None
+
+
+def rendered(result: Result) -> str | None:
+    """Right: a valid input that must work (exit 0, the image written, no NaN)."""
+    if "Traceback" in result.stderr or "internal error" in result.stderr:
+        return "internal error"
+    if result.code != 0 or not (result.folder / "sky.png").exists():
+        return f"failed (exit {result.code})"
     return None
 
 
@@ -203,10 +220,16 @@ def catalogue() -> list[Case]:
              [*render, "--time", "9999-12-31T23:00-05:00", "--lat", "0", "--lon", "0"]),
         Case("internal errors", "montecarlo at the top of the atmosphere",
              ["render", "earth", "--solver", "montecarlo", "--samples", "2", "--size", "8",
-              "--wavelengths", "3", "--elevation-m", "100000"]),
+              "--wavelengths", "3", "--elevation-m", "100000"], judge=rendered),
         # 5. machine-readable output
         Case("strict JSON", "radiance nan azimuth --format json",
              [*RADIANCE[:7], "nan", *RADIANCE[8:], "--format", "json", "--wavelengths", "550,"],
+             judge=strict_json),
+        Case("strict JSON", "radiance montecarlo --format json",
+             [*RADIANCE[:-4], "--solver", "montecarlo", "--samples", "64", "--format", "json",
+              "--wavelengths", "550,"], judge=strict_json),
+        Case("strict JSON", "radiance at the top of the atmosphere --format json",
+             [*RADIANCE, "--altitude", "100000", "--format", "json", "--wavelengths", "550,"],
              judge=strict_json),
         Case("strict JSON", "radiance 200 nm --format json",
              [*RADIANCE, "--format", "json", "--wavelengths", "200"], judge=strict_json),
