@@ -91,7 +91,12 @@ from skyscatter.render.tonemap import (
 )
 from skyscatter.render.video_io import VideoWriter
 from skyscatter.spectrum.colour import spectral_to_xyz, xyz_to_rgb
-from skyscatter.spectrum.grid import checked_data_wavelengths, checked_grid, wavelength_grid
+from skyscatter.spectrum.grid import (
+    DEFAULT_WAVELENGTH_BINS,
+    checked_data_wavelengths,
+    checked_grid,
+    wavelength_grid,
+)
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
@@ -177,9 +182,9 @@ def load_solver(atmosphere: Atmosphere, wavelengths_nm: Sequence[float] | None =
 
 def _checked_wavelength_list(wavelengths_nm: Sequence[float] | None,
                              monochromatic: bool) -> np.ndarray:
-    """The wavelengths of a solver: the default 16 bins, or a checked non-empty 1-D list."""
+    """The wavelengths of a solver: the default bins, or a checked non-empty 1-D list."""
     if wavelengths_nm is None:
-        return wavelength_grid(16)
+        return wavelength_grid(DEFAULT_WAVELENGTH_BINS)
     checked_array("wavelengths_nm", wavelengths_nm)  # numbers, finite
     if monochromatic:
         wavelengths = checked_data_wavelengths(np.atleast_1d(wavelengths_nm), True)
@@ -199,7 +204,7 @@ def check_render_cost(camera: Camera, wavelengths_nm: Sequence[float] | None = N
     solvers more than an hour (`render.budget`); nothing with `allow_large`. `render`,
     `render_at` and `timelapse` call it before any work."""
     _check_camera(camera)
-    n_wl = 16 if wavelengths_nm is None else int(np.size(wavelengths_nm))
+    n_wl = DEFAULT_WAVELENGTH_BINS if wavelengths_nm is None else int(np.size(wavelengths_nm))
     width, height = int(camera.width), int(camera.height)
     what = f"a {width} x {height}-pixel image at {n_wl} wavelengths"
     if frames > 1:
@@ -634,7 +639,7 @@ def _angle_list(name: str, values: Sequence[float], bounds: Bounds) -> np.ndarra
 # Stars the viewer draws (brighter than V 6.5: about 9100, half of them up at a time) and the
 # wavelength bins of their colour (those of `render`)
 VIEWER_MAGNITUDE_LIMIT = 6.5
-VIEWER_STAR_GRID = wavelength_grid(16)
+VIEWER_STAR_GRID = wavelength_grid(DEFAULT_WAVELENGTH_BINS)
 
 
 def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0,

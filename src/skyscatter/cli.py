@@ -21,6 +21,7 @@ from pathlib import Path
 from skyscatter import __version__, checks
 from skyscatter.checks import Bounds
 from skyscatter.errors import InputError
+from skyscatter.spectrum.grid import DEFAULT_WAVELENGTH_BINS  # light: numpy only
 from skyscatter.validate.suite import CASES as VALIDATION_CASES  # light: no solver imported
 
 __all__ = ["main"]
@@ -336,7 +337,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="perspective view elevation in degrees (default 10)")
     render.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
                         help="N bins over 360-830 nm, or a comma-separated list in nm "
-                        "(default 16 bins)")
+                        f"(default {DEFAULT_WAVELENGTH_BINS} bins)")
     _add_solver_arguments(render, 64)
     render.add_argument("--albedo-map", type=Path, default=None, metavar="IMAGE",
                         help="equirectangular ground albedo (PNG/JPEG sRGB, EXR or .npy linear; "
@@ -413,7 +414,8 @@ def build_parser() -> argparse.ArgumentParser:
                            metavar="DEG",
                            help="perspective view elevation (default 10)")
     timelapse.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
-                           help="N bins over 360-830 nm or a list in nm (default 16 bins)")
+                           help="N bins over 360-830 nm or a list in nm "
+                           f"(default {DEFAULT_WAVELENGTH_BINS} bins)")
     _add_solver_arguments(timelapse, 64)
     _add_sky_object_arguments(timelapse)
     timelapse.add_argument("--fps", type=_number(_POSITIVE), default=12.0,
@@ -477,7 +479,8 @@ def build_parser() -> argparse.ArgumentParser:
                             help="a preset name (see `skyscatter presets`) or a TOML file")
     precompute.add_argument("--wavelengths", default=None, metavar="N|LIST",
                             help="as for render: N bins over 360-830 nm or a list in nm "
-                            "(default 16 bins, what render uses); with --monochromatic a list "
+                            f"(default {DEFAULT_WAVELENGTH_BINS} bins, what render uses); with "
+                            "--monochromatic a list "
                             "as for radiance")
     precompute.add_argument("--monochromatic", action="store_true",
                             help="tables for `radiance` at exactly the listed wavelengths "

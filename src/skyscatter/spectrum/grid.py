@@ -4,11 +4,12 @@ A spectral grid is a 1-D, strictly ascending array of wavelengths λ_j [nm]. Eac
 stands for a cell [e_j, e_{j+1}]; a spectrum on the grid is read as piecewise constant over the
 cells. That reading is what makes colour (`colour.cmf_weights`) and band sums exact, so tabulated
 spectra are put on a grid by their *cell average* (`cell_average`), not by point sampling: point
-samples of the solar spectrum alias its Fraunhofer lines on coarse grids (reference-data.md §4.3:
-point values at 400 nm differ by up to 10 % between solar atlases, band means by 1 %).
+samples of the solar spectrum alias its Fraunhofer lines on coarse grids (point values at 400 nm
+differ by up to 10 % between ASTM G173-03, Kurucz 1992 and Gueymard 2004, band means by 1 %).
 
 The default grid follows Bruneton & Neyret (2008) / Elek (2010): `count` equal bins over
-360–830 nm, each represented by its centre.
+360–830 nm, each represented by its centre; `DEFAULT_WAVELENGTH_BINS` bins unless a caller says
+otherwise (images, the viewer's full tables, the CLI's --wavelengths).
 
 The shipped data bound the wavelengths a user may ask for (`checked_data_wavelengths`): images
 need the CIE 1931 colour-matching functions, tabulated over `COLOUR_RANGE_NM` = 360–830 nm
@@ -20,7 +21,8 @@ cross-sections end at 830 nm; past it they are taken as 0 (`optics.absorption`, 
 ~0.001 in the Wulf bands).
 
 Public names: `wavelength_grid`, `cell_edges`, `cell_widths`, `cell_average`, `checked_grid`,
-`checked_wavelengths`, `checked_data_wavelengths`, `COLOUR_RANGE_NM`, `MONOCHROMATIC_RANGE_NM`.
+`checked_wavelengths`, `checked_data_wavelengths`, `COLOUR_RANGE_NM`, `MONOCHROMATIC_RANGE_NM`,
+`DEFAULT_WAVELENGTH_BINS`.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from skyscatter.errors import InputError
 
 __all__ = [
     "COLOUR_RANGE_NM",
+    "DEFAULT_WAVELENGTH_BINS",
     "MONOCHROMATIC_RANGE_NM",
     "cell_average",
     "cell_edges",
@@ -42,6 +45,7 @@ __all__ = [
     "wavelength_grid",
 ]
 
+DEFAULT_WAVELENGTH_BINS = 16  # bins over 360-830 nm of images and tables when none are asked for
 SINGLE_WAVELENGTH_CELL_NM = 1.0  # nm; width given to a one-wavelength grid (monochromatic use)
 COLOUR_RANGE_NM = (360.0, 830.0)  # nm; the CIE 1931 colour-matching functions (colour_cie.npz)
 MONOCHROMATIC_RANGE_NM = (280.5, 1690.0)  # nm; solar spectrum + gas refractive indices (above)
@@ -111,7 +115,8 @@ def checked_grid(wavelengths_nm: ArrayLike, name: str = "wavelengths_nm") -> np.
     return wl
 
 
-def wavelength_grid(count: int = 16, start_nm: float = 360.0, stop_nm: float = 830.0) -> np.ndarray:
+def wavelength_grid(count: int = DEFAULT_WAVELENGTH_BINS, start_nm: float = 360.0,
+                    stop_nm: float = 830.0) -> np.ndarray:
     """Centres of `count` equal bins between `start_nm` and `stop_nm`.
 
         λ_j = start + (j + 1/2) (stop - start) / count,   j = 0 .. count-1

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.lut_solver import LutSolver
@@ -49,7 +49,7 @@ class SolverOptions:
     """
 
     n_samples: int = 64
-    orders: int = 4
+    orders: int = DEFAULT_SCATTERING_ORDERS
     resolution: TableResolution | None = None
     cache: TableCache | None = None
     force: bool = False

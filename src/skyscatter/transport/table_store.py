@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from skyscatter import __version__
-from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache, profile_fingerprint
 from skyscatter.transport.code_fingerprint import code_fingerprint
@@ -84,7 +84,8 @@ def tables_from_arrays(arrays: dict[str, np.ndarray],
 
 
 def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
-                  orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
+                  orders: int = DEFAULT_SCATTERING_ORDERS,
+                  min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                   cache: TableCache | None = None, force: bool = False,
                   progress: Callable[[int, int, str], None] | None = None,
                   log: Callable[[str], None] | None = None) -> AtmosphereTables:

@@ -8,8 +8,8 @@ the gas itself: `atmosphere.variants.scaled_constituent`), the ground albedo and
   preview  8 wavelength bins, the table sizes halved (`TableResolution.scaled(0.5)`), the
            config's orders: about a second for Earth, kept in memory only; the page shows it
            at once after a parameter change;
-  full     16 bins and the default sizes, the tables `skyscatter render` uses, from (and into)
-           the table cache; the page swaps them in when they arrive.
+  full     `DEFAULT_WAVELENGTH_BINS` bins and the default sizes, the tables `skyscatter render`
+           uses, from (and into) the table cache; the page swaps them in when they arrive.
 
 The policy for table requests, whoever sends them: one computation at a time (a lock), so the
 viewer never uses more than one table computation's CPU and memory; a newer request of the same
@@ -47,7 +47,7 @@ from skyscatter.atmosphere.model import Atmosphere, OpticalProfile, SpectralPara
 from skyscatter.atmosphere.variants import scaled_constituent
 from skyscatter.disk_cache import cache_directory_override
 from skyscatter.errors import InputError
-from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.spectrum.grid import DEFAULT_WAVELENGTH_BINS, wavelength_grid
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.table_store import cached_tables
 from skyscatter.transport.tables import AtmosphereTables, TableResolution
@@ -56,7 +56,8 @@ from skyscatter.viewer.gpu_tables import encode, gpu_tables
 __all__ = ["BusyError", "QUALITIES", "SupersededError", "TableRequest", "TableService",
            "VIEWER_CACHE_BYTES", "ViewerCache"]
 
-QUALITIES = {"preview": (8, 0.5), "full": (16, 1.0)}  # wavelength bins, table size factor
+QUALITIES = {  # wavelength bins, table size factor
+    "preview": (8, 0.5), "full": (DEFAULT_WAVELENGTH_BINS, 1.0)}
 MAX_AMOUNT = 20.0  # largest factor on a constituent's amount
 MAX_WAITING = 2  # table requests that may wait while another is computed
 MEMORY_ENTRIES = 6  # table messages kept in memory (a full Earth one is about 25 MB)
