@@ -1,4 +1,4 @@
-"""Benchmark: Mie optics of seed-004's Mars dust, 48 wavelengths (360-830 nm) x 5000 radii.
+"""Benchmark: Mie optics of Meyran 2022's Mars dust, 48 wavelengths (360-830 nm) x 5000 radii.
 
 ModifiedGamma(1.6 µm, 0.2) with 3 % hematite (Maxwell Garnett) in 1.5 + 0i, C_sca-weighted phase
 function on the 861 angles of `MIE_ANGLES_DEG`. Prints the wall time of the first call in this
@@ -54,7 +54,7 @@ def main() -> None:
                                cache_directory=cache_directory)
 
     print(f"numba threads: {numba.get_num_threads()}; 48 wavelengths x 5000 radii, "
-          f"Mars dust (seed-004), C_sca-weighted phase")
+          f"Mars dust (Meyran 2022), C_sca-weighted phase")
     first, table = timed(compute)
     print(f"first call (miepython import + JIT{' compile' if args.fresh_numba_cache else ''}): "
           f"{first:6.2f} s")

@@ -71,7 +71,7 @@ FIGURES = {
 
 
 def make_mars_phase_figure(path: Path) -> None:
-    """The dust phase functions of the four seed-004 Mars models at 440 and 680 nm (as the
+    """The dust phase functions of the four Meyran 2022 Mars models at 440 and 680 nm (as the
     thesis's Fig. 4.2/4.4), plus the scattering-weighted Mie average for comparison."""
     import matplotlib
 

@@ -58,8 +58,8 @@ def worked_example(tmp_path_factory):
                                                              (700.0, 0.0364)])
 def test_worked_example_rayleigh_depth_matches_bodhaine_1999_eq30(worked_example, wavelength_nm,
                                                                   bodhaine_tau):
-    # Reference: Bodhaine et al. 1999 eq. 30 (1013.25 hPa, 360 ppm CO2), as tabulated in
-    # shared/research/reference-data.md §4.1. Ours: the example's USSA-1976 air column (22 rows,
+    # Reference: Bodhaine et al. 1999 eq. 30 (1013.25 hPa, 360 ppm CO2). Ours: the example's
+    # USSA-1976 air column (22 rows,
     # 0.14 % below the full table; 0.3 % below Bodhaine's 2.1544e25 cm^-2) x our cross-section.
     # Tolerance 1 %: column (0.4 %) + King-factor/refractivity conventions (0.5 %) + rounding.
     atmosphere, _, by_kind = worked_example
@@ -102,7 +102,7 @@ def test_worked_example_ground_and_star(worked_example):
     np.testing.assert_allclose(profile.ground_albedo, raw["planet"]["ground_albedo"])
     assert atmosphere.bottom_radius_m == raw["planet"]["radius_m"]
     assert atmosphere.top_altitude_m == raw["atmosphere"]["top_altitude_m"]
-    # ASTM G173 ETR near 550 nm: 1.863 W m^-2 nm^-1 (reference-data.md §4.3); 2 %: bin averaging.
+    # ASTM G173-03 ETR near 550 nm: 1.863 W m^-2 nm^-1 (pvlib's ASTMG173.csv); 2 %: bin averaging.
     assert profile.toa_irradiance[1] == pytest.approx(1.863, rel=2 * PERCENT)
 
 
@@ -164,8 +164,8 @@ def _half_unit_of_last_digit(text: str) -> float:
     ("ozone", 680.0, "0.00975"), ("ozone", 550.0, "0.0282"), ("ozone", 440.0, "0.00128"),
 ])
 def test_earth_bruneton_depths_match_bruneton_2017_demo(constituent, wavelength_nm, printed):
-    # Reference: Bruneton 2017 demo.cc parameters, derived vertical optical depths as printed in
-    # shared/research/anchor-bruneton.md §1.8. The ozone cross-section there is a table of
+    # Reference: vertical optical depths derived by hand from Bruneton 2017's demo.cc parameters
+    # (InitModel). The ozone cross-section there is a table of
     # 10-nm bin means, which our config interpolates point-wise: monochromatic=True, and at the
     # bin centres 440/550/680 it returns the tabulated value itself.
     # Tolerance: half a unit in the last printed digit (0.4 % for 0.00128) + 0.1 % for our

@@ -152,7 +152,8 @@ def test_mars_physical_mass_column_is_p_over_g():
 def test_mars_physical_rayleigh_depth_is_costa_2020s_advanced_mode_order():
     # Costa 2020 Table 1 (advanced mode) gives N = 2.8e23 m^-3 and n_CO2 from Bideau-Mehu: our
     # N0 = P / (k T) = 2.19e23 m^-3 is the same order (636 Pa, 210 K vs their unstated state).
-    # shared/research/reference-data.md section 3 (pyRT_DISORT's CO2 formula, 610 Pa, g = 3.711):
+    # Sneep & Ubachs 2005's CO2 formula as in pyRT_DISORT (utilities/rayleigh_co2.py), 610 Pa,
+    # g = 3.711:
     # tau_R(550 nm) = 0.0026; ours at 636 Pa scaled to 610 Pa: within 10 % (their formula is 8 %
     # above the measured cross-section; ours uses Bodhaine's F = 1.15).
     (mars,) = describe_gas(load_atmosphere("mars-physical"))

@@ -1,8 +1,9 @@
-"""The Mars dust presets of seed 004 (Meyran 2022) against the numbers their sources print.
+"""The Mars dust presets of Meyran 2022 against the numbers their sources print.
 
-Table 4.1 of the thesis (shared/research/seed-004.md §1.5) lists the real-time coefficients in
-(680, 550, 440) nm order, in 1e-3 km^-1 = 1e-6 m^-1; §8.6 is the analyst's re-run of the Mie
-pipeline; App. A.3 prints the first and last entries of the shader's phase table.
+Meyran (2022), "Physically Based Real-Time Rendering of the Martian Atmosphere", M.Sc. thesis,
+Hochschule Hannover: Table 4.1 lists the real-time coefficients in (680, 550, 440) nm order, in
+1e-3 km^-1 = 1e-6 m^-1; tests/optics/test_optics_mie.py re-runs its App. A.2 Mie pipeline;
+App. A.3 prints the first and last entries of the shader's phase table.
 """
 
 import numpy as np
@@ -60,7 +61,7 @@ def test_bluemoon_phase_matches_the_thesis_shader_table():
 def test_hybrid_uses_meyrans_quadratic_g1_and_loses_the_mie_backscatter_peak():
     atmosphere = load_atmosphere("mars-hybrid")
     dust = next(c for c in atmosphere.constituents if c.name == "dust").optics
-    # seed-004 §2.13: g1 = 0.670, 0.400, 0.030 at 440, 550, 680 nm (3 digits)
+    # Meyran 2022 §4.1 fit: g1 = 0.670, 0.400, 0.030 at 440, 550, 680 nm (3 digits)
     np.testing.assert_allclose(dust.blend.g1.at(WL), [0.670, 0.400, 0.030], atol=1e-3)
     bluemoon = next(c for c in load_atmosphere("mars-bluemoon").constituents
                     if c.name == "dust").optics

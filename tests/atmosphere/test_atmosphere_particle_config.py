@@ -67,7 +67,7 @@ def test_bad_mie_values_are_config_errors_naming_the_key(tmp_path, old, new, key
 
 
 def test_spectral_polynomial_is_evaluated_inside_its_range_and_held_outside(tmp_path):
-    # Meyran 2022's g1(lambda) (seed-004 §2.13): 0.670 / 0.400 / 0.030 at 440 / 550 / 680 nm.
+    # Meyran 2022's g1(lambda) (its §4.1): 0.670 / 0.400 / 0.030 at 440 / 550 / 680 nm.
     blend = ('blend = { type = "henyey-greenstein", g = { polynomial_nm = [1.35512821, '
              '-8.39160839e-4, -1.63170163e-6], range_nm = [360.0, 830.0] } }\n')
     atmosphere = _load(tmp_path, OPTICS + blend)

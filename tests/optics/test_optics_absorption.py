@@ -15,13 +15,14 @@ PERCENT = 1e-2  # cross-sections are ~1e-25 m^2: every approx below on them sets
 
 
 def test_dobson_unit_is_a_0p01mm_layer_at_stp():
-    # 1 DU = 1e-5 m x Loschmidt 2.6867811e25 m^-3 (CODATA 2018); reference-data.md: 2.687e20.
+    # 1 DU = 1e-5 m x Loschmidt 2.6867811e25 m^-3 (CODATA 2018); commonly rounded to 2.687e20.
     assert abs(DOBSON_UNIT_M2 / 2.687e20 - 1.0) < 1e-4
 
 
 def test_ozone_optical_depth_300du_at_600nm_matches_serdyuchenko():
-    # reference-data.md §4.2: Serdyuchenko 233 K, 10-nm bin mean 5.019e-25 m^2 -> tau = 0.0405
-    # for 300 DU. Ours is Malicet/Brion at 295 K averaged over 1 nm: 5.144e-25 m^2 -> 0.0415.
+    # Serdyuchenko et al. 2014, 233 K, 10-nm bin mean (Bruneton 2017 demo.cc): 5.019e-25 m^2 ->
+    # tau = 0.0405 for 300 DU. Ours is Malicet/Brion at 295 K averaged over 1 nm: 5.144e-25 m^2
+    # -> 0.0415.
     # Tolerance 5 %: Chappuis-band temperature dependence and dataset differences of a few %.
     tau = ozone_cross_section(600.0) * 300.0 * DOBSON_UNIT_M2
     assert tau == pytest.approx(0.040, rel=5 * PERCENT)
@@ -38,7 +39,7 @@ def test_ozone_cross_section_matches_source_point_values():
 
 def test_ozone_10nm_band_means_track_serdyuchenko_233k():
     # Bruneton's demo table (IUP Bremen / Serdyuchenko 233 K, "10-nm bin averages";
-    # anchor-bruneton.md). Its value at lambda matches our mean over [lambda, lambda + 10] nm
+    # demo.cc). Its value at lambda matches our mean over [lambda, lambda + 10] nm
     # (centred bins differ by up to 17 %, so that is evidently its binning). Measured gap
     # 1.4-5.7 %; tolerance 7 %: Chappuis-band temperature dependence (233 vs 295 K) and the
     # Brion vs Serdyuchenko datasets differ by a few percent, most in the band wings.

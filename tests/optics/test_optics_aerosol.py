@@ -17,7 +17,7 @@ def test_angstrom_law_closed_form():
 
 def test_bruneton_rayleigh_as_angstrom_optics():
     # Bruneton 2017 demo: beta_R = 1.24062e-6 lambda[µm]^-4 m^-1 -> 5.802e-6, 13.558e-6,
-    # 33.1e-6 m^-1 at 680, 550, 440 nm (anchor-bruneton.md); evaluated here by hand.
+    # 33.1e-6 m^-1 at 680, 550, 440 nm (demo.cc kRayleigh); evaluated here by hand.
     optics = AngstromOptics(extinction_at_reference=1.24062e-6, reference_wavelength_nm=1000.0,
                             angstrom_exponent=4.0, phase=RayleighPhase())
     wl = np.array([680.0, 550.0, 440.0])

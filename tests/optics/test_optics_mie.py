@@ -1,4 +1,4 @@
-"""Mie optics of particle populations against miepython, closed forms and seed-004's numbers."""
+"""Mie optics of particle populations against miepython, closed forms and Meyran 2022's numbers."""
 
 from __future__ import annotations
 
@@ -28,12 +28,12 @@ miepython = pytest.importorskip("miepython")
 THETA = np.deg2rad(MIE_ANGLES_DEG)
 MU = np.cos(THETA)
 PERCENT = 0.01
-DUST = ModifiedGamma(1.6e-6, 0.2)  # seed-004 §2.10: Tomasko's a = 1.6 µm, b = 0.2
+DUST = ModifiedGamma(1.6e-6, 0.2)  # Meyran 2022 §3.3.2: Tomasko's a = 1.6 µm, b = 0.2
 RGB_NM = [440.0, 550.0, 680.0]
 
 
 def dust_index() -> ComplexIndex:
-    # seed-004 §2.11: 3 % hematite (Maxwell Garnett) in a 1.5 + 0i host.
+    # Meyran 2022 §3.3.2 (after Ehlers et al. 2014): 3 % hematite (Maxwell Garnett) in 1.5 + 0i.
     return maxwell_garnett(1.5 + 0j, load_material("hematite"), 0.03)
 
 
@@ -48,7 +48,7 @@ def sphere_integral(phase: np.ndarray, weight: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class GammaSample:
-    """seed-004 §8.2 step 1 / §8.6: radii drawn by numpy's gamma(3, 0.32 µm), equal weights."""
+    """Meyran 2022 App. A.2.2: radii drawn by numpy's gamma(3, 0.32 µm), equal weights."""
 
     seed: int
 
@@ -129,7 +129,7 @@ def test_angle_grid_resolves_the_forward_peak():
 # ----- Anomalous diffraction ------------------------------------------------------------------
 
 def ada_extinction_seed_004_eq_2_32(x, m):
-    """Eq. 2.32 of seed-004 (van de Hulst), as printed, with tan(beta) = k/(n - 1)."""
+    """Eq. 2.32 of Meyran 2022 (van de Hulst), as printed, with tan(beta) = k/(n - 1)."""
     rho = 2.0 * x * (m.real - 1.0)
     beta = np.arctan(m.imag / (m.real - 1.0))
     c = np.cos(beta) / rho
@@ -184,11 +184,13 @@ def test_ada_method_keeps_the_mie_phase_function():
                                                                rel=1e-12)
 
 
-# ----- seed-004: the Mars dust of Meyran's thesis -------------------------------------------
+# ----- the Mars dust of Meyran's thesis (2022, Hochschule Hannover) ---------------------------
 
 def test_seed_004_reproduction_with_the_analysts_own_radius_sample():
-    # seed-004 §8.6 drew 5000 radii with numpy.random.default_rng(1).gamma(3, 0.32 µm); with the
-    # same radii every printed number is reproduced (tolerance: half a unit of the last digit).
+    # The reference: the thesis's App. A.2 algorithm re-run with 5000 radii from
+    # numpy.random.default_rng(1).gamma(3, 0.32 µm) and miepython 3.3.0 (it matches the thesis's
+    # Table 4.1 albedos and shader table ends); with the same radii every printed number is
+    # reproduced (tolerance: half a unit of the last digit).
     sample = GammaSample(seed=1)
     table = particle_optics(sample, dust_index(), RGB_NM, n_radii=5000, phase_average="number",
                             cache_directory=False)
@@ -200,8 +202,8 @@ def test_seed_004_reproduction_with_the_analysts_own_radius_sample():
                                                                    8.682e-12], atol=0.5e-15)
     np.testing.assert_allclose(table.phase[0], [17.07, 9.21, 5.31], atol=0.005)
     np.testing.assert_allclose(table.phase[-1], [0.0538, 0.0846, 0.1058], atol=0.00005)
-    # §8.5: C_sca-weighted, the forward peak at 440 nm is 40.7 sr^-1, the back 0.027 sr^-1;
-    # §8.6 table: C_sca-weighted g = 0.854 / 0.787 / 0.725.
+    # The same re-run, C_sca-weighted: forward peak at 440 nm 40.7 sr^-1, back 0.027 sr^-1;
+    # g = 0.854 / 0.787 / 0.725.
     weighted = particle_optics(sample, dust_index(), RGB_NM, n_radii=5000,
                                cache_directory=False)
     assert weighted.phase[0, 0] == pytest.approx(40.7, abs=0.05)
@@ -210,7 +212,7 @@ def test_seed_004_reproduction_with_the_analysts_own_radius_sample():
 
 
 def test_seed_004_reproduction_with_the_deterministic_quadrature():
-    # The quadrature gives the expectation over the gamma distribution; seed-004's numbers are
+    # The quadrature gives the expectation over the gamma distribution; the re-run's numbers are
     # one 5000-radius sample (mean radius 0.950 µm vs 0.96 µm; its <r^2> is 2.1 % low). The
     # relative standard error of a 5000-sample mean of r^2 is sqrt(216/144)/sqrt(5000) = 1.7 %,
     # so absolute values get 4 % (2 sigma + rounding); ratios and albedos are far less noisy.

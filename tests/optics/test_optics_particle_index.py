@@ -27,7 +27,7 @@ def test_every_material_loads_with_k_non_negative():
 
 
 def test_hematite_table_is_the_seed_004_excerpt():
-    # seed-004 §3.9 (CosmoScout VR mars_ehlers.json): 48 rows 0.36-0.83 µm; spot values.
+    # CosmoScout VR mars_ehlers.json (inclusion ior): 48 rows 0.36-0.83 µm; spot values.
     hematite = load_material("hematite")
     assert hematite.wavelengths_nm == tuple(float(w) for w in range(360, 831, 10))
     np.testing.assert_array_equal(hematite.at([360.0, 440.0, 550.0, 680.0, 830.0]),
@@ -59,7 +59,7 @@ def test_water_at_550_nm():
 def test_soot_and_costa_mars_dust():
     # Bond & Bergstrom (2006): 1.95 + 0.79i, the same at every wavelength.
     np.testing.assert_array_equal(load_material("soot").at([400.0, 700.0]), [1.95 + 0.79j] * 2)
-    # Costa (2020) Table 1 via seed-004 Table 3.7: n = 1.52, k = 0.013/0.006/0.001 at 440/550/680.
+    # Costa (2020) Table 1 (Meyran 2022 Table 3.7): n = 1.52, k = 0.013/0.006/0.001 at 440/550/680.
     np.testing.assert_array_equal(load_material("mars-dust-costa").at([440.0, 550.0, 680.0]),
                                   [1.52 + 0.013j, 1.52 + 0.006j, 1.52 + 0.001j])
 
@@ -81,8 +81,9 @@ def test_maxwell_garnett_end_members_are_host_and_inclusion():
 
 
 def test_maxwell_garnett_reproduces_seed_004_mixed_hematite():
-    # seed-004 §8.6: 3 % hematite in 1.5 + 0i, printed to 4 decimals (tolerance: half a unit in
-    # the last digit). The reference prints Im < 0 (miepython's sign); we keep k >= 0.
+    # Meyran 2022 App. A.2.1 re-run: 3 % hematite in 1.5 + 0i, printed to 4 decimals (tolerance:
+    # half a unit in the last digit). The reference prints Im < 0 (miepython's sign); we keep
+    # k >= 0.
     mixed = maxwell_garnett(1.5 + 0j, load_material("hematite"), 0.03)
     m = mixed.at([440.0, 550.0, 680.0])
     np.testing.assert_allclose(m.real, [1.5342, 1.5337, 1.5290], atol=0.5e-4)

@@ -180,8 +180,8 @@ def test_phase_objects_normalised_and_asymmetry_matches_integral(phase):
 
 
 def test_dhg_costa_mars_asymmetry_values():
-    # Costa 2020 (GitHub values, seed-004 §3.5): g1 = (0.67, 0.4, 0.03) at (440, 550, 680) nm,
-    # g2 = 0.094, alpha = 0.743: <nu> = 0.743 g1 + 0.257 x 0.094, by hand.
+    # Costa 2020 (its OpenSpace code's values, Meyran 2022 Table 3.7): g1 = (0.67, 0.4, 0.03) at
+    # (440, 550, 680) nm, g2 = 0.094, alpha = 0.743: <nu> = 0.743 g1 + 0.257 x 0.094, by hand.
     dhg = DoubleHenyeyGreensteinPhase(G_TABLE, 0.094, 0.743)
     np.testing.assert_allclose(dhg.asymmetry(WL), [0.521968, 0.321358, 0.046448], atol=1e-6)
 

@@ -19,7 +19,7 @@ from skyscatter.spectrum.tabulated import SpectralParameter
 
 PERCENT = 1e-2  # cross-sections are ~1e-31 m^2: every approx below on them sets abs=0
 # Bodhaine 1999's sea-level column of air for 1013.25 hPa at 45° latitude [molecules m^-2]
-# (2.1544e25 cm^-2; reference-data.md §4.1).
+# (2.1544e25 cm^-2; Bodhaine et al. 1999).
 COLUMN_45DEG_M2 = 2.1544e29
 
 
@@ -33,7 +33,7 @@ def test_rayleigh_depth_from_cross_section_matches_bodhaine_1999_eq30():
 
 
 def test_rayleigh_depth_matches_reference_data_table():
-    # reference-data.md §4.1, Bodhaine eq. 30 column, printed to 4 decimals; 0.6 % covers the
+    # Bodhaine et al. 1999 eq. 30 evaluated at 400-700 nm, printed to 4 decimals; 0.6 % covers the
     # rounding (up to 0.14 % at 700 nm) and the 0.12 % gap between eq. 30 and first principles.
     wl = [400.0, 450.0, 500.0, 550.0, 650.0, 700.0]
     expected = [0.3602, 0.2211, 0.1434, 0.0971, 0.0492, 0.0364]

@@ -86,7 +86,8 @@ def test_modified_gamma_gives_back_its_effective_radius_and_variance(a_um, b):
 
 
 def test_modified_gamma_of_mars_dust_is_the_gamma_of_seed_004():
-    # seed-004 §2.10: a = 1.6 µm, b = 0.2 -> k = 3, theta = 0.32 µm, number-mean radius 0.96 µm.
+    # Meyran 2022 App. A.2.2: a = 1.6 µm, b = 0.2 -> k = (1 - 2b)/b = 3, theta = 0.32 µm,
+    # number-mean radius 0.96 µm.
     gamma = ModifiedGamma(1.6 * UM, 0.2).as_gamma()
     assert gamma.shape == pytest.approx(3.0, rel=1e-15)
     assert gamma.scale_m == pytest.approx(0.32 * UM, rel=1e-15)

@@ -10,7 +10,7 @@ from skyscatter.spectrum.solar import solar_irradiance_1au, solar_spectrum_table
 ONE_NM_GRID = wavelength_grid(470, 360.0, 830.0)  # 1 nm cells, 360–830 nm
 
 # Bruneton's 48 ASTM G173 ETR values, 10 nm bins 360–830 nm (precomputed_atmospheric_scattering,
-# atmosphere/demo/demo.cc, BSD; digest: shared/research/anchor-bruneton.md). Each is the mean of
+# atmosphere/demo/demo.cc, BSD, kSolarIrradiance). Each is the mean of
 # the table's points in [λ, λ + 10 nm).
 BRUNETON_DEMO_SOLAR = np.array([
     1.11776, 1.14259, 1.01249, 1.14716, 1.72765, 1.73054, 1.6887, 1.61253, 1.91198, 2.03474,
@@ -24,13 +24,13 @@ def test_shipped_table_is_g173_etr_280_to_4000_nm():
     wl, irradiance = solar_spectrum_table()
     assert wl.shape == irradiance.shape == (2002,)
     assert (wl[0], wl[-1]) == (280.0, 4000.0)
-    # ASTM G173 ETR point values (reference-data.md §4.3, from pvlib's CSV) at 500 and 700 nm.
+    # ASTM G173-03 ETR point values (pvlib 0.16.1 data/ASTMG173.csv) at 500 and 700 nm.
     assert irradiance[wl == 500.0][0] == pytest.approx(1.9160, abs=5e-5)
     assert irradiance[wl == 700.0][0] == pytest.approx(1.4220, abs=5e-5)
 
 
 def test_integral_280_to_4000_nm_is_1347_9_w_m2():
-    # reference-data.md §4.3: ∫280–4000 of the G173 ETR = 1347.9 W m⁻² (trapezoid, pvlib CSV).
+    # ∫280–4000 of the G173-03 ETR = 1347.9 W m⁻² (trapezoid over pvlib's ASTMG173.csv).
     # Any grid covering 280–4000 gives the exact integral; 0.05 W m⁻² = rounding of 1347.9.
     for count in (37, 3720):
         grid = wavelength_grid(count, 280.0, 4000.0)
@@ -48,7 +48,7 @@ def test_10_nm_cell_averages_match_bruneton_demo_bins():
 
 
 def test_toa_solar_illuminance_and_chromaticity_match_reference():
-    # reference-data.md §4.4: G173 ETR, CIE 1931 ȳ (colour-science), Km = 683.002, 1 nm:
+    # Independent: G173-03 ETR (pvlib CSV) x CIE 1931 ȳ (colour-science 0.4.7), Km = 683.002, 1 nm:
     # 133.1 klx, x = 0.3234, y = 0.3327. Tolerances: the rounding of the reference (0.05 klx,
     # 5e-5) plus our cell averages vs the reference's 1 nm point sums (measured 0.0002 %).
     xyz = spectral_to_xyz(solar_irradiance_1au(ONE_NM_GRID), ONE_NM_GRID)

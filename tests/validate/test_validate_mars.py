@@ -179,7 +179,7 @@ def test_framework_reading_reverses_collienne_gas_coefficients():
 
 
 def test_measured_mer_mean_is_the_thesis_mean():
-    # seed-004 §4.2: "mean 0.402, 0.381"
+    # Meyran 2022 §5.1.2 (Bell et al. 2006): the mean of the four datasets, 0.402, 0.381
     np.testing.assert_allclose(MEASURED_MEAN, (0.402, 0.381), atol=5e-4)
 
 

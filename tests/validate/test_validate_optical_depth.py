@@ -56,9 +56,9 @@ def test_vertical_optical_depth_of_an_exponential_profile_is_the_closed_form(ear
 
 
 def test_ozone_optical_depth_at_600nm_matches_serdyuchenko_bins(earth):
-    # reference-data.md §4.2: 0.0405 for 300 DU (Serdyuchenko 233 K, 10-nm bin). Ours is another
-    # dataset (Malicet/Brion 295 K) at 600 nm itself: 0.0415. Tolerance 15 %: reference-data.md
-    # §8 test 2, which covers the spread between ozone datasets (0.036 from SPECTRL2).
+    # 0.0405 for 300 DU (Serdyuchenko et al. 2014, 233 K, 10-nm bin of Bruneton's demo.cc). Ours is
+    # another dataset (Malicet/Brion 295 K) at 600 nm itself: 0.0415. Tolerance 15 %: the spread
+    # between ozone datasets (0.036 from SPECTRL2's coefficients, Bird & Riordan 1986).
     comparison = compare_optical_depths(earth, [600.0])
     assert comparison.ozone_column_du == pytest.approx(300.0, rel=1e-9)
     assert comparison.ozone[0] == pytest.approx(0.0405, rel=15 * PERCENT)

@@ -88,7 +88,7 @@ def test_slant_air_mass_is_one_overhead_and_just_below_sec_z_at_60_deg():
 
 def test_direct_normal_illuminance_at_sun_zenith_30_matches_spectrl2():
     # Earth preset, 8 cells, small tables (the direct beam needs only the transmittance table).
-    # Limit: spectrl2.DIRECT_ILLUMINANCE_LIMIT (5 %, reference-data.md §8; its reasons are in
+    # Limit: spectrl2.DIRECT_ILLUMINANCE_LIMIT (5 %; its reasons are in
     # the module). Measured with 16 cells and full tables: ours/SPECTRL2 = 0.9997.
     atmosphere = api.load_atmosphere("earth")
     profile = atmosphere.optical_profile(wavelength_grid(8))

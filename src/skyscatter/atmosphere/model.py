@@ -33,7 +33,8 @@ __all__ = [
 ]
 
 # Scattering orders of the tables when a config does not say: Earth's value in Bruneton 2017
-# (model.h, `Model::Init(num_scattering_orders = 4)`; shared/research/anchor-bruneton.md §1.2);
+# (github.com/ebruneton/precomputed_atmospheric_scattering, atmosphere/model.h,
+# `Model::Init(num_scattering_orders = 4)`);
 # docs/physics/orders.md measures what thicker atmospheres need.
 DEFAULT_SCATTERING_ORDERS = 4
 # The most scattering orders the tables may iterate ([tables] orders, --orders, the API's

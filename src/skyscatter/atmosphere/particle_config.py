@@ -31,7 +31,7 @@ from skyscatter.optics.size_distribution import (
 
 __all__ = ["MIE_WAVELENGTHS_NM", "parse_mie_optics"]
 
-# Wavelengths [nm] of the Mie table of a config: seed-004's 10 nm grid from 360 nm, extended to
+# Wavelengths [nm] of the Mie table of a config: Meyran 2022's 10 nm grid from 360 nm, extended to
 # 900 nm so that the 880 nm filter of the Mars rovers is inside it.
 MIE_WAVELENGTHS_NM = np.arange(360.0, 901.0, 10.0)
 MIE_REFERENCE_NM = Bounds(float(MIE_WAVELENGTHS_NM[0]), float(MIE_WAVELENGTHS_NM[-1]))

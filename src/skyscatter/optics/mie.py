@@ -20,8 +20,9 @@ N [m^-3] gives beta = N <C>. The phase function is either
   - "scattering": sum_i w_i C_sca,i p_i / sum_i w_i C_sca,i, the phase function of the light the
     population scatters (Hansen & Travis 1974, doi:10.1007/BF00168069; the physical one),
   - "number": sum_i w_i p_i, the plain mean of the normalised per-particle phase functions that
-    the Mars thesis of seed-004 (§8.2, step 4) used; it over-weights small particles (at 440 nm
-    for its dust the forward peak is 2.4x lower, seed-004 §8.5). Kept to reproduce its numbers.
+    Meyran's Mars thesis used (2022, Hochschule Hannover, App. A.2); it over-weights small
+    particles (at 440 nm for its dust the forward peak is 2.4x lower, docs/physics/mie.md). Kept to
+    reproduce its numbers.
 The asymmetry parameter is that of the tabulated phase function (C_sca-weighted or plain mean
 of the per-particle g).
 
@@ -39,7 +40,7 @@ approximation (`anomalous_diffraction_efficiencies`) and keeps the Mie phase fun
 asymmetry (ADA has none); the "scattering" phase weights remain the Mie C_sca.
 
 Angles (`MIE_ANGLES_DEG`): the forward peak of a sphere is about 1/x rad wide (diffraction):
-0.38° for x = 150 (r = 8.7 µm, the largest radius of the seed-004 dust quadrature, at 360 nm).
+0.38° for x = 150 (r = 8.7 µm, the largest radius of the Meyran 2022 dust quadrature, at 360 nm).
 Steps of 0.02° up to 2°, 0.1° up to 10° and 0.25° up to 180° (861 angles) put 19 angles inside
 that width, and still 5 for x = 500; a population's peak is wider (its C_sca-weighted radius).
 
@@ -208,7 +209,7 @@ def anomalous_diffraction_efficiencies(size_parameter: ArrayLike,
     Q_ext = 4 Re K(rho tan(beta) + i rho),  Q_abs = 2 K(4 x k),
     K(w) = 1/2 + e^-w / w + (e^-w - 1) / w^2,  rho = 2 x (n - 1),  tan(beta) = k / (n - 1),
     van de Hulst (1957), "Light Scattering by Small Particles", Wiley, §11.22 (the Q_ext form is
-    the same as seed-004 Eq. 2.32, written through K so that n = 1 needs no tan beta). Valid for
+    the same as Meyran 2022 Eq. 2.32, written through K so that n = 1 needs no tan beta). Valid for
     |m - 1| << 1 and x >> 1; Q_ext -> 2 for x -> infinity. Q_sca = Q_ext - Q_abs.
 
     Parameters
@@ -352,9 +353,9 @@ def particle_optics(distribution: SizeDistribution, index: ComplexIndex,
     wavelengths_nm : array_like, shape (n_wl,)
         Vacuum wavelengths, strictly increasing; the medium is taken as vacuum. [nm]
     n_radii : int
-        Nodes of the radius quadrature (5000 matches the sample count of seed-004).
+        Nodes of the radius quadrature (5000 matches the sample count of Meyran 2022, App. A.2).
     phase_average : str
-        "scattering" (C_sca-weighted, physical) or "number" (plain mean, seed-004's thesis).
+        "scattering" (C_sca-weighted, physical) or "number" (plain mean, Meyran 2022's thesis).
     method : str
         "mie" (Mie extinction and scattering) or "ada" (anomalous diffraction extinction and
         absorption, Mie phase function and asymmetry).

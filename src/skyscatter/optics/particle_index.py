@@ -11,7 +11,7 @@ k and held constant outside the table (as `spectrum.tabulated.SpectralParameter`
 skyscatter/data/PROVENANCE.md):
 
     hematite          alpha-Fe2O3, 360-830 nm (CosmoScout VR mars_ehlers.json, a stand-in for
-                      the Amsterdam-Granada database data of the Mars thesis in seed-004 §3.9)
+                      the Amsterdam-Granada database data of Meyran 2022's Mars thesis)
     water             liquid water, 300-1000 nm (Segelstein 1981, via PyPI miepython)
     soot              1.95 + 0.79 i at all wavelengths (Bond & Bergstrom 2006)
     mars-dust-costa   n = 1.52, k = 0.013/0.006/0.001 at 440/550/680 nm (Costa et al. 2020)
@@ -136,7 +136,7 @@ def load_material(name: str) -> ComplexIndex:
 
     Tables: skyscatter/data/refractive_index_<name>.csv (header wavelength_nm,n,k; `#` lines
     name the source); see data/PROVENANCE.md. hematite: CosmoScout VR mars_ehlers.json,
-    360-830 nm (stand-in for the Amsterdam-Granada data, seed-004 §3.9); water: Segelstein
+    360-830 nm (stand-in for the Amsterdam-Granada data of Meyran 2022); water: Segelstein
     (1981), M.S. thesis, Univ. Missouri-Kansas City, 300-1000 nm, from PyPI miepython (MIT);
     mars-dust-costa: Costa et al. (2021), IEEE TVCG 27(2), 785, doi:10.1109/TVCG.2020.3030333,
     Table 1. soot: `SOOT_BOND_BERGSTROM_2006`, a constant.
@@ -173,7 +173,7 @@ def maxwell_garnett(host: ComplexIndex | complex, inclusion: ComplexIndex | comp
     m^2 = m0^2 [mA^2 + 2 m0^2 + 2 v (mA^2 - m0^2)] / [mA^2 + 2 m0^2 - v (mA^2 - m0^2)],
     m0 the host (matrix), mA the inclusion, v its volume fraction. Maxwell Garnett (1904),
     Phil. Trans. R. Soc. A 203, 385, doi:10.1098/rsta.1904.0024; Bohren & Huffman (1983), §8.5,
-    doi:10.1002/9783527618156; as written in seed-004 §2.11. v = 0 gives the host, v = 1 the
+    doi:10.1002/9783527618156; as written in Meyran 2022 §3.3.2. v = 0 gives the host, v = 1 the
     inclusion; to first order in v, m^2 = m0^2 (1 + 3 v (mA^2 - m0^2) / (mA^2 + 2 m0^2)).
     The root with k >= 0 is returned (the principal square root; |Im| guards rounding).
 

@@ -363,8 +363,8 @@ def angle_blended_phase(forward: PhaseFunction, backward: PhaseFunction, angles_
     This is the "hybrid" Mars dust of Meyran (2022, M.Sc. thesis, Hochschule Hannover, §4.1):
     the forward peak of a Mie phase function with Costa et al.'s double Henyey-Greenstein in side
     and back scattering. The thesis does not print its weight; the linear-in-angle weight is the
-    reading of shared/research/seed-004.md §2.13 (the hybrid "converges to" Costa's function in
-    back scattering and keeps the Mie forward peak).
+    reading of the thesis's §4.1 and §5.1.1 (the hybrid "converges to" Costa's function in back
+    scattering and keeps the Mie forward peak).
 
     Parameters
     ----------

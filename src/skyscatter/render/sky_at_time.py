@@ -20,8 +20,8 @@ moon's topocentric positions and the rotation from J2000 to the observer's east-
 
 Refraction moves what is seen through the air (disks and stars; Saemundsson 1986 via
 `astro.earth_sky.refract`), not the light that scatters in it (the tables assume straight
-rays), so the sky is lit by the sun's geometric direction as the seed's reference
-implementation does (seed 003, Appendix S.12).
+rays), so the sky is lit by the sun's geometric direction as osgHimmel does (Müller 2012, M.Sc.
+thesis, Hasso-Plattner-Institut; github.com/cgcostume/osghimmel, src/atmospheregeode.cpp).
 """
 
 from __future__ import annotations

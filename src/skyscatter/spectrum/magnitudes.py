@@ -30,8 +30,8 @@ Hayes 1985, IAU Symp. 111, 225).
 
 Public names: `V_PASSBAND_BESSELL_1990`, `V_ZERO_POINT_FLUX`, `v_band_mean`,
 `v_magnitude_of_spectrum`, `colour_temperature_from_b_minus_v`, `stellar_irradiance`. The
-thesis's T = 7000 K / (B-V + 0.56) (seed 003 eq. 4.26) gives 5785 K for the Sun, close to the
-5778 K used here, but diverges for blue stars (B-V -> -0.56).
+T = 7000 K / (B-V + 0.56) of Müller (2012, M.Sc. thesis, Hasso-Plattner-Institut, eq. 4.26)
+gives 5785 K for the Sun, close to the 5778 K used here, but diverges for blue stars (B-V -> -0.56).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ One definition of each mapping, as numba scalar functions that kernels call and 
 copy of the viewer mirrors (same names). Bruneton (2017), `precomputed_atmospheric_scattering`,
 atmosphere/functions.glsl, which refines Bruneton & Neyret (2008), "Precomputed atmospheric
 scattering", Comput. Graph. Forum 27(4), 1079, doi:10.1111/j.1467-8659.2008.01245.x, §4;
-digest in shared/research/anchor-bruneton.md §1.4.
+github.com/ebruneton/precomputed_atmospheric_scattering, atmosphere/functions.glsl.
 
 Symbols:
   r     distance to the planet centre [m]; R_b, R_t bottom and top radius [m]

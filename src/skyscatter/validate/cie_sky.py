@@ -8,8 +8,8 @@ whose zenith angle is Zs:
     phi(Z)  = 1 + a exp(b / cos Z)                        (gradation)
     f(chi)  = 1 + c [exp(d chi) - exp(d pi / 2)] + e cos^2 chi   (indicatrix)
 
-Coefficients of the clear-sky types from the standard's Table 1, as digested in
-shared/research/reference-data.md §1.2 (verified against three public implementations there).
+Coefficients of the clear-sky types from the standard's Table 1 (also in Darula & Kittler
+2002, "CIE general sky standard defining luminance distributions", Proc. eSim 2002).
 """
 
 from __future__ import annotations
@@ -119,8 +119,8 @@ def compare_with_cie(solver, sun_zenith_deg: float,
 KEY = "cie-sky"
 SUN_ELEVATIONS_DEG = (15.0, 30.0, 45.0, 60.0)
 AEROSOL_FACTORS = (0.0, 0.5, 1.0, 2.0, 4.0)  # times the earth preset's tau(500 nm) = 0.1
-RMS_LIMIT = 0.25  # reference-data.md §8 suggests a shape RMS < 20 % against the closest
-# clear type; 25 % allows for the sun elevation where the measured fit is worst (15 deg)
+RMS_LIMIT = 0.25  # a shape RMS < 20 % against the closest clear type is the usual target;
+# 25 % allows for the sun elevation where the measured fit is worst (15 deg)
 
 
 def run(settings: ValidationSettings) -> CaseResult:
@@ -179,7 +179,8 @@ def _summary(fits: dict[float, list[CieFit]], elevations: tuple[float, ...],
         "Relative luminance L / L_zenith of the clear sky from the ground (precomputed tables, "
         "CIE 1931 luminance of the spectral radiance) on view zenith 0-80 deg x azimuth from "
         "the sun 0-180 deg, against the CIE standard general sky (CIE S 011/E:2003) types 12 "
-        "(clear, low turbidity) and 13 (clear, polluted), as in seed 001 Fig. 7. Directions "
+        "(clear, low turbidity) and 13 (clear, polluted), as in Costa et al. 2021 (IEEE TVCG "
+        "27(2), 785) Fig. 7. Directions "
         "within 10 deg of the sun are left out. The number is the RMS of ours / CIE - 1. "
         f"Earth preset (aerosol optical depth 0.1 at 500 nm), closest type by sun elevation: "
         f"{closest}.")

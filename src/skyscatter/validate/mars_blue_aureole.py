@@ -1,13 +1,13 @@
-"""The blue glow around the setting sun on Mars (seed-004 §2.12, §4.4).
+"""The blue glow around the setting sun on Mars (Meyran 2022, §3.3.1 and §5.2).
 
 Ehlers, Chakrabarty & Moosmüller (2014), "Blue moons and Martian sunsets", Appl. Opt. 53, 1808,
-doi:10.1364/AO.53.001808 (as quoted by Meyran 2022, seed-004 §2.12): near-forward scattering
+doi:10.1364/AO.53.001808 (as quoted by Meyran 2022, §3.3.1): near-forward scattering
 by the dust, stronger at short wavelengths, makes a blue cone that "dominates up to 10 deg
 around the Sun and decreases up to 28 deg". The thesis compares its renders with Spirit's
 sunset of sol 489 (sun 1 deg high) and InSight's of sol 1198 (2 to -2 deg): Collienne's model
 is blue along the whole horizon, Costa's glow is concentrated but too blue, Blue Moon's and the
-hybrid show a blue tint around the sun, the hybrid closest to the photographs (seed-004 §4.2,
-§4.4).
+hybrid show a blue tint around the sun, the hybrid closest to the photographs (Meyran 2022,
+§5.1.2 and §5.2, Figs. 5.8, 5.12, 5.13).
 
 Here, with the sun 2 deg high: CIE 1931 x, y and McCamy's correlated colour temperature of the
 sky (Monte Carlo, all orders) along the sun's almucantar (the horizon, 2 deg up; angles from
@@ -46,7 +46,7 @@ from skyscatter.validate.report import CaseResult, Check, Figure, Table, Validat
 __all__ = ["KEY", "GlowProfile", "glow_profiles", "run"]
 
 KEY = "mars-blue-aureole"
-SUN_ELEVATION_DEG = 2.0  # InSight sol 1198: 2 to -2 deg; Spirit sol 489: 1 deg (seed-004 §4.4)
+SUN_ELEVATION_DEG = 2.0  # InSight sol 1198: 2 to -2 deg; Spirit sol 489: 1 deg (Meyran 2022 §5.2)
 ANGLES_DEG = (2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.5, 15.0, 20.0, 25.0, 30.0, 40.0, 60.0, 90.0,
               120.0)
 QUICK_ANGLES_DEG = (3.0, 4.0, 5.0, 7.5, 10.0, 15.0, 20.0, 30.0, 60.0, 90.0)
@@ -54,7 +54,7 @@ VERTICAL_MAX_DEG = 60.0
 NEAR_DEG, FAR_DEG = 3.0, 30.0  # the glow: x(30) - x(3)
 SPREAD_DEG = (5.0, 90.0)  # along the horizon: x(90) - x(5), the blue of the whole horizon
 EHLERS_DEG = (10.0, 28.0)  # "dominates up to 10 deg ... decreases up to 28 deg"
-GLOW_MODELS = ("mars-costa", "mars-bluemoon", "mars-hybrid")  # a blue glow (seed-004 §4.4)
+GLOW_MODELS = ("mars-costa", "mars-bluemoon", "mars-hybrid")  # a blue glow (Meyran 2022 §5.2)
 GLOW_LIMIT = 0.01  # x(30) - x(3) at least this
 RADIUS_RANGE_DEG = (3.0, 30.0)  # the hybrid's half-blueness radius
 # "Blue" for Collienne's horizon: bluer than D65 (McCamy CCT of D65's chromaticity), the white
@@ -233,7 +233,7 @@ def _notes(profiles: dict[str, tuple[GlowProfile, GlowProfile]], quick: bool) ->
         "suggests; where x rises monotonically it lies between them by construction, so the "
         "radius check mainly says that a glow exists and is not flat; the radius itself (how "
         "far in the 3-30 deg range the blue reaches) is the information.",
-        "Collienne's 'blue along the whole horizon' (seed-004 §4.4): x(90) - x(5) along the "
+        "Collienne's 'blue along the whole horizon' (Meyran 2022 §5.2): x(90) - x(5) along the "
         "horizon is reported, not checked, because it measures how much the colour changes, "
         "not whether it is blue (Blue Moon's changes least and is orange). The claim is about "
         "the colour itself in renders without white balance on an sRGB display, so it is "

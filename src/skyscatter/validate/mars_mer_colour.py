@@ -1,5 +1,5 @@
 """The colour of the daytime Martian sky against the Mars Exploration Rovers' Pancam
-(seed-004 §4.2, the thesis's Figs. 5.6, 5.7 and 5.9).
+(Meyran 2022 §5.1.2, the thesis's Figs. 5.6, 5.7 and 5.9).
 
 Bell et al. (2006; the thesis's ref. [57], quoted by Meyran 2022) measured the CIE
 1931 chromaticity of the sky with calibrated Pancam images through the L4/L5/L6 filters (482,
@@ -16,7 +16,7 @@ the sun elevations, for each model and for scaled dust amounts of the hybrid. Th
 is given as its vertical optical depth at 550 nm; the optical depth that fits best is
 interpolated along the scan (piecewise linear in log tau). Collienne's preset is also computed
 with its "inverted Rayleigh" coefficients read in the reverse wavelength order, the one its
-framework config shares with Costa's (seed-004 §1.4 analyst note), to test whether that reading
+framework config shares with Costa's (Meyran 2022 App. A.1.2), to test whether that reading
 is what the thesis computed.
 
 Public names: `KEY`, `MEASURED_X`, `MEASURED_Y`, `MEASURED_MEAN`, `ColourTrack`,
@@ -51,11 +51,11 @@ __all__ = ["KEY", "MEASURED_MEAN", "MEASURED_X", "MEASURED_Y", "ColourTrack",
            "best_fit_optical_depth", "horizon_survey_xy", "run"]
 
 KEY = "mars-mer-colour"
-# Bell et al. 2006 via the thesis (seed-004 §4.2): the four MER datasets' mean chromaticity
+# Bell et al. 2006 via the thesis (Meyran 2022 §5.1.2): the four MER datasets' mean chromaticity
 MEASURED_X = (0.408, 0.396, 0.405, 0.400)
 MEASURED_Y = (0.382, 0.383, 0.377, 0.381)
 MEASURED_MEAN = (float(np.mean(MEASURED_X)), float(np.mean(MEASURED_Y)))  # 0.402, 0.381
-THESIS_COLLIENNE = (0.313, 0.318)  # the thesis's Collienne mean (seed-004 §4.2)
+THESIS_COLLIENNE = (0.313, 0.318)  # the thesis's Collienne mean (Meyran 2022 §5.1.2)
 VIEW_ELEVATION_DEG = 3.0  # the horizon survey: 3 deg above the horizon
 VIEW_AZIMUTH_DEG = 90.0  # due west with the sun high: about 90 deg from the sun's azimuth
 SUN_ELEVATIONS_DEG = (20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0)

@@ -1,5 +1,5 @@
 """Direct-sun transmittance of the Mars models at 880 nm against the range the Mars
-Exploration Rovers measured (seed-004 §4.3, the thesis's Figs. 5.10-5.11).
+Exploration Rovers measured (Meyran 2022 §5.1.3, the thesis's Figs. 5.10-5.11).
 
 Lemmon et al. (2015), Icarus 251, 96, doi:10.1016/j.icarus.2014.03.029, derived the optical
 depth from Pancam images of the sun over 7315 sols of Spirit and Opportunity. The thesis quotes
@@ -42,7 +42,7 @@ from skyscatter.validate.report import CaseResult, Check, Figure, Table, Validat
 __all__ = ["KEY", "MEASURED_MAX", "MEASURED_MIN", "direct_transmittance", "run"]
 
 KEY = "mars-mer-transmittance"
-WAVELENGTH_NM = 880.0  # the Pancam filter of both extremes (seed-004 §4.3)
+WAVELENGTH_NM = 880.0  # the Pancam filter of both extremes (Meyran 2022 §5.1.3)
 MEASURED_MIN = 0.00988  # Opportunity sol 3363 (Lemmon et al. 2015 via the thesis)
 MEASURED_MAX = 0.839  # Spirit sol 428
 # Half a unit in the last printed digit of 0.839: how far outside the range still counts as in.

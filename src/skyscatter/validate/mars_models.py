@@ -1,8 +1,8 @@
-"""What the Mars validation cases share: the four dust models of seed 004, loaded with a note
+"""What the Mars validation cases share: the four dust models of Meyran 2022, loaded with a note
 for those that are missing, their dusty variants, their solvers, and the geometry and curve
 helpers of the comparisons.
 
-The models are the four that Meyran (2022; shared/research/seed-004.md §1.2, §4) compares
+The models are the four that Meyran (2022, M.Sc. thesis, Hochschule Hannover; §3, §5) compares
 with Mars Pathfinder and the Mars Exploration Rovers: Collienne et al. (2013), Costa et al.
 (2020), "Blue Moon's" (Mie dust after Ehlers et al. 2014) and the hybrid of the last two. Each
 is a preset whose dust constituent is called "dust"; a preset that does not exist (yet) is
@@ -74,13 +74,13 @@ __all__ = [
     "vertical_optical_depths",
 ]
 
-# The four models of seed-004 §1.2, in the thesis's order.
+# The four models of Meyran 2022, in the thesis's order.
 MARS_MODELS = ("mars-collienne", "mars-costa", "mars-bluemoon", "mars-hybrid")
 MODEL_LABELS = {"mars-collienne": "Collienne", "mars-costa": "Costa",
                 "mars-bluemoon": "Blue Moon's", "mars-hybrid": "hybrid"}
 MODEL_COLOURS = {"mars-collienne": "tab:blue", "mars-costa": "tab:green",
                  "mars-bluemoon": "tab:purple", "mars-hybrid": "tab:red"}  # the same in every plot
-# The model whose dust amount the cases scan: the thesis's best (seed-004 §4.2, Fig. 5.9).
+# The model whose dust amount the cases scan: the thesis's best (Meyran 2022 §5.1.2, Fig. 5.9).
 SCAN_MODEL = "mars-hybrid"
 DUST = "dust"  # the dust constituent's name in all four presets
 
@@ -171,8 +171,8 @@ def framework_reading(atmosphere: Atmosphere, constituent: str = "gas") -> Atmos
 
     For Collienne's preset: its "inverted Rayleigh" (5.75, 13.57, 19.918) 1e-6 m^-1 at (440,
     550, 680) nm read as (680, 550, 440) nm, the order in which the thesis's framework config
-    lists Costa's coefficients on the same `RayleighScattering: Constant` line (seed-004 §1.4
-    analyst note): a test of whether the thesis computed Collienne's sky with that reading.
+    lists Costa's coefficients on the same `RayleighScattering: Constant` line (Meyran 2022
+    App. A.1.2): a test of whether the thesis computed Collienne's sky with that reading.
     """
     for k, c in enumerate(atmosphere.constituents):
         scattering = getattr(c.optics, "scattering", None)

@@ -1,13 +1,13 @@
 """Sky radiance along the sun's almucantar on Mars, as Meyran (2022) compares it with Mars
-Pathfinder (seed-004 §4.1, the thesis's Fig. 5.2).
+Pathfinder (its §5.1.1, Fig. 5.2).
 
 Tomasko et al. (1999), J. Geophys. Res. 104(E4), 8987, doi:10.1029/98JE02658, measured the
 sky radiance [W m^-2 sr^-1 nm^-1] with the Imager for Mars Pathfinder on sol 11 at 444, 671,
 896 and 965 nm, the sun 12-29 deg high, at azimuths from the sun up to 180 deg. The thesis
-evaluates its four models at 442.25 nm (its framework's grid, seed-004 §3.7) with the sun 14 deg
+evaluates its four models at 442.25 nm (its framework's grid, 360 + 11.75 i nm) with the sun 14 deg
 high. The measured curves are not available here as numbers (only as a figure in the thesis),
 so this case does not compare with them; it computes the four models' curves and checks the
-thesis's published findings about their shapes (seed-004 §4.1, §4.5):
+thesis's published findings about their shapes (its §5.1.1 and conclusion):
 
 - Blue Moon's (Mie dust) has the strongest forward peak: the largest L(5 deg) / L(90 deg);
 - Collienne has "no forward peak": the smallest of the four;
@@ -55,7 +55,7 @@ from skyscatter.validate.report import CaseResult, Check, Figure, Table, Validat
 __all__ = ["KEY", "AlmucantarCurve", "almucantar_radiance", "run"]
 
 KEY = "mars-pathfinder"
-WAVELENGTH_NM = 442.25  # the thesis's Fig. 5.2 (seed-004 §3.7: its framework's grid)
+WAVELENGTH_NM = 442.25  # the thesis's Fig. 5.2 (its framework's grid)
 SUN_ELEVATION_DEG = 14.0  # the thesis's Fig. 5.2 (Tomasko's sol 11 sequences: 13-15 deg)
 AZIMUTHS_DEG = tuple(2.5 * k for k in range(73))  # 0, 2.5, ..., 180
 QUICK_AZIMUTHS_DEG = (0.0, 2.5, 5.0, 10.0, 20.0, 30.0, 45.0, 60.0, 90.0, 120.0, 150.0, 165.0,
@@ -69,7 +69,7 @@ PATHS, CHECK_PATHS = 20_000, 200_000
 QUICK_PATHS, QUICK_CHECK_PATHS = 4_000, 50_000
 TABLE_ANGLES_DEG = (10.0, 20.0, 30.0, 90.0, 180.0)  # where the tables' error is reported
 # The hybrid's L(180)/L(150) may go at most this fraction of the way from Costa's to Blue
-# Moon's: closer to Costa's (it "converges to" Costa's phase function there, seed-004 §4.1).
+# Moon's: closer to Costa's (it "converges to" Costa's phase function there, thesis §5.1.1).
 HYBRID_BACK_FRACTION = 0.5
 READING = "Collienne, gas coefficients reversed"
 
@@ -233,7 +233,7 @@ def _summary(curves: dict[str, AlmucantarCurve], reading: AlmucantarCurve | None
     text = (
         f"Sky radiance at {WAVELENGTH_NM:g} nm seen from the ground along the sun's "
         f"almucantar, the sun {SUN_ELEVATION_DEG:g} deg high (Monte Carlo, all orders), for "
-        "the Mars dust models of seed 004, as in the thesis's comparison with Mars Pathfinder "
+        "the Mars dust models of Meyran 2022, as in the thesis's comparison with Mars Pathfinder "
         "(Tomasko et al. 1999; the thesis's Fig. 5.2). **The measured Pathfinder curves are "
         "not available here as numbers, so there is no comparison with the measurement**: "
         "the checks are the thesis's findings on the shape of each model's curve. Forward "
@@ -292,9 +292,9 @@ def _notes(curves: dict[str, AlmucantarCurve], quick: bool) -> list[str]:
     notes = [
         "The measured Pathfinder radiances (Tomasko et al. 1999, sol 11, 444 nm) are not "
         "available to this suite as numbers: the thesis shows them only as curves in its "
-        "Fig. 5.2, and no digitised copy is in shared/. No absolute comparison is made and no "
+        "Fig. 5.2, and no digitised copy is available. No absolute comparison is made and no "
         "measured value is plotted. The thesis finds that all four models are darker than "
-        "the measurement at all angles (seed-004 §4.1).",
+        "the measurement at all angles (its §5.1.1).",
         "The checks restate the thesis's findings on the curves' shapes; they test that the "
         "presets reproduce the thesis's models, not that the models match Mars.",
         "The radiance is the Monte Carlo solver's (exact up to its noise), not the tables': "

