@@ -2,10 +2,15 @@
 
 References: the functions `precompute_tables` calls, read off its source by hand (the kernels
 of each table, `geometry.sun_visible_fraction` through the single-scattering table) and the
-lookups that only `LutSolver` calls at render time (`sky_radiance_rays`, `transmittance_rays`).
+lookups that only `LutSolver` calls at render time (`sky_radiance_rays`, `transmittance_rays`);
+the split of the table kernels by job, read off the modules' own top-level definitions: the key
+must cover all of `_table_build_kernels` and `_table_common_kernels` and none of
+`_table_lookup_kernels`.
 """
 
 from __future__ import annotations
+
+import ast
 
 import pytest
 from transport_cases import exponential_earth
@@ -16,7 +21,9 @@ from skyscatter.transport.table_store import table_metadata
 from skyscatter.transport.tables import TableResolution
 
 ROOT = ("skyscatter.transport.tables", "precompute_tables")
-KERNELS = "skyscatter.transport._table_kernels"
+BUILD = "skyscatter.transport._table_build_kernels"
+COMMON = "skyscatter.transport._table_common_kernels"
+LOOKUP = "skyscatter.transport._table_lookup_kernels"
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +34,7 @@ def reached():
 def test_precomputation_kernels_and_sun_visible_fraction_are_covered(reached):
     for name in ("single_scattering_table", "multiple_scattering_table", "indirect_irradiance",
                  "direct_ground_irradiance", "incoming_radiance"):
-        assert (KERNELS, name) in reached
+        assert (BUILD, name) in reached
     assert ("skyscatter.transport.geometry", "sun_visible_fraction") in reached
     assert ("skyscatter.transport._kernels", "column_table") in reached
     # a module-level constant the precomputation reads
@@ -37,9 +44,32 @@ def test_precomputation_kernels_and_sun_visible_fraction_are_covered(reached):
 def test_render_time_lookups_and_error_classes_are_not_covered(reached):
     for name in ("sky_radiance_rays", "transmittance_rays", "aerial_perspective_points",
                  "ground_irradiance_points"):
-        assert (KERNELS, name) not in reached
+        assert (LOOKUP, name) not in reached
     assert not any(module == "skyscatter.transport.lut_solver" for module, _ in reached)
     assert ("skyscatter.errors", "InputError") not in reached  # only raised
+
+
+def _top_level_names(module: str) -> set[str]:
+    """The functions and module-level constants `module` defines, read with `ast`."""
+    names = set()
+    for node in ast.parse(fingerprint_module._module_source(module)).body:
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, ast.Assign):
+            names.update(target.id for target in node.targets if isinstance(target, ast.Name))
+    return names
+
+
+def test_the_key_covers_the_build_kernels_whole_and_no_lookup_kernel(reached):
+    # The modules split the table kernels by job: everything in the build and common modules
+    # runs in the precomputation, nothing in the lookup module does.
+    for module in (BUILD, COMMON):
+        names = _top_level_names(module)
+        assert names, module
+        assert {name for name in names if (module, name) not in reached} == set(), module
+    lookups = _top_level_names(LOOKUP)
+    assert {"sky_radiance_rays", "lit_single_scattering", "EXACT_SINGLE_SAMPLES"} <= lookups
+    assert {name for name in lookups if (LOOKUP, name) in reached} == set()
 
 
 def _edited(module: str, old: str, new: str):
@@ -61,7 +91,7 @@ def _fingerprint(read=fingerprint_module._module_source) -> dict:
 
 def test_an_edit_to_a_lookup_keeps_the_key_and_one_to_precomputed_code_changes_it():
     base = _fingerprint()
-    lookup = _fingerprint(_edited(KERNELS, "def sky_radiance_rays(",
+    lookup = _fingerprint(_edited(LOOKUP, "def sky_radiance_rays(",
                                   "def unused_helper():\n    return 1\n\n\ndef sky_radiance_rays("))
     assert lookup == base
     comment_only = _fingerprint(_edited("skyscatter.transport.geometry",
@@ -74,6 +104,8 @@ def test_an_edit_to_a_lookup_keeps_the_key_and_one_to_precomputed_code_changes_i
                                    "return disk_fraction_above(mu_s,",
                                    "return 0.5 * disk_fraction_above(mu_s,"))
     assert physics != base
+    shared = _fingerprint(_edited(COMMON, "i = min(int(f), n - 2)", "i = min(int(f), n - 3)"))
+    assert shared[(COMMON, "linear_axis")] != base[(COMMON, "linear_axis")]
     assert (physics[("skyscatter.transport.geometry", "sun_visible_fraction")]
             != base[("skyscatter.transport.geometry", "sun_visible_fraction")])
 

@@ -9,7 +9,7 @@ import pytest
 from test_transport_tables import _second_order_brute_force, single_only
 from transport_cases import EARTH_RADIUS_M
 
-from skyscatter.transport import _table_kernels
+from skyscatter.transport import _table_lookup_kernels
 from skyscatter.transport.geometry import local_frame_directions, sun_visible_fraction
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
@@ -112,10 +112,10 @@ def test_sky_fades_smoothly_through_twilight(profile, tables_two_orders):
 
 def test_blend_weight_is_zero_by_day_one_below_the_horizon_and_smooth_between():
     cosines = np.cos(np.radians(np.linspace(80.0, 95.0, 301)))
-    weight = np.array([_table_kernels.exact_single_weight(c) for c in cosines])
+    weight = np.array([_table_lookup_kernels.exact_single_weight(c) for c in cosines])
     assert weight[0] == 0.0 and weight[-1] == 1.0
-    assert _table_kernels.exact_single_weight(np.cos(np.radians(84.9))) == 0.0
-    assert _table_kernels.exact_single_weight(0.0) == 1.0
+    assert _table_lookup_kernels.exact_single_weight(np.cos(np.radians(84.9))) == 0.0
+    assert _table_lookup_kernels.exact_single_weight(0.0) == 1.0
     assert np.all(np.diff(weight) >= 0.0) and np.max(np.diff(weight)) < 0.02
 
 
@@ -135,7 +135,7 @@ def test_umbra_interval_agrees_with_the_sun_visible_fraction(sun_zenith_deg, alt
         for azimuth in np.radians([0.0, 60.0, 120.0, 180.0]):
             mu = np.cos(view_zenith)
             nu = mu * mu_s + np.sin(view_zenith) * sin_s * np.cos(azimuth)
-            t_a, t_b = _table_kernels.shadow_interval(r, mu, mu_s, nu, bottom, alpha)
+            t_a, t_b = _table_lookup_kernels.shadow_interval(r, mu, mu_s, nu, bottom, alpha)
             t = np.linspace(0.0, 2.0e6, 4001)
             radius = np.sqrt(r * r + 2.0 * r * mu * t + t * t)
             mu_s_t = (r * mu_s + t * nu) / radius

@@ -24,7 +24,7 @@ PROBE = (Path(__file__).parent / "glsl_probe.js").read_text()
 MIN_PSNR_DB = 35.0  # issue 7
 # The views of issue 7 (ground noon, low sun, space) and a fisheye all-sky view. The low sun
 # stands 6 deg high: below 5 deg the CPU renderer ray-marches single scattering for the
-# twilight (transport/_table_kernels.exact_single_weight), which the shader does not.
+# twilight (transport/_table_lookup_kernels.exact_single_weight), which the shader does not.
 VIEWS = {
     "noon": dict(projection="perspective", sun_zenith=30, sun_azimuth=160, heading=180,
                  pitch=15, fov=80, altitude_m=2, lat=45, lon=0),

@@ -9,7 +9,7 @@ with S_s the single scattering of constituent s without its phase function, M th
 and E_indirect the sky light on the ground (`transport/tables.py`). As in
 `SingleScatteringSolver`, the sun disk's own radiance is not included. Observers in space are
 moved to the top of the atmosphere along each ray first; rays that miss it see nothing.
-Kernels: `transport/_table_kernels.py`.
+Kernels: `transport/_table_lookup_kernels.py`.
 """
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
-from skyscatter.transport import _table_kernels
+from skyscatter.transport import _table_lookup_kernels
+from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
@@ -68,11 +69,12 @@ class LutSolver:
                              f"({profile.wavelengths_nm.size})", key="tables",
                              value=tables.wavelengths_nm, allowed="the profile's wavelengths")
         self.tables = tables
-        self._scattering = _table_kernels.flat_tables(tables.scattering)
+        self._scattering = flat_tables(tables.scattering)
         self._shape = tuple(int(n) for n in tables.scattering.shape[:4])
         self._albedo = np.ascontiguousarray(profile.ground_albedo, dtype=np.float64)
         self._sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
-        # For single scattering ray-marched in twilight (`_table_kernels.lit_single_scattering`)
+        # For single scattering ray-marched in twilight
+        # (`_table_lookup_kernels.lit_single_scattering`)
         self._h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
         self._density = np.ascontiguousarray(profile.density, dtype=np.float64)
         self._scatterers = np.array(tables.scattering_constituents, dtype=np.int64)
@@ -92,7 +94,7 @@ class LutSolver:
         Single scattering is looked up in the table while the sun at the ray's start is more
         than 5 deg above the horizon and ray-marched through the sunlit parts of the ray
         (with the transmittance table) once it is below the horizon, blended in between
-        (`_table_kernels.exact_single_weight`): the table's interpolation in the sun's zenith
+        (`_table_lookup_kernels.exact_single_weight`): the table's interpolation in the sun's zenith
         cosine leaks light into the planet's shadow in twilight (docs/physics/tables.md)."""
         origins, directions, shape = _rays(position, view_directions)
         sun = _sun(sun_direction)
@@ -101,7 +103,7 @@ class LutSolver:
         view_table = self._view_table(origins, sun)
         for start in range(0, directions.shape[0], CHUNK_RAYS):
             stop = min(start + CHUNK_RAYS, directions.shape[0])
-            _table_kernels.sky_radiance_rays(
+            _table_lookup_kernels.sky_radiance_rays(
                 origins if origins.shape[0] == 1 else origins[start:stop],
                 directions[start:stop], sun, t.bottom_radius_m, t.top_radius_m,
                 t.min_cos_sun_zenith, self._scattering, self._shape, t.phase, t.transmittance,
@@ -115,7 +117,7 @@ class LutSolver:
     def _view_table(self, origins: np.ndarray, sun: np.ndarray) -> np.ndarray:
         """Single scattering of every view direction of the one observer in `origins` (1, 3)
         when it is inside the atmosphere and the sun is low enough for the lookups to use it
-        (`_table_kernels.single_scattering_view_table`); otherwise an empty table, and the
+        (`_table_lookup_kernels.single_scattering_view_table`); otherwise an empty table, and the
         kernel marches each ray itself."""
         t = self.tables
         n_s = len(t.scattering_constituents)
@@ -124,9 +126,9 @@ class LutSolver:
             return empty
         r = float(np.linalg.norm(origins[0]))
         mu_s = float(origins[0] @ sun) / r if r > 0.0 else 1.0
-        if r > t.top_radius_m or _table_kernels.exact_single_weight(mu_s) <= 0.0:
+        if r > t.top_radius_m or _table_lookup_kernels.exact_single_weight(mu_s) <= 0.0:
             return empty
-        return _table_kernels.single_scattering_view_table(
+        return _table_lookup_kernels.single_scattering_view_table(
             max(r, t.bottom_radius_m), mu_s, t.bottom_radius_m, t.top_radius_m,
             float(self.profile.sun_angular_radius_rad), VIEW_TABLE_SAMPLES, self._h_step,
             self._density, self._scatterers, t.transmittance)
@@ -141,7 +143,7 @@ class LutSolver:
         distances = _writable(np.broadcast_to(np.asarray(distance_m, dtype=np.float64),
                                               shape).reshape(-1))
         t = self.tables
-        result = _table_kernels.transmittance_rays(
+        result = _table_lookup_kernels.transmittance_rays(
             origins, dirs, distances, t.bottom_radius_m, t.top_radius_m, t.transmittance)
         return result.reshape(shape + (self.profile.n_wavelengths,))
 
@@ -155,14 +157,14 @@ class LutSolver:
 
         Single scattering is the difference of two table lookups (Bruneton 2017) by day and,
         as in `sky_radiance`, ray-marched through the sunlit part of the segment once the sun
-        at either of its ends nears the horizon (`_table_kernels.exact_single_weight`), with
+        at either of its ends nears the horizon (`_table_lookup_kernels.exact_single_weight`), with
         the orders >= 2 interpolated geometrically in the sun's zenith cosine."""
         origins, targets, shape = _rays(position, points)
         sun = _sun(sun_direction)
         p, t = self.profile, self.tables
         inscattered = np.empty((targets.shape[0], p.n_wavelengths))
         transmittance = np.empty_like(inscattered)
-        _table_kernels.aerial_perspective_points(
+        _table_lookup_kernels.aerial_perspective_points(
             origins, targets, sun, t.bottom_radius_m, t.top_radius_m, t.min_cos_sun_zenith,
             self._scattering, self._shape, t.phase, t.transmittance,
             float(p.sun_angular_radius_rad), self._h_step, self._density, self._scatterers,
@@ -188,7 +190,7 @@ class LutSolver:
         sunlit = (np.ones(n, dtype=np.bool_) if lit is None
                   else np.ascontiguousarray(np.broadcast_to(lit, (n,)), dtype=np.bool_))
         out = np.empty((n, p.n_wavelengths))
-        _table_kernels.surface_radiance_points(
+        _table_lookup_kernels.surface_radiance_points(
             _writable(np.asarray(position, dtype=np.float64).reshape(3)), targets, facing,
             sunlit, reflectance, _sun(sun_direction), t.bottom_radius_m, t.top_radius_m,
             t.min_cos_sun_zenith, self._scattering, self._shape, t.phase, t.transmittance,
@@ -214,7 +216,7 @@ class LutSolver:
                                                positions.shape).reshape(-1, 3))
         sun = _sun(sun_direction)
         p, t = self.profile, self.tables
-        direct, diffuse = _table_kernels.ground_irradiance_points(
+        direct, diffuse = _table_lookup_kernels.ground_irradiance_points(
             flat, facing, sun, t.bottom_radius_m, t.top_radius_m, t.transmittance, t.irradiance,
             self._sun_irradiance, float(p.sun_angular_radius_rad))
         n_wl = p.n_wavelengths

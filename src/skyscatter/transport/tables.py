@@ -51,7 +51,8 @@ import numpy as np
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
-from skyscatter.transport import _kernels, _table_kernels
+from skyscatter.transport import _kernels, _table_build_kernels
+from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN,
     scattering_r_from_u,
@@ -236,8 +237,8 @@ def _phase_matrices(phase: np.ndarray, resolution: TableResolution) -> np.ndarra
     the sun's vertical plane, each row scaled to sum to 1 (the phase function's normalisation);
     p from the sampled phase functions `phase` (n_s, n_angle, n_wl)."""
     _, _, solid, out, incoming, mirrored = _sphere_grids(resolution)
-    return _table_kernels.phase_matrices(phase, np.ascontiguousarray(out @ incoming.T),
-                                         np.ascontiguousarray(out @ mirrored.T), solid)
+    return _table_build_kernels.phase_matrices(phase, np.ascontiguousarray(out @ incoming.T),
+                                               np.ascontiguousarray(out @ mirrored.T), solid)
 
 
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
@@ -343,12 +344,12 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             sun[None, :] * profile.scattering_per_density[scatterer_index][:, batch])
         label = f"wavelengths {batch.start + 1}-{batch.stop} of {n_wl}"
 
-        single = _table_kernels.single_scattering_table(
+        single = _table_build_kernels.single_scattering_table(
             *shape, res.ray_samples, *geometry, h_step, density, columns, extinction,
             np.ascontiguousarray(transmittance[..., batch]), scatterer_index, factor,
             float(profile.sun_angular_radius_rad))
         scattering[..., :n_s, batch] = single
-        order_mean[0, batch], order_zenith[0, batch] = _table_kernels.order_statistics(
+        order_mean[0, batch], order_zenith[0, batch] = _table_build_kernels.order_statistics(
             single, True, phase_b, *geometry)
         report(f"single scattering, {label}")
         if on_order is not None:
@@ -359,31 +360,31 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         matrices = _phase_matrices(phase_b, res)
         beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
         previous, use_phase = single, True
-        ground = _table_kernels.direct_ground_irradiance(
+        ground = _table_build_kernels.direct_ground_irradiance(
             DIRECT_GROUND_SAMPLES, bottom, top, columns, extinction, sun,
             float(profile.sun_angular_radius_rad))
         for order in range(2, orders + 1):
-            previous_flat = _table_kernels.flat_tables(previous)
+            previous_flat = flat_tables(previous)
             n_t = previous.shape[4]
-            incoming = _table_kernels.incoming_radiance(
+            incoming = _table_build_kernels.incoming_radiance(
                 res.scattering_r, res.scattering_mu_s, theta_in, phi_in, *geometry,
                 previous_flat, res.scattering_mu, res.scattering_nu, n_t, use_phase, phase_b,
                 ground, albedo, columns, extinction).astype(np.float32)
             source = _source_function(matrices, incoming, beta_s, node_density, res)
             del incoming
-            delta_irradiance = _table_kernels.indirect_irradiance(
+            delta_irradiance = _table_build_kernels.indirect_irradiance(
                 res.irradiance_r, res.irradiance_mu_s, res.irradiance_theta,
                 res.irradiance_phi, *geometry, previous_flat, *shape, n_t, use_phase, phase_b)
             irradiance[..., batch] += delta_irradiance
             ground = np.ascontiguousarray(delta_irradiance[0])
-            delta = _table_kernels.multiple_scattering_table(
+            delta = _table_build_kernels.multiple_scattering_table(
                 *shape, res.multiple_ray_samples, *geometry, h_step, density, columns, extinction,
                 np.ascontiguousarray(scattering_all[:, batch]), source, res.density_phi)
             del source, previous_flat
             scattering[..., n_s, batch] += delta
             previous, use_phase = delta[..., None, :], False
             order_mean[order - 1, batch], order_zenith[order - 1, batch] = (
-                _table_kernels.order_statistics(previous, False, phase_b, *geometry))
+                _table_build_kernels.order_statistics(previous, False, phase_b, *geometry))
             report(f"order {order}, {label}")
             if on_order is not None:
                 on_order(order, batch, _read_only(scattering[..., n_s, :]),

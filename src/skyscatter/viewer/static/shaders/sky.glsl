@@ -1,4 +1,5 @@
-// Sky radiance from the tables: the GLSL twin of the lookups in transport/_table_kernels.py
+// Sky radiance from the tables: the GLSL twin of the lookups in
+// transport/_table_lookup_kernels.py and transport/_table_common_kernels.py
 // (sky_radiance_rays by day: the tables alone, as Bruneton 2017's GetSkyRadiance; the CPU
 // renderer's twilight ray march of single scattering, below sun elevation 5 deg, is not done
 // here). CIE XYZ, Y = luminance [cd m^-2]; tables decoded from viewer/gpu_tables.py's message.

@@ -1,0 +1,506 @@
+"""Numba kernels that build the precomputed tables (`transport/tables.py`,
+`precompute_tables`): single scattering, the ground's direct irradiance, the phase matrices and
+the incoming radiance of the scattering density, indirect irradiance, one order of multiple
+scattering, and each order's statistics. The tables' cache key (`transport/code_fingerprint.py`)
+hashes exactly this code and what it calls; the lookups of the solver live in
+`_table_lookup_kernels`, the helpers of both in `_table_common_kernels`.
+
+Conventions (docs/physics/tables.md, Bruneton 2017 functions.glsl; the table layout in
+`_table_common_kernels`):
+- During the precomputation transmittances come from a wavelength-free table of column
+  densities per constituent (n_c, n_r_t, n_mu_t) in the transmittance parameterisation:
+  tau = sum_c beta_e,c col_c, so all wavelengths share one lookup. Between two points of a ray,
+  col = col_top(start) - col_top(end) (rays that miss the ground) or col_top(end, -mu_end) -
+  col_top(start, -mu) (rays that hit it), Bruneton 2017 `GetTransmittance` in columns.
+- The scattering density J is stored as the source function J / beta_s (beta_s the scattering
+  coefficient) on (r_k, mu_s_l) nodes of the scattering table times outgoing directions
+  (theta_o, phi_o) on a regular grid, phi measured from the sun's vertical plane (J is even in
+  phi); rays multiply it by the exact beta_s at each sample.
+Kernels take arrays and floats only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skyscatter.transport._kernels import density_at
+from skyscatter.transport._table_common_kernels import (
+    linear_axis,
+    lookup_scratch,
+    phase_values,
+    scattering_corners,
+    scattering_lookup,
+    table_ray_distances,
+    transmittance_in_row,
+)
+from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fraction
+from skyscatter.transport.table_parameterisation import (
+    distance_to_bottom_boundary,
+    distance_to_top_boundary,
+    irradiance_r_mu_s_from_x,
+    mu_s_mapping_constants,
+    ray_intersects_ground,
+    scattering_mu_from_u,
+    scattering_mu_s_from_u,
+    scattering_nu_from_u,
+    scattering_r_from_u,
+    scattering_u_mu_s_from_constants,
+    scattering_u_r,
+    texel_index,
+    transmittance_x_from_r_mu,
+    transmittance_x_mu,
+    transmittance_x_r,
+)
+
+
+@njit(cache=True)
+def columns_to_top(r, mu, bottom_radius, top_radius, columns, out):
+    """Column densities from (r, mu) to the top, bilinear in `columns` (n_c, n_r_t, n_mu_t),
+    into out (n_c,). For rays that do not hit the ground."""
+    x_mu, x_r = transmittance_x_from_r_mu(r, mu, bottom_radius, top_radius)
+    i, a = linear_axis(x_r * (columns.shape[1] - 1), columns.shape[1])
+    j, b = linear_axis(x_mu * (columns.shape[2] - 1), columns.shape[2])
+    for c in range(columns.shape[0]):
+        out[c] = ((1.0 - a) * ((1.0 - b) * columns[c, i, j] + b * columns[c, i, j + 1])
+                  + a * ((1.0 - b) * columns[c, i + 1, j] + b * columns[c, i + 1, j + 1]))
+
+
+@njit(cache=True)
+def _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step, density,
+                 columns, t, radius, mu_t, weight, dens, col_view):
+    """Samples of the table ray (r, mu) up to the ground or the top (`table_ray_distances`):
+    distances t, radii, cosines mu_t, trapezoid weights [m], densities dens (n, n_c) and view
+    columns col_view (n, n_c) from the start. Returns the number of samples (0 for a ray of
+    zero length)."""
+    n_c = density.shape[0]
+    if hits_ground:
+        d = distance_to_bottom_boundary(r, mu, bottom_radius)
+    else:
+        d = distance_to_top_boundary(r, mu, top_radius)
+    if d <= 0.0:
+        return 0
+    total = table_ray_distances(r, mu, d, hits_ground, n_samples, t)
+    start = np.empty(n_c)
+    here = np.empty(n_c)
+    columns_to_top(r, -mu if hits_ground else mu, bottom_radius, top_radius, columns, start)
+    for j in range(total):
+        tj = t[j]
+        rj = math.sqrt(max(r * r + tj * tj + 2.0 * r * mu * tj, 0.0))
+        rj = min(max(rj, bottom_radius), top_radius)
+        mj = min(max((r * mu + tj) / rj, -1.0), 1.0)
+        radius[j] = rj
+        mu_t[j] = mj
+        density_at(rj - bottom_radius, h_step, density, dens[j])
+        if hits_ground:
+            columns_to_top(rj, -mj, bottom_radius, top_radius, columns, here)
+            for c in range(n_c):
+                col_view[j, c] = max(here[c] - start[c], 0.0)
+        else:
+            columns_to_top(rj, mj, bottom_radius, top_radius, columns, here)
+            for c in range(n_c):
+                col_view[j, c] = max(start[c] - here[c], 0.0)
+    for j in range(total):
+        left = t[j] - t[j - 1] if j > 0 else 0.0
+        right = t[j + 1] - t[j] if j < total - 1 else 0.0
+        weight[j] = 0.5 * (left + right)
+    return total
+
+
+@njit(cache=True)
+def _view_transmittance(total, weight, col_view, extinction, out):
+    """out[j, w] = T(x, p_j) * weight[j] from the view columns of `_ray_samples`."""
+    n_c, n_wl = extinction.shape
+    for j in range(total):
+        for w in range(n_wl):
+            tau = 0.0
+            for c in range(n_c):
+                tau += extinction[c, w] * col_view[j, c]
+            out[j, w] = math.exp(-tau) * weight[j]
+
+
+@njit(cache=True)
+def _table_ray(i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
+               columns, extinction):
+    """The ray of scattering-table cell (i_r, i_mu): (r, mu, total, t, radius, mu_t, dens,
+    view) with its `total` samples (`_ray_samples`) and the transmittance from the cell's point
+    to each sample, view (total, n_wl)."""
+    n_c, n_wl = extinction.shape
+    n_max = n_samples + 8
+    r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+    mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
+                                           n_mu)
+    t = np.empty(n_max)
+    radius = np.empty(n_max)
+    mu_t = np.empty(n_max)
+    weight = np.empty(n_max)
+    dens = np.empty((n_max, n_c))
+    col_view = np.empty((n_max, n_c))
+    total = _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step,
+                         density, columns, t, radius, mu_t, weight, dens, col_view)
+    view = np.empty((total, n_wl))
+    _view_transmittance(total, weight, col_view, extinction, view)
+    return r, mu, total, t, radius, mu_t, dens, view
+
+
+@njit(parallel=True, cache=True)
+def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
+                            mu_s_min, h_step, density, columns, extinction, transmittance,
+                            scatterers, factor, sun_angular_radius):
+    """Single scattering without phase function, per scattering constituent:
+    table[s, cell, w] = factor[s, w] * int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt, with
+    factor = E_sun beta_s,s [W m^-2 nm^-1 / density]; (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl)
+    float32 (interleaved, `scattering_lookup`). T(x, p) from the column table, T_sun from the
+    transmittance table (n_r_t, n_mu_t, n_wl) (no exponential per cell). Bruneton 2017,
+    `ComputeSingleScattering`; V = visible part of the sun disk."""
+    n_s = scatterers.size
+    n_wl = extinction.shape[1]
+    table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_s, n_wl), dtype=np.float32)
+    n_r_t = transmittance.shape[0]
+    # mu_s >= mu_h + alpha + alpha^2 / 2 >= cos(theta_h - alpha): the whole sun disk is above
+    # the horizon, `sun_visible_fraction` = 1 (its own fast exit costs a cos and a sin).
+    sun_clear = sun_angular_radius * (1.0 + 0.5 * sun_angular_radius)
+    for row in prange(n_r * n_mu):
+        i_r = row // n_mu
+        i_mu = row % n_mu
+        r, mu, total, t, radius, mu_t, dens, view = _table_ray(
+            i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
+            columns, extinction)
+        if total == 0:
+            continue
+        # Per sample: the horizon, and the r part of the transmittance lookup towards the sun.
+        mu_h = np.empty(total)
+        row_i = np.empty(total, dtype=np.int64)
+        row_a = np.empty(total)
+        row_d_min = np.empty(total)
+        row_d_max = np.empty(total)
+        for j in range(total):
+            mu_h[j] = horizon_cos_zenith(radius[j], bottom_radius)
+            x_r, row_d_min[j], row_d_max[j] = transmittance_x_r(radius[j], bottom_radius,
+                                                                top_radius)
+            row_i[j], row_a[j] = linear_axis(x_r * (n_r_t - 1), n_r_t)
+        sun = np.empty(n_wl)
+        acc = np.empty((n_s, n_wl))
+        for i_s in range(n_mu_s):
+            mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
+                                          mu_s_min, n_mu_s)
+            spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+            for i_nu in range(n_nu):
+                nu = scattering_nu_from_u(i_nu / (n_nu - 1))
+                nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                acc[:, :] = 0.0
+                for j in range(total):
+                    rj = radius[j]
+                    mu_s_j = min(max((r * mu_s + t[j] * nu) / rj, -1.0), 1.0)
+                    visible = 1.0
+                    if mu_s_j < mu_h[j] + sun_clear:  # else the whole disk is up
+                        visible = sun_visible_fraction(rj, mu_s_j, bottom_radius,
+                                                       sun_angular_radius)
+                        if visible <= 0.0:
+                            continue
+                    x_mu = transmittance_x_mu(rj, max(mu_s_j, mu_h[j]), top_radius,
+                                              row_d_min[j], row_d_max[j])
+                    transmittance_in_row(transmittance, row_i[j], row_a[j], x_mu, sun)
+                    for s in range(n_s):
+                        dv = dens[j, scatterers[s]] * visible
+                        for w in range(n_wl):
+                            acc[s, w] += dv * view[j, w] * sun[w]
+                for s in range(n_s):
+                    for w in range(n_wl):
+                        table[i_r, i_mu, i_s, i_nu, s, w] = acc[s, w] * factor[s, w]
+    return table
+
+
+@njit(cache=True)
+def direct_ground_irradiance(n_points, bottom_radius, top_radius, columns, extinction,
+                             sun_irradiance, sun_angular_radius):
+    """Direct sun irradiance on the ground E_sun T_sun max(mu_s, 0) V at mu_s = -1 + 2 i /
+    (n_points - 1), (n_points, n_wl) [W m^-2 nm^-1]."""
+    n_c, n_wl = extinction.shape
+    out = np.zeros((n_points, n_wl))
+    for i in range(n_points):
+        mu_s = -1.0 + 2.0 * i / (n_points - 1)
+        visible = sun_visible_fraction(bottom_radius, mu_s, bottom_radius, sun_angular_radius)
+        if visible <= 0.0 or mu_s <= 0.0:
+            continue
+        col = np.empty(n_c)
+        columns_to_top(bottom_radius, mu_s, bottom_radius, top_radius, columns, col)
+        for w in range(n_wl):
+            tau = 0.0
+            for c in range(n_c):
+                tau += extinction[c, w] * col[c]
+            out[i, w] = sun_irradiance[w] * math.exp(-tau) * mu_s * visible
+    return out
+
+
+@njit(parallel=True, cache=True)
+def phase_matrices(phase_table, cos_direct, cos_mirror, solid_angle):
+    """Phase matrices of the sphere integral, (n_s, n_wl, n_out, n_in) float32:
+    P[o, i] = (p(cos_direct[o, i]) + p(cos_mirror[o, i])) solid_angle[i], each row normalised
+    to sum 1; p from `phase_table` (n_s, n_angle, n_wl) as in `phase_values`."""
+    n_s, n_angle, n_wl = phase_table.shape
+    n_out, n_in = cos_direct.shape
+    out = np.empty((n_s, n_wl, n_out, n_in), dtype=np.float32)
+    for o in prange(n_out):
+        row = np.empty((n_s, n_wl, n_in))
+        direct = np.empty(n_s * n_wl)
+        mirror = np.empty(n_s * n_wl)
+        for i in range(n_in):
+            phase_values(phase_table, cos_direct[o, i], direct)
+            phase_values(phase_table, cos_mirror[o, i], mirror)
+            for s in range(n_s):
+                for w in range(n_wl):
+                    row[s, w, i] = (direct[s * n_wl + w] + mirror[s * n_wl + w]) * solid_angle[i]
+        for s in range(n_s):
+            for w in range(n_wl):
+                total = 0.0
+                for i in range(n_in):
+                    total += row[s, w, i]
+                for i in range(n_in):
+                    out[s, w, o, i] = row[s, w, i] / total
+    return out
+
+
+@njit(cache=True)
+def _ground_radiance(r, mu, mu_s, nu, bottom_radius, top_radius, columns, extinction,
+                     ground_irradiance, albedo, col_a, col_b, out):
+    """out[w] += radiance of the Lambertian ground seen from (r, mu) through the atmosphere:
+    T(x, g) albedo / pi E(mu_s(g)), E from `ground_irradiance` (n_g, n_wl) on mu_s = -1 + 2 i /
+    (n_g - 1). For rays that hit the ground."""
+    n_c, n_wl = extinction.shape
+    d = distance_to_bottom_boundary(r, mu, bottom_radius)
+    mu_g = min(max((r * mu + d) / bottom_radius, -1.0), 1.0)
+    mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
+    columns_to_top(bottom_radius, -mu_g, bottom_radius, top_radius, columns, col_a)
+    columns_to_top(r, -mu, bottom_radius, top_radius, columns, col_b)
+    n_g = ground_irradiance.shape[0]
+    i, a = linear_axis(0.5 * (mu_s_g + 1.0) * (n_g - 1), n_g)
+    for w in range(n_wl):
+        tau = 0.0
+        for c in range(n_c):
+            tau += extinction[c, w] * max(col_a[c] - col_b[c], 0.0)
+        irradiance = (1.0 - a) * ground_irradiance[i, w] + a * ground_irradiance[i + 1, w]
+        out[w] += math.exp(-tau) * albedo[w] / math.pi * irradiance
+
+
+@njit(parallel=True, cache=True)
+def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, mu_s_min,
+                      tables, n_mu, n_nu, n_t, use_phase, phase_table, ground_irradiance, albedo,
+                      columns, extinction):
+    """Radiance of the previous order arriving at the scattering-density nodes, from the
+    directions (theta_in[a], phi_in[p]) (phi from the sun's vertical plane): the scattering
+    lookup (with phase functions when `use_phase`, i.e. the single-scattering tables; `tables`
+    as from `flat_tables`, n_mu and n_nu their axes, n_t tables) plus the ground lit by
+    `ground_irradiance` for directions that hit it. Returns
+    (n_wl, n_a n_p, n_r n_mu_s), the layout of the matrix product that follows.
+    Bruneton 2017, `ComputeScatteringDensity`, the inner part."""
+    n_c, n_wl = extinction.shape
+    n_a = theta_in.size
+    n_p = phi_in.size
+    radiance = np.zeros((n_wl, n_a * n_p, n_r * n_mu_s))
+    for kl in prange(n_r * n_mu_s):
+        k = kl // n_mu_s
+        l = kl % n_mu_s
+        r = scattering_r_from_u((k + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        mu_s = scattering_mu_s_from_u((l + 0.5) / n_mu_s, bottom_radius, top_radius, mu_s_min,
+                                      n_mu_s)
+        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
+        value = np.empty(n_wl)
+        col_a = np.empty(n_c)
+        col_b = np.empty(n_c)
+        for a in range(n_a):
+            mu_in = math.cos(theta_in[a])
+            sin_in = math.sin(theta_in[a])
+            hits_ground = ray_intersects_ground(r, mu_in, bottom_radius)
+            for p in range(n_p):
+                nu_in = min(max(mu_in * mu_s + sin_in * sin_s * math.cos(phi_in[p]), -1.0), 1.0)
+                if use_phase:
+                    phase_values(phase_table, nu_in, weights)
+                value[:] = 0.0
+                i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
+                    r, mu_in, mu_s, nu_in, hits_ground, bottom_radius, top_radius, mu_s_min,
+                    n_r, n_mu, n_mu_s, n_nu)
+                scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
+                                  i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
+                if hits_ground:
+                    _ground_radiance(r, mu_in, mu_s, nu_in, bottom_radius, top_radius, columns,
+                                     extinction, ground_irradiance, albedo, col_a, col_b, value)
+                for w in range(n_wl):
+                    radiance[w, a * n_p + p, kl] = value[w]
+    return radiance
+
+
+@njit(parallel=True, cache=True)
+def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radius, mu_s_min,
+                        tables, n_r, n_mu, n_mu_s, n_nu, n_t, use_phase, phase_table):
+    """Irradiance on a horizontal surface from the sky radiance of one order,
+    E = int_{mu > 0} L(r, mu, mu_s, nu) mu d omega, on the irradiance nodes (r = R_b + i (R_t -
+    R_b) / (n_r_e - 1), mu_s = -1 + 2 j / (n_mu_s_e - 1)); midpoint rule with n_theta polar
+    angles in [0, pi/2] and n_phi azimuths in [0, pi] (L is even in the azimuth); `tables`
+    from `flat_tables`, (n_r, n_mu, n_mu_s, n_nu) their axes. Returns (n_r_e, n_mu_s_e,
+    n_wl). Bruneton 2017, `ComputeIndirectIrradiance`."""
+    n_wl = phase_table.shape[2]
+    out = np.zeros((n_r_e, n_mu_s_e, n_wl))
+    d_theta = 0.5 * math.pi / n_theta
+    d_phi = math.pi / n_phi
+    for node in prange(n_r_e * n_mu_s_e):
+        i = node // n_mu_s_e
+        j = node % n_mu_s_e
+        r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1), bottom_radius,
+                                           top_radius)
+        sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
+        value = np.empty(n_wl)
+        for a in range(n_theta):
+            theta = (a + 0.5) * d_theta
+            mu_in = math.cos(theta)
+            sin_in = math.sin(theta)
+            solid = 2.0 * mu_in * sin_in * d_theta * d_phi  # x 2: the mirrored half
+            for p in range(n_phi):
+                phi = (p + 0.5) * d_phi
+                nu_in = min(max(mu_in * mu_s + sin_in * sin_s * math.cos(phi), -1.0), 1.0)
+                if use_phase:
+                    phase_values(phase_table, nu_in, weights)
+                value[:] = 0.0
+                i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
+                    r, mu_in, mu_s, nu_in, False, bottom_radius, top_radius, mu_s_min, n_r,
+                    n_mu, n_mu_s, n_nu)
+                scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
+                                  i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
+                for w in range(n_wl):
+                    out[i, j, w] += value[w] * solid
+    return out
+
+
+@njit(parallel=True, cache=True)
+def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
+                              mu_s_min, h_step, density, columns, extinction, scattering,
+                              source, n_phi):
+    """One order of multiple scattering: int_0^d T(x, p) J(p, v) dt for every cell, with
+    J(p, v) = beta_s(p) S(r, theta, mu_s, phi): beta_s(p) = sum_c n_c(p) scattering[c] the
+    exact scattering coefficient at the sample, S the source function J / beta_s interpolated
+    in `source` (n_r, n_theta, n_mu_s * n_phi * n_wl) (r, mu_s on the scattering-table nodes;
+    theta = view zenith and phi = azimuth from the sun on regular grids over [0, pi]). For each
+    ray sample the (r, theta) interpolation is done once, to a (mu_s, phi) slab shared by the
+    n_mu_s x n_nu cells of the ray. Returns (n_r, n_mu, n_mu_s, n_nu, n_wl) float32.
+    Bruneton 2017, `ComputeMultipleScattering`."""
+    n_c, n_wl = extinction.shape
+    n_theta = source.shape[1]
+    n_block = source.shape[2]
+    table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
+    mu_s_nodes = np.empty(n_mu_s)
+    for i_s in range(n_mu_s):
+        mu_s_nodes[i_s] = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius,
+                                                 top_radius, mu_s_min, n_mu_s)
+    d_min, d_max, big_a = mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min)
+    for row in prange(n_r * n_mu):
+        i_r = row // n_mu
+        i_mu = row % n_mu
+        r, mu, total, t, radius, mu_t, dens, view = _table_ray(
+            i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
+            columns, extinction)
+        if total == 0:
+            continue
+        for j in range(total):  # T(x, p) dt beta_s(p)
+            for w in range(n_wl):
+                beta = 0.0
+                for c in range(n_c):
+                    beta += dens[j, c] * scattering[c, w]
+                view[j, w] *= beta
+        nu_cells = np.empty((n_mu_s, n_nu))
+        for i_s in range(n_mu_s):
+            mu_s = mu_s_nodes[i_s]
+            spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+            for i_nu in range(n_nu):
+                nu = scattering_nu_from_u(i_nu / (n_nu - 1))
+                nu_cells[i_s, i_nu] = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+        acc = np.zeros((n_mu_s, n_nu, n_wl))
+        slab = np.empty(n_block, dtype=np.float32)
+        for j in range(total):
+            k, a_r = linear_axis(texel_index(scattering_u_r(radius[j], bottom_radius, top_radius,
+                                                      n_r), n_r), n_r)
+            o, a_th = linear_axis(math.acos(mu_t[j]) / math.pi * (n_theta - 1), n_theta)
+            c00 = np.float32((1.0 - a_r) * (1.0 - a_th))
+            c01 = np.float32((1.0 - a_r) * a_th)
+            c10 = np.float32(a_r * (1.0 - a_th))
+            c11 = np.float32(a_r * a_th)
+            block00 = source[k, o]
+            block01 = source[k, o + 1]
+            block10 = source[k + 1, o]
+            block11 = source[k + 1, o + 1]
+            for q in range(n_block):
+                slab[q] = (c00 * block00[q] + c01 * block01[q] + c10 * block10[q]
+                           + c11 * block11[q])
+            sin_t = math.sqrt(max(1.0 - mu_t[j] * mu_t[j], 0.0))
+            rj = radius[j]
+            tj = t[j]
+            for i_s in range(n_mu_s):
+                for i_nu in range(n_nu):
+                    nu = nu_cells[i_s, i_nu]
+                    mu_s_j = min(max((r * mu_s_nodes[i_s] + tj * nu) / rj, -1.0), 1.0)
+                    l, a_l = linear_axis(texel_index(scattering_u_mu_s_from_constants(
+                        mu_s_j, bottom_radius, top_radius, d_min, d_max, big_a, n_mu_s),
+                        n_mu_s), n_mu_s)
+                    denominator = sin_t * math.sqrt(max(1.0 - mu_s_j * mu_s_j, 0.0))
+                    cos_phi = 1.0
+                    if denominator > 1e-12:
+                        cos_phi = min(max((nu - mu_t[j] * mu_s_j) / denominator, -1.0), 1.0)
+                    m, a_m = linear_axis(math.acos(cos_phi) / math.pi * (n_phi - 1), n_phi)
+                    b00 = (l * n_phi + m) * n_wl
+                    b01 = b00 + n_wl
+                    b10 = b00 + n_phi * n_wl
+                    b11 = b10 + n_wl
+                    w00 = (1.0 - a_l) * (1.0 - a_m)
+                    w01 = (1.0 - a_l) * a_m
+                    w10 = a_l * (1.0 - a_m)
+                    w11 = a_l * a_m
+                    for w in range(n_wl):
+                        acc[i_s, i_nu, w] += view[j, w] * (
+                            w00 * slab[b00 + w] + w01 * slab[b01 + w]
+                            + w10 * slab[b10 + w] + w11 * slab[b11 + w])
+        for i_s in range(n_mu_s):
+            for i_nu in range(n_nu):
+                for w in range(n_wl):
+                    table[i_r, i_mu, i_s, i_nu, w] = acc[i_s, i_nu, w]
+    return table
+
+
+@njit(cache=True)
+def order_statistics(tables, use_phase, phase_table, bottom_radius, top_radius, mu_s_min):
+    """(mean over all cells, value at the ground looking at the zenith with the sun there) of
+    the radiance of one order [W m^-2 sr^-1 nm^-1], each (n_wl,), from interleaved tables
+    (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl); with phase functions applied (`use_phase`) for the
+    single-scattering tables."""
+    n_r, n_mu, n_mu_s, n_nu, n_t, n_wl = tables.shape
+    partial = np.zeros((n_r, n_wl))
+    for i_r in range(n_r):
+        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        weights = np.ones(n_t * n_wl)
+        for i_mu in range(n_mu):
+            mu, _ = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
+                                         n_mu)
+            for i_s in range(n_mu_s):
+                mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
+                                              mu_s_min, n_mu_s)
+                spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+                for i_nu in range(n_nu):
+                    nu = scattering_nu_from_u(i_nu / (n_nu - 1))
+                    nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                    if use_phase:
+                        phase_values(phase_table, nu, weights)
+                    for t in range(n_t):
+                        for w in range(n_wl):
+                            partial[i_r, w] += (weights[t * n_wl + w]
+                                                * tables[i_r, i_mu, i_s, i_nu, t, w])
+    mean = partial.sum(axis=0) / (n_r * n_mu * n_mu_s * n_nu)
+    weights = np.ones(n_t * n_wl)
+    if use_phase:
+        phase_values(phase_table, 1.0, weights)
+    zenith = np.zeros(n_wl)
+    for t in range(n_t):
+        for w in range(n_wl):
+            zenith[w] += weights[t * n_wl + w] * tables[0, n_mu // 2, n_mu_s - 1, n_nu - 1, t, w]
+    return mean, zenith

@@ -1,0 +1,185 @@
+"""Numba kernels shared by the two jobs of the precomputed tables: building them
+(`_table_build_kernels`, run by `transport/tables.py`) and looking them up
+(`_table_lookup_kernels`, run by `transport/lut_solver.py`). Everything here is part of the
+precomputation, so the tables' cache key (`transport/code_fingerprint.py`) covers it.
+
+Conventions (docs/physics/tables.md, Bruneton 2017 functions.glsl):
+- Table coordinates come from `transport/table_parameterisation.py` only. Entry i of an axis of
+  n entries holds the texel centre x = i / (n - 1); interpolation is linear on each axis
+  (quadrilinear in the 4-D scattering table, the mu axis split into its ground / sky halves).
+- Scattering tables are interleaved, (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl): the n_t tables of a
+  cell (single scattering per constituent, then multiple) and their wavelengths are adjacent,
+  so a lookup reads each (r, mu, mu_s) corner's two nu slices in one contiguous run; it sums
+  weights[t, w] * table_t (phase functions for single scattering, 1 for multiple).
+- Phase functions inside kernels come from tables (n_s, n_angle, n_wl) sampled uniformly in the
+  scattering angle over [0, pi], interpolated linearly.
+- Table rays are sampled densest near their lowest point and near the observer
+  (`table_ray_distances`); integrals use the trapezoid rule on the samples.
+Kernels take arrays and floats only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from skyscatter.transport.table_parameterisation import (
+    scattering_u_mu,
+    scattering_u_mu_s,
+    scattering_u_nu,
+    scattering_u_r,
+    texel_index,
+)
+
+
+@njit(cache=True)
+def linear_axis(f, n):
+    """(i, a): lower entry and weight of the fractional index f on an axis of n >= 2 entries."""
+    f = min(max(f, 0.0), n - 1.0)
+    i = min(int(f), n - 2)
+    return i, f - i
+
+
+@njit(cache=True)
+def transmittance_in_row(transmittance, i, a, x_mu, out):
+    """`transmittance_to_top` with the r part (row i, weight a, from `transmittance_x_r`)
+    done by the caller: bilinear at (i + a, x_mu (n_mu_t - 1)), into out (n_wl,)."""
+    j, b = linear_axis(x_mu * (transmittance.shape[1] - 1), transmittance.shape[1])
+    for w in range(transmittance.shape[2]):
+        out[w] = ((1.0 - a) * ((1.0 - b) * transmittance[i, j, w]
+                               + b * transmittance[i, j + 1, w])
+                  + a * ((1.0 - b) * transmittance[i + 1, j, w]
+                         + b * transmittance[i + 1, j + 1, w]))
+
+
+@njit(cache=True)
+def phase_values(phase_table, nu, out):
+    """Phase functions at nu = cos(scattering angle), linear in the angle, from `phase_table`
+    (n_s, n_angle, n_wl) sampled uniformly over [0, pi]; into out[s * n_wl + w] for s < n_s
+    (out may be longer: the weights of a lookup, 1 for the multiple-scattering table) [sr^-1]."""
+    n_angle = phase_table.shape[1]
+    n_wl = phase_table.shape[2]
+    theta = math.acos(min(max(nu, -1.0), 1.0))
+    i, a = linear_axis(theta / math.pi * (n_angle - 1), n_angle)
+    for s in range(phase_table.shape[0]):
+        for w in range(n_wl):
+            out[s * n_wl + w] = (1.0 - a) * phase_table[s, i, w] + a * phase_table[s, i + 1, w]
+
+
+@njit(cache=True)
+def mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu):
+    """(i, a): lower entry and weight of the ray (r, mu) on a mu axis of n_mu entries
+    (`scattering_u_mu`), the interpolation kept inside the half chosen by `hits_ground`."""
+    u_mu = scattering_u_mu(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
+    half = n_mu // 2
+    f_mu = u_mu * n_mu - 0.5
+    if hits_ground:
+        f_mu = min(max(f_mu, 0.0), half - 1.0)
+        i_mu = min(int(f_mu), half - 2)
+    else:
+        f_mu = min(max(f_mu, float(half)), n_mu - 1.0)
+        i_mu = min(int(f_mu), n_mu - 2)
+    return i_mu, f_mu - i_mu
+
+
+@njit(cache=True)
+def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r,
+                       n_mu, n_mu_s, n_nu):
+    """Lower entries and weights (i_r, a_r, i_mu, a_mu, i_mu_s, a_mu_s, i_nu, a_nu) of the
+    quadrilinear lookup of (r, mu, mu_s, nu) in a scattering table. The mu interpolation stays
+    inside the half chosen by `hits_ground`."""
+    i_r, a_r = linear_axis(texel_index(scattering_u_r(r, bottom_radius, top_radius, n_r), n_r), n_r)
+    i_mu, a_mu = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
+    i_s, a_s = linear_axis(texel_index(
+        scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s), n_mu_s), n_mu_s)
+    i_nu, a_nu = linear_axis(scattering_u_nu(nu) * (n_nu - 1), n_nu)
+    return i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu
+
+
+@njit(cache=True)
+def lookup_scratch(n_t, n_wl):
+    """(weights, pair_weights, pair_values) for `scattering_lookup` of n_t tables of n_wl
+    wavelengths: weights 1 (for the tables without a phase function), the others scratch."""
+    return np.ones(n_t * n_wl), np.empty(2 * n_t * n_wl), np.empty(2 * n_t * n_wl)
+
+
+@njit(cache=True)
+def scattering_lookup(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu,
+                      a_nu, pair_weights, pair_values, out):
+    """out[w] += sum_t weights[t n_wl + w] * table_t(w) interpolated at the corners of
+    `scattering_corners`.
+
+    `flat` is the interleaved table (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl) as a 1-D view
+    (`flat_tables`): for each (r, mu, mu_s) corner the two nu slices and all tables and
+    wavelengths are 2 n_t n_wl contiguous numbers, read in one loop. pair_weights and
+    pair_values are scratch arrays of 2 n_t n_wl."""
+    m = weights.size
+    n_wl = out.size
+    n_t = m // n_wl
+    s_nu = m
+    s_s = n_nu * s_nu
+    s_mu = n_mu_s * s_s
+    s_r = n_mu * s_mu
+    for k in range(m):
+        pair_weights[k] = (1.0 - a_nu) * weights[k]
+        pair_weights[m + k] = a_nu * weights[k]
+        pair_values[k] = 0.0
+        pair_values[m + k] = 0.0
+    base = i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu
+    for dr in range(2):
+        wr = a_r if dr == 1 else 1.0 - a_r
+        if wr == 0.0:
+            continue
+        for dm in range(2):
+            wm = wr * (a_mu if dm == 1 else 1.0 - a_mu)
+            if wm == 0.0:
+                continue
+            for ds in range(2):
+                ws = wm * (a_s if ds == 1 else 1.0 - a_s)
+                if ws == 0.0:
+                    continue
+                offset = base + dr * s_r + dm * s_mu + ds * s_s
+                segment = flat[offset:offset + 2 * m]
+                for k in range(2 * m):
+                    pair_values[k] += ws * pair_weights[k] * segment[k]
+    for t in range(2 * n_t):
+        for w in range(n_wl):
+            out[w] += pair_values[t * n_wl + w]
+
+
+def flat_tables(tables: np.ndarray) -> np.ndarray:
+    """An interleaved scattering table (n_r, n_mu, n_mu_s, n_nu, [n_t,] n_wl) as the 1-D view
+    `scattering_lookup` reads (a copy only if it is not C-contiguous)."""
+    return np.ascontiguousarray(tables).reshape(-1)
+
+
+@njit(cache=True)
+def table_ray_distances(r, mu, d, hits_ground, n_samples, out):
+    """Sample distances along the table ray (r, mu) of length d, increasing from 0 to d, into
+    out; returns their number (n_samples + 1). Where they crowd:
+    - upward rays (lowest point at the start): t = d (k/n)^2, dense near the start;
+    - rays that hit the ground: t = d (1 - cos(pi k/n)) / 2, dense near the observer (the
+      attenuation of thick paths) and near the ground (the densest air);
+    - rays through a tangent point t_p = -r mu: half the samples on [0, t_p] with the cosine
+      law (dense at the observer and at t_p), half on [t_p, d] with t_p + (d - t_p) (k/m)^2.
+    Unlike the ray-marching solver (`_kernels.sample_distance`, dense at the tangent point
+    only), the observer's end is resolved too: a ray from 1 km just above the horizon has its
+    light within ~30 km of the observer in the blue."""
+    t_tangent = -r * mu
+    if hits_ground:
+        for k in range(n_samples + 1):
+            out[k] = 0.5 * d * (1.0 - math.cos(math.pi * k / n_samples))
+    elif t_tangent <= 0.0 or t_tangent >= d:
+        for k in range(n_samples + 1):
+            out[k] = d * (k / n_samples) ** 2
+    else:
+        m1 = n_samples // 2
+        m2 = n_samples - m1
+        for k in range(m1 + 1):
+            out[k] = 0.5 * t_tangent * (1.0 - math.cos(math.pi * k / m1))
+        for k in range(1, m2 + 1):
+            out[m1 + k] = t_tangent + (d - t_tangent) * (k / m2) ** 2
+    out[n_samples] = d
+    return n_samples + 1
