@@ -58,7 +58,13 @@ from skyscatter.render.budget import (
     check_cost,
     image_memory_bytes,
 )
-from skyscatter.render.camera import Camera, EquirectangularCamera, FisheyeCamera, PerspectiveCamera
+from skyscatter.render.camera import (
+    MAX_SIDE_PIXELS,
+    Camera,
+    EquirectangularCamera,
+    FisheyeCamera,
+    PerspectiveCamera,
+)
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer, write_png
 from skyscatter.render.scene import (
     SkyImage,
@@ -92,7 +98,9 @@ from skyscatter.render.tonemap import (
 from skyscatter.render.video_io import VideoWriter
 from skyscatter.spectrum.colour import spectral_to_xyz, xyz_to_rgb
 from skyscatter.spectrum.grid import (
+    COLOUR_RANGE_NM,
     DEFAULT_WAVELENGTH_BINS,
+    MONOCHROMATIC_RANGE_NM,
     checked_data_wavelengths,
     checked_grid,
     wavelength_grid,
@@ -102,10 +110,23 @@ from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import SolverOptions, make_solver
+from skyscatter.validate.report import ValidationSettings
+from skyscatter.validate.suite import CASES as VALIDATION_CASES
+from skyscatter.validate.suite import run_suite as run_validation
+from skyscatter.viewer import server as viewer_server_module
 from skyscatter.viewer.server import ViewerServer, make_server
 from skyscatter.viewer.table_service import TableService
 
 __all__ = [
+    "COLOUR_RANGE_NM",
+    "DEFAULT_WAVELENGTH_BINS",
+    "MAX_FRAMES",
+    "MAX_SAMPLES",
+    "MAX_SCATTERING_ORDERS",
+    "MAX_SIDE_PIXELS",
+    "MONOCHROMATIC_RANGE_NM",
+    "VALIDATION_CASES",
+    "ValidationSettings",
     "AlbedoMap",
     "EquirectangularCamera",
     "FRAME_NAME",
@@ -137,6 +158,11 @@ __all__ = [
     "sun_direction",
     "viewer_server",
     "viewpoint_at",
+    "is_loopback",
+    "parse_time",
+    "run_validation",
+    "serve_viewer",
+    "wavelength_grid",
 ]
 
 EXR_UNITS = {"rgb": "linear RGB, Y = 1 for 1 cd/m^2", "luminance": "cd/m^2",
@@ -650,8 +676,7 @@ def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", por
     tables come from and go to the table cache (`cache_dir`, default
     `default_cache_directory()`) unless `use_cache` is False. `log` gets the requests and
     where tables came from. The server's `url` carries its per-launch token, which every API
-    request needs (`viewer.server`: who may ask). Call
-    `viewer.server.serve_forever(server, open_browser)`."""
+    request needs (`viewer.server`: who may ask). Serve it with `serve_viewer(server)`."""
     cache = TableCache(cache_dir) if use_cache else None
     service = TableService(config, cache, log)
 
@@ -670,6 +695,12 @@ def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", por
                           "irradiance_xyz": [float(f"{v:.5g}") for v in xyz.reshape(-1)]}}
 
     return make_server(service, sky_at, host, port, log)
+
+
+def serve_viewer(server: ViewerServer, open_browser: bool = True) -> None:
+    """Serve the viewer of `viewer_server` until Ctrl-C, opening its page in the default
+    browser first if `open_browser`; closes the server (`viewer.server.serve_forever`)."""
+    viewer_server_module.serve_forever(server, open_browser)
 
 
 def is_loopback(host: str) -> bool:

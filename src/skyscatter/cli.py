@@ -19,10 +19,9 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from skyscatter import __version__, checks
+from skyscatter.api_constants import DEFAULT_WAVELENGTH_BINS, VALIDATION_CASES  # no solver
 from skyscatter.checks import Bounds
 from skyscatter.errors import InputError
-from skyscatter.spectrum.grid import DEFAULT_WAVELENGTH_BINS  # light: numpy only
-from skyscatter.validate.suite import CASES as VALIDATION_CASES  # light: no solver imported
 
 __all__ = ["main"]
 
@@ -87,8 +86,8 @@ def _wavelength_list(monochromatic: bool) -> Callable[[str], list[float]]:
     """An argparse type: wavelengths [nm] within the shipped data's range
     (`spectrum.grid.checked_data_wavelengths`)."""
     def parse(text: str) -> list[float]:
-        from skyscatter.spectrum.grid import COLOUR_RANGE_NM, MONOCHROMATIC_RANGE_NM
-        low, high = MONOCHROMATIC_RANGE_NM if monochromatic else COLOUR_RANGE_NM
+        from skyscatter import api
+        low, high = api.MONOCHROMATIC_RANGE_NM if monochromatic else api.COLOUR_RANGE_NM
         data = ("the solar spectrum and the gases' refractive indices" if monochromatic
                 else "the CIE colour-matching functions")
         try:
@@ -120,26 +119,26 @@ def _positive_int(text: str) -> int:
 
 def _size(text: str) -> int:
     """Image height in pixels, 1 to `render.camera.MAX_SIDE_PIXELS` (argparse type)."""
-    from skyscatter.render.camera import MAX_SIDE_PIXELS
-    return _whole(1, MAX_SIDE_PIXELS)(text)
+    from skyscatter import api
+    return _whole(1, api.MAX_SIDE_PIXELS)(text)
 
 
 def _orders(text: str) -> int:
     """Scattering orders, 1 to the config's `MAX_SCATTERING_ORDERS` (argparse type)."""
-    from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS
-    return _whole(1, MAX_SCATTERING_ORDERS)(text)
+    from skyscatter import api
+    return _whole(1, api.MAX_SCATTERING_ORDERS)(text)
 
 
 def _samples(text: str) -> int:
     """Samples per ray, 1 to `render.budget.MAX_SAMPLES` (argparse type)."""
-    from skyscatter.render.budget import MAX_SAMPLES
-    return _whole(1, MAX_SAMPLES)(text)
+    from skyscatter import api
+    return _whole(1, api.MAX_SAMPLES)(text)
 
 
 def _frame_count(text: str) -> int:
     """Frames of a time-lapse, 1 to `render.budget.MAX_FRAMES` (argparse type)."""
-    from skyscatter.render.budget import MAX_FRAMES
-    return _whole(1, MAX_FRAMES)(text)
+    from skyscatter import api
+    return _whole(1, api.MAX_FRAMES)(text)
 
 
 def _exposure(text: str) -> float | None:
@@ -182,8 +181,8 @@ def _wavelengths(text: str) -> list[float]:
             raise argparse.ArgumentTypeError(
                 f"{count} bins is more than the {MAX_BINS} 1-nm bins of 360-830 nm; for one "
                 "wavelength write it as a list, e.g. 550,")
-        from skyscatter.spectrum.grid import wavelength_grid
-        return list(wavelength_grid(count))
+        from skyscatter import api
+        return list(api.wavelength_grid(count))
     return _wavelength_list(monochromatic=False)(text)
 
 
@@ -584,7 +583,7 @@ def _gas_summary(gas: dict, indent: str) -> str:
 
 def _render(args: argparse.Namespace) -> None:
     from skyscatter import api
-    from skyscatter.render.progress import progress
+    from skyscatter.cli_progress import progress
 
     image_target = _image_target(args.output)
     api.check_image_options(args.tonemap, args.colour_space, args.exr_content, image_target,
@@ -686,20 +685,18 @@ def _timelapse(args: argparse.Namespace) -> None:
     import datetime
 
     from skyscatter import api
-    from skyscatter.astro.time import parse_time
-    from skyscatter.render.budget import MAX_FRAMES
-    from skyscatter.render.progress import progress
+    from skyscatter.cli_progress import progress
 
     api.check_image_options(args.tonemap, args.colour_space)
-    start, end = parse_time(args.start), parse_time(args.end)
+    start, end = api.parse_time(args.start), api.parse_time(args.end)
     if not end > start:
         raise InputError(f"--end {args.end} must come after --start {args.start}", key="end",
                          value=args.end)
     span = (end - start).total_seconds()
-    if args.step is not None and span / args.step >= MAX_FRAMES:
+    if args.step is not None and span / args.step >= api.MAX_FRAMES:
         raise InputError(f"--step {args.step:g} s over {span:g} s would make more than "
-                         f"{MAX_FRAMES} frames; give a longer --step", key="step",
-                         value=args.step, allowed=f"at most {MAX_FRAMES} frames")
+                         f"{api.MAX_FRAMES} frames; give a longer --step", key="step",
+                         value=args.step, allowed=f"at most {api.MAX_FRAMES} frames")
     if args.step is not None:
         count = int(span // args.step) + 1
     else:
@@ -765,7 +762,7 @@ def _solver_options(args: argparse.Namespace, atmosphere) -> Iterator:
     """Solver options from --orders/--samples/--cache-dir/--no-cache/--force, with a progress
     bar for the tables' precomputation and a log line saying where they came from."""
     from skyscatter import api
-    from skyscatter.render.progress import progress
+    from skyscatter.cli_progress import progress
 
     with progress(1, "precomputing tables", unit="step") as bar:
         def advance(done: int, total: int, stage: str) -> None:
@@ -837,7 +834,6 @@ def _precompute(args: argparse.Namespace) -> None:
 
 def _view(args: argparse.Namespace) -> None:
     from skyscatter import api
-    from skyscatter.viewer.server import serve_forever
 
     def log(message: str) -> None:
         print(f"skyscatter: {message}", file=sys.stderr, flush=True)
@@ -852,7 +848,7 @@ def _view(args: argparse.Namespace) -> None:
               "you trust; --host 127.0.0.1 keeps the viewer to this computer.",
               file=sys.stderr, flush=True)
     print(f"skyscatter viewer: {server.url}  (Ctrl-C stops it)", flush=True)
-    serve_forever(server, open_browser=not args.no_browser)
+    api.serve_viewer(server, open_browser=not args.no_browser)
 
 
 def _cache(args: argparse.Namespace) -> None:
@@ -894,10 +890,9 @@ def _cache(args: argparse.Namespace) -> None:
 
 
 def _validate(args: argparse.Namespace) -> int:
+    from skyscatter import api
+    from skyscatter.disk_cache import TableCache
     from skyscatter.output_files import check_writable_file
-    from skyscatter.transport.cache import TableCache
-    from skyscatter.validate.report import ValidationSettings
-    from skyscatter.validate.suite import run_suite
 
     if args.output.exists() and not args.output.is_dir():
         raise InputError(f"--output {args.output} is a file; give a directory",
@@ -918,11 +913,11 @@ def _validate(args: argparse.Namespace) -> int:
                 print(f"  FAILED {check.name}: {check.value:.3g}{check.unit} > "
                       f"{check.limit:.3g}{check.unit}", flush=True)
 
-    settings = ValidationSettings(args.output, quick=args.quick,
+    settings = api.ValidationSettings(args.output, quick=args.quick,
                                   cache=None if args.no_cache else TableCache(args.cache_dir),
                                   log=log, seed=args.seed)
     try:
-        outcome = run_suite(settings, args.cases, on_case)
+        outcome = api.run_validation(settings, args.cases, on_case)
     except OSError as error:
         raise InputError(f"cannot write the report into {args.output}: {error.strerror}",
                          key="output", value=str(args.output)) from None

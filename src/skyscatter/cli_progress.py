@@ -1,4 +1,5 @@
-"""Progress bars for long renders, shown on a terminal only.
+"""The command line's progress bars (renders, time-lapses, table precomputation), shown on a
+terminal only.
 
 A thin wrapper around tqdm (https://tqdm.github.io): the bar goes to stderr and appears only
 when stderr is a TTY (unless forced), so logs, pipes and tests stay clean (STYLE.md §10).

@@ -1,9 +1,10 @@
-"""Progress bars: silent off a terminal, complete when forced on."""
+"""The command line's progress bars (`skyscatter.cli_progress`): silent off a terminal,
+complete when forced on."""
 
 import io
 import sys
 
-from skyscatter.render.progress import progress
+from skyscatter.cli_progress import progress
 
 
 def test_progress_is_silent_when_stderr_is_not_a_terminal(capsys):
