@@ -109,7 +109,13 @@ from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
 from skyscatter.transport.single_scattering import observer_position
-from skyscatter.transport.solvers import SolverOptions, make_solver
+from skyscatter.transport.solvers import (
+    NoisySolver,
+    Solver,
+    SolverOptions,
+    TableSolver,
+    make_solver,
+)
 from skyscatter.validate.report import ValidationSettings
 from skyscatter.validate.suite import CASES as VALIDATION_CASES
 from skyscatter.validate.suite import run_suite as run_validation
@@ -193,7 +199,7 @@ def solver_options(atmosphere: Atmosphere, orders: int | None = None, n_samples:
 
 def load_solver(atmosphere: Atmosphere, wavelengths_nm: Sequence[float] | None = None,
                 solver: str = "lut", options: SolverOptions | None = None,
-                monochromatic: bool = False):
+                monochromatic: bool = False) -> Solver:
     """A solver (`transport.solvers.SOLVERS`) of `atmosphere` on `wavelengths_nm` (default:
     16 bins over 360-830 nm; `monochromatic`: 1 nm cells at each wavelength, as
     `sky_radiance_rows`). With the "lut" solver the tables come from the cache or are
@@ -370,10 +376,10 @@ def _check_observer(observer: Observer) -> None:
                          value=observer, allowed="an Observer")
 
 
-def _eclipse_optics(engine) -> EclipseOptics | None:
+def _eclipse_optics(engine: Solver) -> EclipseOptics | None:
     """The grazing transmittance and bending of the planet's air, for the light in the
     umbra; None when the solver has no transmittance table or the air no Rayleigh gas."""
-    if not hasattr(engine, "tables"):
+    if not isinstance(engine, TableSolver):
         return None
     try:
         grazing_deflection_rad(engine.profile, [0.0])
@@ -636,7 +642,7 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     for sun_zenith in sun_zeniths_deg:
         sun = sun_direction(sun_zenith, 0.0)
         error = None
-        if hasattr(engine, "sky_radiance_with_error"):
+        if isinstance(engine, NoisySolver):
             radiance, error = engine.sky_radiance_with_error(position, directions, sun)
         else:
             radiance = engine.sky_radiance(position, directions, sun)

@@ -70,6 +70,7 @@ from skyscatter.render.stars import (
 from skyscatter.render.surfaces import Ground
 from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, stellar_irradiance
 from skyscatter.spectrum.star import Star
+from skyscatter.transport.solvers import Solver, TableSolver
 
 __all__ = ["BODIES", "EclipseOptics", "Ephemeris", "MoonLight", "Observer", "SkyObjects",
            "apparent_directions", "ephemeris", "moon_light", "render_sky_at", "star_field"]
@@ -253,10 +254,10 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     return sky_image(spectral, directions, valid, viewpoint, profile)
 
 
-def _sun_lights_the_sky(solver, sun_true: np.ndarray) -> bool:
+def _sun_lights_the_sky(solver: Solver, sun_true: np.ndarray) -> bool:
     """True while the sun is higher than `NIGHT_SUN_ZENITH_DEG` and than the lowest sun the
     solver's tables hold; below that the sunlit sky is left out."""
-    lowest = getattr(getattr(solver, "tables", None), "min_cos_sun_zenith", -1.0)
+    lowest = solver.tables.min_cos_sun_zenith if isinstance(solver, TableSolver) else -1.0
     return bool(sun_true[2] >= max(lowest, math.cos(math.radians(NIGHT_SUN_ZENITH_DEG))))
 
 

@@ -23,6 +23,7 @@ from skyscatter.errors import InputError
 from skyscatter.render.albedo_map import AlbedoMap
 from skyscatter.render.terrain import Heightfield
 from skyscatter.transport.geometry import ground_distances
+from skyscatter.transport.solvers import Solver, SurfaceRadianceSolver
 
 __all__ = ["Ground", "surface_radiance"]
 
@@ -35,12 +36,13 @@ class Ground:
     terrain: Heightfield | None = None
 
 
-def surface_radiance(solver, position: np.ndarray, directions: np.ndarray,
+def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarray,
                      sun_direction: np.ndarray, ground: Ground
                      ) -> tuple[np.ndarray, np.ndarray]:
     """(radiance (n_hit, n_wl) [W m^-2 sr^-1 nm^-1], hit (n,) bool) of the rays from
-    `position` along unit `directions` (n, 3) that meet the ground or the terrain."""
-    if not hasattr(solver, "surface_radiance"):
+    `position` along unit `directions` (n, 3) that meet the ground or the terrain; InputError
+    unless the solver is a `SurfaceRadianceSolver`."""
+    if not isinstance(solver, SurfaceRadianceSolver):
         raise InputError("an albedo map or terrain needs the table solver (--solver lut)",
                          key="solver", value=getattr(solver, "name", solver), allowed="lut")
     profile = solver.profile

@@ -1,16 +1,48 @@
-"""The solvers by name, so that the CLI and `validate` can pick one: `make_solver("lut", ...)`.
+"""The solver contract and the solvers by name: `make_solver("lut", profile, options)`.
 
-Every solver answers `sky_radiance(position, view_directions, sun_direction)`,
-`transmittance(position, directions, distance_m)`, `ground_irradiance(position,
-sun_direction)` and `aerial_perspective(position, points, sun_direction)` for one
-`OpticalProfile`. `transmittance` with the default infinite distance is the light of a source
-(the sun, the moon, a star) along the directions: 0 where the ray meets the planet.
+Every solver answers two questions about the light in one `OpticalProfile` (`Solver`):
+
+    sky_radiance(position, view_directions, sun_direction)  -> S + (n_wl,)  [W m^-2 sr^-1 nm^-1]
+    transmittance(position, directions, distance_m=inf)     -> S + (n_wl,)  [-]
+
+on the profile's wavelengths, `solver.profile.wavelengths_nm`: the last axis of every spectral
+result. Positions are planet-centred [m] (3,) or broadcast against the directions (..., 3) to
+the shape S; observers stand on the ground, in the air or in space (rays that miss the
+atmosphere see no sky and lose no light). `transmittance` with the default infinite distance is
+the light of a source (the sun, the moon, a star) along the directions: 0 where the ray meets
+the planet.
+
+What only some solvers can do is a capability protocol, asked for with `isinstance`:
+
+    protocol               members                                   lut   single  montecarlo
+    SurfaceSolver          ground_irradiance, aerial_perspective     yes   yes     -
+    SurfaceRadianceSolver  surface_radiance (albedo maps, terrain)   yes   -       -
+    NoisySolver            sky_radiance_with_error                   -     -       yes
+    TableSolver            tables (eclipse optics, lowest sun)       yes   -       -
+
+`tests/transport/test_solver_conformance.py` runs every registered solver through the same
+checks (shapes, units, broadcasting, wavelength last, finite at the horizon) and calls the
+members of every protocol it satisfies.
+
+A new solver is one class and one registration: write the class in `transport/<name>.py` (the
+`Solver` members and those of the capabilities it has; its module docstring gives the model,
+the sources and the accuracy), then register its factory at the end of this module:
+
+    @register_solver("name", "one line for errors and listings")
+    def _name(profile: OpticalProfile, options: SolverOptions) -> NameSolver:
+        return NameSolver(profile, n_samples=options.n_samples)
+
+`make_solver`, `SOLVERS`, `--solver name` and the conformance test then know it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
@@ -19,18 +51,107 @@ from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.monte_carlo import MonteCarloSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver
 from skyscatter.transport.table_store import cached_tables
-from skyscatter.transport.tables import TableResolution
+from skyscatter.transport.tables import AtmosphereTables, TableResolution
 
-__all__ = ["SOLVERS", "SolverOptions", "make_solver"]
+__all__ = [
+    "SOLVERS",
+    "NoisySolver",
+    "Solver",
+    "SolverFactory",
+    "SolverOptions",
+    "SurfaceRadianceSolver",
+    "SurfaceSolver",
+    "TableSolver",
+    "make_solver",
+    "register_solver",
+]
 
-SOLVERS = {
-    "lut": "precomputed tables with multiple scattering (Bruneton & Neyret), orders from the "
-           "config (4 for Earth), cached on disk",
-    "single": "single scattering + one Lambertian ground bounce, ray marched (no tables): the "
-              "independent check",
-    "montecarlo": "backward Monte Carlo path tracing, all orders, exact up to noise (slow; "
-                  "n_samples paths per ray and wavelength): the reference",
-}
+
+@runtime_checkable
+class Solver(Protocol):
+    """What every solver answers, for one atmosphere on its wavelengths.
+
+    name : str
+        The name it is registered under (`SOLVERS`).
+    profile : OpticalProfile
+        The atmosphere; `profile.wavelengths_nm` (n_wl,) [nm] is the spectral grid of every
+        result, `profile.n_wavelengths` its length.
+    """
+
+    name: str
+    profile: OpticalProfile
+
+    def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
+                     sun_direction: ArrayLike,
+                     progress: Callable[[int], None] | None = None) -> np.ndarray:
+        """Diffuse spectral radiance [W m^-2 sr^-1 nm^-1], shape S + (n_wl,), seen from
+        `position` (planet-centred [m], (3,) or broadcastable to the directions) along unit
+        `view_directions` (..., 3) broadcast to S + (3,), with the sun along unit
+        `sun_direction` (3,) (any height, below the horizon included); without the sun disk's
+        own radiance. `progress(n)`, when given, is called with the number of rays done."""
+        ...
+
+    def transmittance(self, position: ArrayLike, directions: ArrayLike,
+                      distance_m: ArrayLike = np.inf) -> np.ndarray:
+        """Transmittance [-] in [0, 1], shape S + (n_wl,), from `position` along unit
+        `directions` (shapes as `sky_radiance`) over `distance_m` [m] (broadcastable to S;
+        inf: out of the atmosphere, and 0 when the planet is in the way)."""
+        ...
+
+
+@runtime_checkable
+class SurfaceSolver(Protocol):
+    """A solver that lights surfaces: the irradiance on the ground and the air between the
+    observer and a point (`LutSolver.aerial_perspective` has the full meaning)."""
+
+    def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike
+                          ) -> tuple[np.ndarray, np.ndarray]:
+        """(direct, diffuse) spectral irradiance [W m^-2 nm^-1], each (n_wl,), on a horizontal
+        surface at `position` (planet-centred [m], (3,)) with the sun along `sun_direction`
+        (3,). Direct: E_sun T_sun max(mu_s, 0) times the visible part of the disk."""
+        ...
+
+    def aerial_perspective(self, position: ArrayLike, points: ArrayLike,
+                           sun_direction: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """(inscattered [W m^-2 sr^-1 nm^-1], transmittance [-]), each S + (n_wl,), between the
+        observer at `position` (3,) and `points` (S + (3,)) [m]: an object at p with radiance
+        L_p is seen as T L_p + inscattered."""
+        ...
+
+
+@runtime_checkable
+class SurfaceRadianceSolver(Protocol):
+    """A solver that shades Lambertian surfaces of their own albedo and orientation (albedo
+    maps, terrain: `render.surfaces`)."""
+
+    def surface_radiance(self, position: ArrayLike, points: ArrayLike, normals: ArrayLike,
+                         albedo: ArrayLike, sun_direction: ArrayLike,
+                         lit: ArrayLike | None = None) -> np.ndarray:
+        """Radiance [W m^-2 sr^-1 nm^-1] (n, n_wl) reaching the observer at `position` (3,)
+        from surfaces at `points` (n, 3) facing unit `normals` (n, 3) with `albedo` ((n, n_wl)
+        or (n_wl,)), in sunlight where `lit` (n,): L_in + T albedo / pi (E_sun + E_sky)."""
+        ...
+
+
+@runtime_checkable
+class NoisySolver(Protocol):
+    """A solver whose sky radiance is a statistical estimate (Monte Carlo)."""
+
+    def sky_radiance_with_error(self, position: ArrayLike, view_directions: ArrayLike,
+                                sun_direction: ArrayLike,
+                                progress: Callable[[int], None] | None = None
+                                ) -> tuple[np.ndarray, np.ndarray]:
+        """(mean, standard error of the mean) of the sky radiance [W m^-2 sr^-1 nm^-1], each
+        S + (n_wl,); arguments as `Solver.sky_radiance`, whose answer is the mean."""
+        ...
+
+
+@runtime_checkable
+class TableSolver(Protocol):
+    """A solver that answers from precomputed tables (their transmittance serves the eclipse
+    optics; below their lowest sun, `tables.min_cos_sun_zenith`, the sunlit sky is left out)."""
+
+    tables: AtmosphereTables
 
 
 @dataclass(frozen=True)
@@ -58,18 +179,53 @@ class SolverOptions:
     seed: int = 0
 
 
+SolverFactory = Callable[[OpticalProfile, SolverOptions], Solver]
+
+# name -> one-line description, in the order of registration (`register_solver`)
+SOLVERS: dict[str, str] = {}
+_FACTORIES: dict[str, SolverFactory] = {}
+
+
+def register_solver(name: str, description: str) -> Callable[[SolverFactory], SolverFactory]:
+    """Decorator that makes `factory(profile, options) -> Solver` the solver `name` of
+    `make_solver`, described by `description` in `SOLVERS`. A name is registered once."""
+    def register(factory: SolverFactory) -> SolverFactory:
+        if name in _FACTORIES:
+            raise ValueError(f"a solver named {name!r} is registered already")
+        _FACTORIES[name] = factory
+        SOLVERS[name] = description
+        return factory
+    return register
+
+
 def make_solver(name: str, profile: OpticalProfile, options: SolverOptions | None = None
-                ) -> SingleScatteringSolver | LutSolver | MonteCarloSolver:
-    """A solver of `profile` by name (`SOLVERS`)."""
-    options = options or SolverOptions()
-    if name == "single":
-        return SingleScatteringSolver(profile, n_samples=options.n_samples)
-    if name == "lut":
-        tables = cached_tables(profile, options.resolution, options.orders,
-                               cache=options.cache, force=options.force,
-                               progress=options.progress, log=options.log)
-        return LutSolver(profile, tables=tables)
-    if name == "montecarlo":
-        return MonteCarloSolver(profile, n_samples=options.n_samples, seed=options.seed)
-    raise InputError(f"unknown solver {name!r}; available: {', '.join(SOLVERS)}",
-                     key="solver", value=name, allowed=", ".join(SOLVERS))
+                ) -> Solver:
+    """A solver of `profile` by name (`SOLVERS`); InputError listing the names otherwise."""
+    factory = _FACTORIES.get(name) if isinstance(name, str) else None
+    if factory is None:
+        raise InputError(f"unknown solver {name!r}; available: {', '.join(SOLVERS)}",
+                         key="solver", value=name, allowed=", ".join(SOLVERS))
+    return factory(profile, options or SolverOptions())
+
+
+# The solvers -------------------------------------------------------------------------------
+
+@register_solver("lut", "precomputed tables with multiple scattering (Bruneton & Neyret), "
+                        "orders from the config ([tables] orders), cached on disk")
+def _lut(profile: OpticalProfile, options: SolverOptions) -> LutSolver:
+    tables = cached_tables(profile, options.resolution, options.orders, cache=options.cache,
+                           force=options.force, progress=options.progress, log=options.log)
+    return LutSolver(profile, tables=tables)
+
+
+@register_solver("single", "single scattering + one Lambertian ground bounce, ray marched "
+                           "(no tables): the independent check")
+def _single(profile: OpticalProfile, options: SolverOptions) -> SingleScatteringSolver:
+    return SingleScatteringSolver(profile, n_samples=options.n_samples)
+
+
+@register_solver("montecarlo", "backward Monte Carlo path tracing, all orders, exact up to "
+                               "noise (slow; n_samples paths per ray and wavelength): the "
+                               "reference")
+def _montecarlo(profile: OpticalProfile, options: SolverOptions) -> MonteCarloSolver:
+    return MonteCarloSolver(profile, n_samples=options.n_samples, seed=options.seed)

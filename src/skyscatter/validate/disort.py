@@ -32,7 +32,6 @@ from __future__ import annotations
 import time
 import warnings
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from numpy.polynomial import legendre
@@ -45,6 +44,7 @@ from skyscatter.errors import InputError
 from skyscatter.optics.phase import PhaseFunction
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.transport.geometry import local_frame_directions
+from skyscatter.transport.solvers import Solver
 from skyscatter.validate.common import table_solver
 from skyscatter.validate.plots import new_figure, save_figure
 from skyscatter.validate.report import (
@@ -305,13 +305,6 @@ def plane_parallel_single_scattering(layers: PlaneParallelLayers, toa_irradiance
     return radiance * np.asarray(toa_irradiance, dtype=np.float64)
 
 
-class SkyRadianceSolver(Protocol):
-    """Anything that answers `sky_radiance` (the solvers of `transport`)."""
-
-    def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
-                     sun_direction: ArrayLike) -> np.ndarray: ...
-
-
 @dataclass(frozen=True)
 class DisortComparison:
     """A solver's ground-level sky radiance next to the plane-parallel DISORT reference.
@@ -333,7 +326,7 @@ class DisortComparison:
         return self.ours / self.reference - 1.0
 
 
-def compare_with_disort(solver: SkyRadianceSolver, profile: OpticalProfile,
+def compare_with_disort(solver: Solver, profile: OpticalProfile,
                         sun_zenith_rad: ArrayLike, relative_azimuth_rad: ArrayLike,
                         max_view_zenith_rad: float = np.radians(70.0), n_streams: int = 32,
                         layers: PlaneParallelLayers | None = None) -> DisortComparison:

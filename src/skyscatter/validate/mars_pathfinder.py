@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.model import Atmosphere
 from skyscatter.transport.single_scattering import observer_position
+from skyscatter.transport.solvers import NoisySolver, Solver
 from skyscatter.validate.mars_models import (
     MODEL_COLOURS,
     MODEL_LABELS,
@@ -107,18 +108,18 @@ class AlmucantarCurve:
         return self.ratio(BACK_DEG, BEFORE_BACK_DEG)[0]
 
 
-def almucantar_radiance(solver, azimuth_deg: ArrayLike,
+def almucantar_radiance(solver: Solver, azimuth_deg: ArrayLike,
                         sun_elevation_deg: float = SUN_ELEVATION_DEG
                         ) -> tuple[np.ndarray, np.ndarray]:
     """Spectral sky radiance and its standard error, each (n, n_wl) [W m^-2 sr^-1 nm^-1], from
     the ground along the sun's almucantar (view elevation = `sun_elevation_deg` [deg]) at
-    `azimuth_deg` [deg] from the sun. `solver` is any solver; the error is 0 unless it has
-    `sky_radiance_with_error` (Monte Carlo)."""
+    `azimuth_deg` [deg] from the sun. `solver` is any solver; the error is 0 unless it is a
+    `NoisySolver` (Monte Carlo)."""
     azimuth = np.asarray(azimuth_deg, dtype=np.float64)
     views = sky_direction(np.full(azimuth.shape, sun_elevation_deg), azimuth)
     origin = observer_position(0.0, solver.profile.bottom_radius_m)
     sun = sky_direction(sun_elevation_deg, 0.0)
-    if hasattr(solver, "sky_radiance_with_error"):
+    if isinstance(solver, NoisySolver):
         return solver.sky_radiance_with_error(origin, views, sun)
     radiance = solver.sky_radiance(origin, views, sun)
     return radiance, np.zeros_like(radiance)
