@@ -15,7 +15,7 @@ import numpy as np
 
 from skyscatter import api
 from skyscatter.render.camera import FisheyeCamera
-from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.spectrum.grid import DEFAULT_WAVELENGTH_BINS, wavelength_grid
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
 
@@ -37,7 +37,7 @@ def best_of(function, repeats: int = 3) -> tuple[float, float]:
 def main() -> None:
     atmosphere = api.load_atmosphere("earth")
     camera = FisheyeCamera(512)
-    wavelengths = wavelength_grid(16)
+    wavelengths = wavelength_grid(DEFAULT_WAVELENGTH_BINS)
     print(f"numba threads: {numba.get_num_threads()}")
 
     def render() -> None:

@@ -20,7 +20,7 @@ from timing import best_of
 from skyscatter.astro import star_catalogue
 from skyscatter.render.camera import FisheyeCamera
 from skyscatter.render.stars import add_stars, integrated_starlight_radiance
-from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.spectrum.grid import DEFAULT_WAVELENGTH_BINS, wavelength_grid
 from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, stellar_irradiance
 
 SIZE = 1024
@@ -31,7 +31,7 @@ def main() -> None:
     parsed = star_catalogue._parse_hip2(star_catalogue._catalogue_path())
     print(f"parse hip2.dat ({parsed['hip'].size} stars): {time.perf_counter() - start:.3f} s")
     catalogue = star_catalogue.load_star_catalogue()
-    wavelengths = wavelength_grid(16)
+    wavelengths = wavelength_grid(DEFAULT_WAVELENGTH_BINS)
     camera = FisheyeCamera(SIZE)
     valid = camera.valid_mask()
     rotation, _ = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))

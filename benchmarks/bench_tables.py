@@ -22,6 +22,7 @@ import numba
 import numpy as np
 
 from skyscatter.atmosphere.config import load_atmosphere
+from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS
 from skyscatter.render.camera import PerspectiveCamera
 from skyscatter.render.scene import ground_viewpoint, render_sky, sun_direction
 from skyscatter.render.surfaces import Ground
@@ -100,7 +101,7 @@ def accuracy_against_finer_tables(orders: int) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--wavelengths", type=int, default=15)
-    parser.add_argument("--orders", type=int, default=4)
+    parser.add_argument("--orders", type=int, default=DEFAULT_SCATTERING_ORDERS)
     parser.add_argument("--accuracy", action="store_true",
                         help="also compare with 2x finer tables (3 wavelengths, minutes)")
     args = parser.parse_args()

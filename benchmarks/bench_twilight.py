@@ -21,7 +21,7 @@ import numpy as np
 from bench_tables import PeakMemory
 
 from skyscatter.atmosphere.config import load_atmosphere
-from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.spectrum.grid import DEFAULT_WAVELENGTH_BINS, wavelength_grid
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
@@ -46,7 +46,7 @@ def fisheye_directions(size: int) -> np.ndarray:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--size", type=int, default=1024)
-    parser.add_argument("--wavelengths", type=int, default=16)
+    parser.add_argument("--wavelengths", type=int, default=DEFAULT_WAVELENGTH_BINS)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--sun-zenith", type=float, nargs="+", default=[60.0, 96.0, 106.0])
     parser.add_argument("--precompute", action="store_true")

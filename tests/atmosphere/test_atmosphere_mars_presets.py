@@ -35,21 +35,22 @@ def test_collienne_coefficients_are_table_4_1():
 def test_mie_dust_reproduces_table_4_1(name):
     # Table 4.1, "Costa & New": beta_sca = (10.2982, 12.8212, 15.4969), beta_ext = (15.4174,
     # 15.7726, 16.1938) 1e-6 m^-1 at 440/550/680 nm, from 5000 random radii (no seed). The
-    # preset fixes beta_ext(440 nm); the rest follows from Mie theory. 0.5 %: the analyst's
-    # re-run with another random sample matches the spectral ratios to ~0.2-0.3 % (§1.5, §8.6),
-    # ours is a deterministic quadrature.
+    # preset fixes beta_ext(440 nm); the rest follows from Mie theory. 0.5 %: a re-run of App. A.2
+    # with another random sample matches the spectral ratios to ~0.2-0.3 %, ours is a
+    # deterministic quadrature.
     coefficients, _ = _ground_coefficients(name)
     scattering, extinction = coefficients["dust"]
     np.testing.assert_allclose(extinction, [15.4174e-6, 15.7726e-6, 16.1938e-6], rtol=5e-3)
     np.testing.assert_allclose(scattering, [10.2982e-6, 12.8212e-6, 15.4969e-6], rtol=5e-3)
-    # Single-scattering albedo 0.667 / 0.812 / 0.956 (§8.6), +-0.002 (3 digits and sampling)
+    # Single-scattering albedo 0.667 / 0.812 / 0.956 (that re-run), +-0.002 (3 digits, sampling)
     np.testing.assert_allclose(scattering / extinction, [0.667, 0.812, 0.956], atol=2e-3)
 
 
 def test_bluemoon_phase_matches_the_thesis_shader_table():
     # App. A.3: first and last rows of the shader's table, (B, G, R) = 440/550/680 nm. The
-    # forward value depends on the few largest radii of a random sample: the analyst's re-run
-    # (17.07 / 9.21 / 5.31, §8.6) is already 5 % above the shader at 440 nm; 10 % allowed.
+    # forward value depends on the few largest radii of a random sample: a re-run of App. A.2
+    # (17.07 / 9.21 / 5.31, tests/optics/test_optics_mie.py) is already 5 % above the shader at
+    # 440 nm; 10 % allowed.
     _, profile = _ground_coefficients("mars-bluemoon")
     phase = profile.phases[profile.names.index("dust")]
     np.testing.assert_allclose(phase.evaluate(1.0, WL), [16.224125, 8.951169, 5.213453],

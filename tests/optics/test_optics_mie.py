@@ -128,7 +128,7 @@ def test_angle_grid_resolves_the_forward_peak():
 
 # ----- Anomalous diffraction ------------------------------------------------------------------
 
-def ada_extinction_seed_004_eq_2_32(x, m):
+def ada_extinction_meyran_2022_eq_2_32(x, m):
     """Eq. 2.32 of Meyran 2022 (van de Hulst), as printed, with tan(beta) = k/(n - 1)."""
     rho = 2.0 * x * (m.real - 1.0)
     beta = np.arctan(m.imag / (m.real - 1.0))
@@ -139,12 +139,12 @@ def ada_extinction_seed_004_eq_2_32(x, m):
 
 
 @pytest.mark.parametrize("m", [1.05 + 0.0j, 1.05 + 0.01j, 1.5 + 0.0154j, 1.33 + 1e-4j])
-def test_ada_extinction_equals_seed_004_eq_2_32(m):
+def test_ada_extinction_equals_meyran_2022_eq_2_32(m):
     # The printed form cancels for small rho (Q_ext ~ rho^2 / 2): at x = 0.5, m = 1.05 it keeps
     # ~10 digits, hence rtol 1e-9.
     x = np.array([0.5, 3.0, 10.0, 100.0, 1000.0])
     q_ext, _ = anomalous_diffraction_efficiencies(x, m)
-    np.testing.assert_allclose(q_ext, ada_extinction_seed_004_eq_2_32(x, m), rtol=1e-9)
+    np.testing.assert_allclose(q_ext, ada_extinction_meyran_2022_eq_2_32(x, m), rtol=1e-9)
 
 
 def test_ada_extinction_approaches_mie_for_a_soft_sphere():
@@ -186,7 +186,7 @@ def test_ada_method_keeps_the_mie_phase_function():
 
 # ----- the Mars dust of Meyran's thesis (2022, Hochschule Hannover) ---------------------------
 
-def test_seed_004_reproduction_with_the_analysts_own_radius_sample():
+def test_meyran_2022_reproduction_with_a_seeded_radius_sample():
     # The reference: the thesis's App. A.2 algorithm re-run with 5000 radii from
     # numpy.random.default_rng(1).gamma(3, 0.32 µm) and miepython 3.3.0 (it matches the thesis's
     # Table 4.1 albedos and shader table ends); with the same radii every printed number is
@@ -211,7 +211,7 @@ def test_seed_004_reproduction_with_the_analysts_own_radius_sample():
     np.testing.assert_allclose(weighted.asymmetry, [0.854, 0.787, 0.725], atol=5e-4)
 
 
-def test_seed_004_reproduction_with_the_deterministic_quadrature():
+def test_meyran_2022_reproduction_with_the_deterministic_quadrature():
     # The quadrature gives the expectation over the gamma distribution; the re-run's numbers are
     # one 5000-radius sample (mean radius 0.950 µm vs 0.96 µm; its <r^2> is 2.1 % low). The
     # relative standard error of a 5000-sample mean of r^2 is sqrt(216/144)/sqrt(5000) = 1.7 %,

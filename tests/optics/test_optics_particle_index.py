@@ -26,7 +26,7 @@ def test_every_material_loads_with_k_non_negative():
         assert np.all(np.isfinite(m)) and np.all(m.real > 1.0) and np.all(m.imag >= 0.0)
 
 
-def test_hematite_table_is_the_seed_004_excerpt():
+def test_hematite_table_is_the_cosmoscout_mars_ehlers_table():
     # CosmoScout VR mars_ehlers.json (inclusion ior): 48 rows 0.36-0.83 µm; spot values.
     hematite = load_material("hematite")
     assert hematite.wavelengths_nm == tuple(float(w) for w in range(360, 831, 10))
@@ -80,7 +80,7 @@ def test_maxwell_garnett_end_members_are_host_and_inclusion():
                                rtol=1e-14)
 
 
-def test_maxwell_garnett_reproduces_seed_004_mixed_hematite():
+def test_maxwell_garnett_reproduces_meyran_2022_mixed_hematite():
     # Meyran 2022 App. A.2.1 re-run: 3 % hematite in 1.5 + 0i, printed to 4 decimals (tolerance:
     # half a unit in the last digit). The reference prints Im < 0 (miepython's sign); we keep
     # k >= 0.

@@ -85,7 +85,7 @@ def test_modified_gamma_gives_back_its_effective_radius_and_variance(a_um, b):
     assert effective_variance(radii, weights) == pytest.approx(b, **VEFF_TOLERANCE)
 
 
-def test_modified_gamma_of_mars_dust_is_the_gamma_of_seed_004():
+def test_modified_gamma_of_mars_dust_is_the_gamma_of_meyran_2022():
     # Meyran 2022 App. A.2.2: a = 1.6 µm, b = 0.2 -> k = (1 - 2b)/b = 3, theta = 0.32 µm,
     # number-mean radius 0.96 µm.
     gamma = ModifiedGamma(1.6 * UM, 0.2).as_gamma()

@@ -293,7 +293,7 @@ def _rayleigh_figure(comparison: OpticalDepthComparison, output_dir, limit: floa
                                               ("Hansen & Travis 1974", "^"))):
         values = np.array([RAYLEIGH_REFERENCE_TABLE[w][column] for w in table_wl])
         bottom.plot(table_wl, 100.0 * (values / bodhaine_at_table - 1.0), marker=marker, ls="none",
-                    mfc="none", label=f"{label} (reference-data §4.1)")
+                    mfc="none", label=f"{label} (eq. 2.29 / Table 3)")
     for sign in (-1.0, 1.0):
         bottom.axhline(sign * 100.0 * limit, color="tab:red", lw=0.8, ls=":",
                        label=f"the {format_percent(limit, 0)} limit" if sign > 0 else None)
@@ -411,7 +411,8 @@ def run(settings: ValidationSettings) -> CaseResult:
         Check(f"ozone optical depth vs {du:.0f} DU x cross-section, max |rel. diff.| at "
               "360-830 nm", 100.0 * worst_ozone, 100.0 * OZONE_LIMIT, "%"),
         Check(f"Chappuis maximum ({peak:.0f} nm) from the middle of "
-              f"{CHAPPUIS_RANGE_NM[0]:.0f}-{CHAPPUIS_RANGE_NM[1]:.0f} nm (reference-data §4.2)",
+              f"{CHAPPUIS_RANGE_NM[0]:.0f}-{CHAPPUIS_RANGE_NM[1]:.0f} nm "
+              "(Serdyuchenko et al. 2014)",
               abs(peak - peak_centre), peak_half_width, " nm"),
     ]
     summary = (
