@@ -1,6 +1,6 @@
 """skyscatter: physically based simulation and rendering of planetary atmospheres.
 
-Data flow (one module boundary per arrow, see DESIGN.md):
+Data flow (one module boundary per arrow, see docs/architecture.md):
 config (TOML) -> Atmosphere -> solver (transport) -> scene (render) -> colour -> image.
 """
 

@@ -2,7 +2,7 @@
 terminal only.
 
 A thin wrapper around tqdm (https://tqdm.github.io): the bar goes to stderr and appears only
-when stderr is a TTY (unless forced), so logs, pipes and tests stay clean (STYLE.md §10).
+when stderr is a TTY (unless forced), so logs, pipes and tests stay clean.
 """
 
 from __future__ import annotations

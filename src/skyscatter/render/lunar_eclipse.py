@@ -32,7 +32,7 @@ errs by ~β²/6 < 1e-4).
         Ψ(h) = 2 acos(clip((b² + ε² - s²) / (2 |b| ε), -1, 1))
 
     where Ψ is the range of ψ over which the source point lies on the solar disk (law of
-    cosines). For a point Sun this is the brief's focusing factor: summed over the tangent
+    cosines). For a point Sun this is the focusing factor: summed over the tangent
     altitudes that reach P at distance ρ from the axis, T (R + h) dh / (ρ dρ); the extended
     Sun removes its caustic at ρ = 0. The integral is a midpoint sum over altitude cells
     (default 100 m below 20 km, 1 km above, with exact β-widths of the cells).
