@@ -1,4 +1,4 @@
-"""The package layout is the data flow (STYLE.md section 1): no import may point backwards.
+"""The package layout is the data flow (docs/architecture.md): no import may point backwards.
 
 `LAYERS` is the one table of what each layer may import. `layering_violations(root)` reads the
 imports of every module under a package root with `ast` - every form: `import skyscatter.x`,
@@ -20,8 +20,9 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "skyscatter"
 
-# Layer -> the layers its modules may import besides their own. Left to right along DESIGN.md's
-# data flow: config -> atmosphere -> solver (transport) -> scene (render) -> image / viewer.
+# Layer -> the layers its modules may import besides their own. Left to right along the data
+# flow of docs/architecture.md: config -> atmosphere -> solver (transport) -> scene (render) ->
+# image / viewer.
 LAYERS: dict[str, set[str]] = {
     # errors, checks, files and caches every layer uses; the package's own __init__
     "base": set(),
