@@ -4,11 +4,16 @@ plus a stated allowance for the reference's own error."""
 
 from __future__ import annotations
 
+import ast
+import importlib.util
+from pathlib import Path
+
 import numba
 import numpy as np
 import pytest
 from transport_cases import EARTH_RADIUS_M, SMALL, exponential_earth, homogeneous_shell
 
+from skyscatter.transport.code_fingerprint import reached_definitions
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.monte_carlo import MonteCarloSolver
@@ -149,3 +154,72 @@ def test_transmittance_and_the_solver_registry(earth_profile):
     reference = SingleScatteringSolver(earth_profile).transmittance(GROUND, VIEWS)
     np.testing.assert_allclose(solver.transmittance(GROUND, VIEWS), reference, rtol=1e-12)
     assert solver.sky_radiance(GROUND, VIEWS[:2], VIEWS[0]).shape == (2, 3)
+
+
+
+# The Monte Carlo reference checks the tables and the single-scattering solver, so it shares no
+# code with them: neither their modules nor anyone's private helpers (shared ray geometry,
+# column densities and phase sampling live in neutral modules that every solver imports).
+MONTE_CARLO_MODULES = ("skyscatter.transport.monte_carlo",
+                       "skyscatter.transport._monte_carlo_kernels")
+CHECKED = ("tables", "table_parameterisation", "table_store", "lut_solver", "cache",
+           "single_scattering")
+NEUTRAL_PRIVATE = ("skyscatter.transport._kernels", "skyscatter.transport._monte_carlo_kernels")
+
+
+def _is_checked(module: str) -> bool:
+    """Whether `module` belongs to a solver that the Monte Carlo reference checks."""
+    last = module.rsplit(".", 1)[-1]
+    return last in CHECKED or last.startswith("_table_")
+
+
+def _independence_problems(source: str, package: str) -> list[str]:
+    """The imports of `source` (a module of `package`) that break the independence, every
+    import form read with ast: `import a.b`, `from a import b`, relative imports."""
+    problems = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package.rsplit(".", node.level - 1)[0]
+                base = f"{parent}.{base}" if base else parent
+            names = [f"{base}.{alias.name}" for alias in node.names]
+        else:
+            continue
+        for name in names:
+            parts = name.split(".")
+            if any(_is_checked(".".join(parts[:i])) for i in range(2, len(parts) + 1)):
+                problems.append(f"imports {name}")
+            elif parts[-1].startswith("_") and name not in NEUTRAL_PRIVATE:
+                problems.append(f"imports the private {name}")
+    return problems
+
+
+@pytest.mark.parametrize("module", MONTE_CARLO_MODULES)
+def test_monte_carlo_imports_nothing_of_the_solvers_it_checks(module):
+    source = Path(importlib.util.find_spec(module).origin).read_text(encoding="utf-8")
+    assert _independence_problems(source, module.rsplit(".", 1)[0]) == []
+
+
+def test_monte_carlo_runs_no_code_of_the_solvers_it_checks():
+    # Transitively: all the code the solver reaches, followed through every module by the
+    # tables' cache key (code_fingerprint), not only its own imports.
+    reached = reached_definitions([("skyscatter.transport.monte_carlo", "MonteCarloSolver")])
+    assert ("skyscatter.transport._kernels", "columns_along_segment") in reached  # it sees far
+    assert sorted(f"{module}.{name}" for module, name in reached if _is_checked(module)) == []
+
+
+@pytest.mark.parametrize("line", [
+    "from skyscatter.transport.tables import sample_phase_functions",
+    "from skyscatter.transport import _table_lookup_kernels",
+    "from skyscatter.transport import single_scattering",
+    "from . import lut_solver",
+    "from .single_scattering import SingleScatteringSolver",
+    "import skyscatter.transport.table_parameterisation as parameterisation",
+    "from skyscatter.transport.geometry import _private_helper",
+])
+def test_the_independence_check_finds_each_import_form(line):
+    # A checker that cannot fail checks nothing.
+    assert len(_independence_problems(line + "\n", "skyscatter.transport")) == 1

@@ -1,4 +1,7 @@
-"""Numba kernels of the single-scattering solver: column densities and in-scattering.
+"""Numba kernels that march rays through the profile: column densities, which every solver
+shares (the tables build their column table with them, the Monte Carlo reference and
+`transport/transmittance.py` march with them), and the single-scattering solver's
+in-scattering.
 
 Conventions (docs/physics/single_scattering.md):
 - A constituent's density is linearly interpolated between uniform altitude levels

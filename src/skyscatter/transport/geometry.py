@@ -14,9 +14,11 @@ import math
 
 import numpy as np
 from numba import njit, prange
+from numpy.typing import ArrayLike
 
 __all__ = [
     "atmosphere_segment",
+    "broadcast_rays",
     "disk_fraction_above",
     "distance_to_sphere",
     "ground_distances",
@@ -153,3 +155,19 @@ def local_frame_directions(zenith_rad: np.ndarray, azimuth_rad: np.ndarray) -> n
     azimuth = np.asarray(azimuth_rad, dtype=np.float64)
     s = np.sin(zenith)
     return np.stack([s * np.sin(azimuth), s * np.cos(azimuth), np.cos(zenith)], axis=-1)
+
+
+def broadcast_rays(position: ArrayLike, directions: ArrayLike, normalise: bool = True
+                   ) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    """(origins, directions, S): `position` [m] ((3,) or (..., 3)) and `directions` (..., 3)
+    broadcast to the shape S + (3,) and flattened to (n, 3) C-contiguous float64 arrays, the
+    directions made unit vectors when `normalise`: the rays a solver's kernels march."""
+    dirs = np.asarray(directions, dtype=np.float64)
+    origins = np.asarray(position, dtype=np.float64)
+    shape = np.broadcast_shapes(dirs.shape, origins.shape)[:-1]
+    dirs = np.broadcast_to(dirs, shape + (3,))
+    if normalise:
+        dirs = dirs / np.linalg.norm(dirs, axis=-1, keepdims=True)
+    origins = np.broadcast_to(origins, shape + (3,))
+    return (np.ascontiguousarray(origins.reshape(-1, 3)),
+            np.ascontiguousarray(dirs.reshape(-1, 3)), shape)

@@ -38,7 +38,7 @@ intervals). The sun is a point source unless the profile gives it a radius,
 in which case V is the part of its disk above the geometric horizon
 (`geometry.sun_visible_fraction`) and a sun below the horizon is attenuated like the horizon
 ray, as in the other solvers; the sun disk's own radiance is not included. Phase functions are
-tabulated at `n_angle` scattering angles (`tables.sample_phase_functions`) and interpolated
+tabulated at `n_angle` scattering angles (`scatterers.sample_phase_functions`) and interpolated
 linearly in angle. Each result is a mean over `n_samples` paths per ray and wavelength with its
 standard error; a fixed `seed` gives the same numbers for any number of threads.
 """
@@ -53,8 +53,9 @@ from numpy.typing import ArrayLike
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport import _monte_carlo_kernels
-from skyscatter.transport.single_scattering import _broadcast_rays, ray_marched_transmittance
-from skyscatter.transport.tables import sample_phase_functions, scattering_constituents
+from skyscatter.transport.geometry import broadcast_rays
+from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
+from skyscatter.transport.transmittance import ray_marched_transmittance
 
 __all__ = ["MonteCarloSolver"]
 
@@ -142,7 +143,7 @@ class MonteCarloSolver:
         """(mean, standard error of the mean) of the sky radiance [W m^-2 sr^-1 nm^-1], each
         (..., n_wl); arguments as `sky_radiance`. `progress(n)` is called with the number of
         rays done after each chunk."""
-        origins, directions, shape = _broadcast_rays(position, view_directions)
+        origins, directions, shape = broadcast_rays(position, view_directions)
         sun = np.asarray(sun_direction, dtype=np.float64)
         sun = np.ascontiguousarray(sun / np.linalg.norm(sun))
         p = self.profile

@@ -17,7 +17,12 @@ from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.transport import _kernels
-from skyscatter.transport.geometry import sun_visible_fraction, towards_visible_sun
+from skyscatter.transport.geometry import (
+    broadcast_rays,
+    sun_visible_fraction,
+    towards_visible_sun,
+)
+from skyscatter.transport.transmittance import ray_marched_transmittance
 
 __all__ = ["SingleScatteringSolver", "observer_position", "ray_marched_transmittance"]
 
@@ -52,7 +57,7 @@ class SingleScatteringSolver:
         (3,) or broadcastable to the directions) along unit `view_directions` (..., 3), with the
         sun along unit `sun_direction` (3,). Returns (..., n_wl). `progress(n)` is called with
         the number of rays done after each chunk."""
-        origins, directions, shape = _broadcast_rays(position, view_directions)
+        origins, directions, shape = broadcast_rays(position, view_directions)
         distances = np.full(directions.shape[0], np.inf)
         radiance, _ = self._march(origins, directions, distances, sun_direction, True, progress)
         return radiance.reshape(shape + (self.profile.n_wavelengths,))
@@ -62,7 +67,7 @@ class SingleScatteringSolver:
         """(inscattered [W m^-2 sr^-1 nm^-1], transmittance [-]) between `position` and
         `points` (..., 3) [m], each (..., n_wl): single scattering of the air in between,
         ray marched (`LutSolver.aerial_perspective` has the meaning)."""
-        origins, targets, shape = _broadcast_rays(position, points, normalise=False)
+        origins, targets, shape = broadcast_rays(position, points, normalise=False)
         offsets = targets - origins
         distances = np.linalg.norm(offsets, axis=1)
         directions = np.ascontiguousarray(offsets / np.where(distances > 0, distances,
@@ -137,23 +142,6 @@ class SingleScatteringSolver:
         return direct, diffuse
 
 
-def ray_marched_transmittance(profile: OpticalProfile, position: ArrayLike,
-                              directions: ArrayLike, distance_m: ArrayLike = np.inf,
-                              n_samples: int = 256) -> np.ndarray:
-    """Transmittance [-] (..., n_wl) of `profile` from `position` along `directions` over
-    `distance_m` [m] (inf: out of the atmosphere, towards a light source; 0 when the ground
-    blocks the path): trapezoid columns with `n_samples` intervals
-    (`_kernels.transmittance_rays`)."""
-    origins, dirs, shape = _broadcast_rays(position, directions)
-    distances = np.broadcast_to(np.asarray(distance_m, dtype=np.float64), shape).ravel()
-    h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
-    result = _kernels.transmittance_rays(
-        origins, dirs, np.ascontiguousarray(distances), n_samples, profile.bottom_radius_m,
-        profile.top_radius_m, h_step, np.ascontiguousarray(profile.density, dtype=np.float64),
-        np.ascontiguousarray(profile.extinction_per_density, dtype=np.float64))
-    return result.reshape(shape + (profile.n_wavelengths,))
-
-
 def _unit(vector: np.ndarray) -> np.ndarray:
     return vector / np.linalg.norm(vector, axis=-1, keepdims=True)
 
@@ -164,18 +152,3 @@ def _tangent_frame(up: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     east = np.cross(helper, up)
     east /= np.linalg.norm(east)
     return east, np.cross(up, east)
-
-
-def _broadcast_rays(position: ArrayLike, directions: ArrayLike, normalise: bool = True
-                    ) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
-    """Flatten broadcast origins and (unit, if `normalise`) directions to (n, 3) C-contiguous
-    arrays."""
-    dirs = np.asarray(directions, dtype=np.float64)
-    origins = np.asarray(position, dtype=np.float64)
-    shape = np.broadcast_shapes(dirs.shape, origins.shape)[:-1]
-    dirs = np.broadcast_to(dirs, shape + (3,))
-    if normalise:
-        dirs = _unit(dirs)
-    origins = np.broadcast_to(origins, shape + (3,))
-    return (np.ascontiguousarray(origins.reshape(-1, 3)),
-            np.ascontiguousarray(dirs.reshape(-1, 3)), shape)

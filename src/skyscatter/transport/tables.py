@@ -53,6 +53,7 @@ from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
+from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN,
     scattering_r_from_u,
@@ -189,26 +190,6 @@ class AtmosphereTables:
     def nbytes(self) -> int:
         return sum(a.nbytes for a in (self.transmittance, self.scattering, self.irradiance,
                                       self.phase))
-
-
-def scattering_constituents(profile: OpticalProfile) -> tuple[int, ...]:
-    """Indices of the constituents that scatter (a phase function and a nonzero scattering
-    cross-section at some wavelength)."""
-    return tuple(c for c, phase in enumerate(profile.phases)
-                 if phase is not None and np.any(profile.scattering_per_density[c] > 0.0))
-
-
-def sample_phase_functions(profile: OpticalProfile, constituents: tuple[int, ...],
-                           n_angle: int, wavelengths_nm: np.ndarray | None = None) -> np.ndarray:
-    """p_c at scattering angles theta_i = pi i / (n_angle - 1) for each constituent in
-    `constituents`, shape (n_s, n_angle, n_wl) [sr^-1] (linear interpolation in theta between
-    samples is what the kernels do)."""
-    wl = profile.wavelengths_nm if wavelengths_nm is None else wavelengths_nm
-    nu = np.cos(np.linspace(0.0, np.pi, n_angle))
-    table = np.empty((len(constituents), n_angle, wl.size))
-    for s, c in enumerate(constituents):
-        table[s] = profile.phases[c].evaluate(nu, wl)
-    return table
 
 
 def _sphere_grids(resolution: TableResolution) -> tuple[np.ndarray, ...]:
