@@ -65,7 +65,8 @@ from skyscatter.render.camera import (
     FisheyeCamera,
     PerspectiveCamera,
 )
-from skyscatter.render.image_io import display_format, display_image_writer, exr_writer, write_png
+from skyscatter.render.exposure import display_rgb8, metered_ev100
+from skyscatter.render.image_io import display_format, display_image_writer, exr_writer
 from skyscatter.render.scene import (
     SkyImage,
     Viewpoint,
@@ -75,28 +76,19 @@ from skyscatter.render.scene import (
     sun_direction,
 )
 from skyscatter.render.sky_at_time import (
-    EclipseOptics,
     Ephemeris,
     Observer,
     SkyObjects,
-    apparent_directions,
+    eclipse_optics,
     ephemeris,
     render_sky_at,
-    star_field,
 )
 from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
-from skyscatter.render.tonemap import (
-    adapted_ev100,
-    auto_ev100,
-    exposure_scale,
-    incident_ev100,
-    night_adapted_exposure,
-    to_srgb8,
-    tonemap,
-)
+from skyscatter.render.timelapse import write_frames
+from skyscatter.render.tonemap import tonemap
 from skyscatter.render.video_io import VideoWriter
-from skyscatter.spectrum.colour import spectral_to_xyz, xyz_to_rgb
+from skyscatter.spectrum.colour import xyz_to_rgb
 from skyscatter.spectrum.grid import (
     COLOUR_RANGE_NM,
     DEFAULT_WAVELENGTH_BINS,
@@ -107,20 +99,14 @@ from skyscatter.spectrum.grid import (
 )
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
-from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
 from skyscatter.transport.single_scattering import observer_position
-from skyscatter.transport.solvers import (
-    NoisySolver,
-    Solver,
-    SolverOptions,
-    TableSolver,
-    make_solver,
-)
+from skyscatter.transport.solvers import NoisySolver, Solver, SolverOptions, make_solver
 from skyscatter.validate.report import ValidationSettings
 from skyscatter.validate.suite import CASES as VALIDATION_CASES
 from skyscatter.validate.suite import run_suite as run_validation
 from skyscatter.viewer import server as viewer_server_module
 from skyscatter.viewer.server import ViewerServer, make_server
+from skyscatter.viewer.sky_message import sky_message
 from skyscatter.viewer.table_service import TableService
 
 __all__ = [
@@ -364,7 +350,7 @@ def _render_at(engine, atmosphere: Atmosphere, camera: Camera, observer: Observe
     else:
         viewpoint = viewpoint_at(orbit_altitude_m, radius, observer.latitude_deg,
                                  observer.longitude_deg)
-    optics = _eclipse_optics(engine) if sky.moon is not None else None
+    optics = eclipse_optics(engine) if sky.moon is not None else None
     return render_sky_at(engine, camera, viewpoint, atmosphere.planet.star, sky, objects,
                          progress, ground, optics)
 
@@ -374,23 +360,6 @@ def _check_observer(observer: Observer) -> None:
         raise InputError(f"observer = {observer!r} is not allowed: an Observer from "
                          "make_observer(time, latitude_deg, longitude_deg)", key="observer",
                          value=observer, allowed="an Observer")
-
-
-def _eclipse_optics(engine: Solver) -> EclipseOptics | None:
-    """The grazing transmittance and bending of the planet's air, for the light in the
-    umbra; None when the solver has no transmittance table or the air no Rayleigh gas."""
-    if not isinstance(engine, TableSolver):
-        return None
-    try:
-        grazing_deflection_rad(engine.profile, [0.0])
-    except InputError:
-        return None
-    profile = engine.profile
-    return EclipseOptics(
-        grazing_transmittance=lambda heights: grazing_transmittance(engine, heights),
-        grazing_deflection=lambda heights: grazing_deflection_rad(profile, heights),
-        planet_radius_m=profile.bottom_radius_m,
-        top_altitude_m=profile.top_radius_m - profile.bottom_radius_m)
 
 
 @dataclass(frozen=True)
@@ -453,36 +422,17 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     engine = load_solver(atmosphere, wavelengths, solver, options)
     objects = objects or SkyObjects()
     frames_dir = Path(frames_dir)
-    frames, exposures = [], []
-    ev100 = None
+
+    def render_frame(observer: Observer) -> SkyImage:
+        return _render_at(engine, atmosphere, camera, observer, objects, None, orbit_altitude_m,
+                          None)
+
     with staged_outputs() as stage, VideoWriter(video_path, fps, stage) as video:
-        new_frames_dir = stage.folder(frames_dir)
-        for index, observer in enumerate(observers):
-            image = _render_at(engine, atmosphere, camera, observer, objects, None,
-                               orbit_altitude_m, None)
-            xyz = image.xyz()
-            metered, night = night_adapted_exposure(xyz[..., 1], image.sky)
-            elapsed = ((observer.time_utc - observers[index - 1].time_utc).total_seconds()
-                       if index else 0.0)
-            ev100 = adapted_ev100(ev100, metered - night, abs(elapsed), adaptation_time_s)
-            rgb8 = _display_rgb8(xyz_to_rgb(xyz, colour_space), image.valid, ev100,
-                                 compensation_ev, operator)
-            name = f"frame_{index + 1:05d}.png"
-            write_png(new_frames_dir / name, rgb8,
-                      text={"Software": "skyscatter", "EV100": f"{ev100:.3f}",
-                            "Time": observer.time_utc.isoformat()})
-            video.add(rgb8)
-            frames.append(frames_dir / name)
-            exposures.append(ev100)
-            if on_frame is not None:
-                on_frame(index, observer.time_utc, ev100)
+        frames, exposures = write_frames(
+            render_frame, observers, video, stage.folder(frames_dir), frames_dir,
+            compensation_ev=compensation_ev, operator=operator, colour_space=colour_space,
+            adaptation_time_s=adaptation_time_s, on_frame=on_frame)
     return Timelapse(Path(video_path), frames, exposures)
-
-
-def _display_rgb8(linear_rgb: np.ndarray, valid: np.ndarray, ev100: float,
-                  compensation_ev: float, operator: str) -> np.ndarray:
-    display = tonemap(linear_rgb, operator, exposure_scale(ev100, compensation_ev))
-    return to_srgb8(display * valid[..., None])
 
 
 def viewpoint_at(altitude_m: float, planet_radius_m: float, latitude_deg: float | None = None,
@@ -573,20 +523,14 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
     EV.check("compensation_ev", compensation_ev)
     check_image_options(operator, colour_space, exr_content, png_path, exr_path)
     xyz = image.xyz(balance_to_light)
-    if ev100 is None and image.from_space:
-        ev100 = incident_ev100(float(spectral_to_xyz(image.light_spectrum,
-                                                     image.wavelengths_nm)[1]))
-    elif ev100 is None and adapt_to_night:
-        metered, night = night_adapted_exposure(xyz[..., 1], image.sky)
-        ev100 = metered - night
-    elif ev100 is None:
-        ev100 = auto_ev100(xyz[..., 1], image.sky)
+    if ev100 is None:
+        ev100 = metered_ev100(image, xyz, adapt_to_night)
     linear = xyz_to_rgb(xyz, colour_space)
     stream = png_path if hasattr(png_path, "write") else None
     with staged_outputs() as stage:
         if png_path is not None:
             write = display_image_writer(
-                _display_rgb8(linear, image.valid, ev100, compensation_ev, operator),
+                display_rgb8(linear, image.valid, ev100, compensation_ev, operator),
                 {"Software": "skyscatter", "EV100": f"{ev100:.3f}", "ColourSpace": colour_space},
                 "PNG" if stream is not None else display_format(png_path))
             if stream is None:
@@ -668,12 +612,6 @@ def _angle_list(name: str, values: Sequence[float], bounds: Bounds) -> np.ndarra
     return array
 
 
-# Stars the viewer draws (brighter than V 6.5: about 9100, half of them up at a time) and the
-# wavelength bins of their colour (those of `render`)
-VIEWER_MAGNITUDE_LIMIT = 6.5
-VIEWER_STAR_GRID = wavelength_grid(DEFAULT_WAVELENGTH_BINS)
-
-
 def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0,
                   cache_dir: str | Path | None = None, use_cache: bool = True,
                   log: Callable[[str], None] | None = None) -> ViewerServer:
@@ -688,17 +626,8 @@ def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", por
 
     def sky_at(atmosphere: Atmosphere, time: str, latitude_deg: float,
                longitude_deg: float) -> dict:
-        observer = make_observer(time, latitude_deg, longitude_deg)
-        sky = sky_ephemeris(atmosphere, observer)
-        directions, irradiance = star_field(sky, VIEWER_MAGNITUDE_LIMIT, VIEWER_STAR_GRID)
-        xyz = spectral_to_xyz(irradiance, VIEWER_STAR_GRID)
-        east, north, up = apparent_directions(sky, sky.sun.direction())
-        return {"sun_zenith_deg": float(np.degrees(np.arccos(np.clip(up, -1.0, 1.0)))),
-                "sun_azimuth_deg": float(np.degrees(np.arctan2(east, north)) % 360.0),
-                "time_utc": observer.time_utc.isoformat(),
-                "stars": {"count": int(directions.shape[0]),
-                          "directions_enu": np.round(directions, 7).reshape(-1).tolist(),
-                          "irradiance_xyz": [float(f"{v:.5g}") for v in xyz.reshape(-1)]}}
+        return sky_message(atmosphere.planet.body,
+                           make_observer(time, latitude_deg, longitude_deg))
 
     return make_server(service, sky_at, host, port, log)
 

@@ -13,7 +13,7 @@ from skyscatter import api
 from skyscatter.astro.moon_phase import MOON_RADIUS_M
 from skyscatter.errors import InputError
 from skyscatter.render.moon import moon_irradiance
-from skyscatter.render.sky_at_time import moon_light
+from skyscatter.render.sky_at_time import eclipse_optics, moon_light
 from skyscatter.spectrum.colour import spectral_to_xyz
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.spectrum.magnitudes import v_magnitude_of_spectrum
@@ -111,7 +111,7 @@ def test_total_lunar_eclipse_dims_and_reddens_the_moon(earth):
     sky = api.sky_ephemeris(atmosphere, api.make_observer(
         datetime.datetime(2022, 11, 8, 10, 59, tzinfo=datetime.UTC), *HONOLULU))
     sun = atmosphere.planet.star
-    optics = api._eclipse_optics(solver)
+    optics = eclipse_optics(solver)
     eclipsed = moon_light(sky, sun, wavelengths, optics)
     uneclipsed = moon_irradiance(eclipsed.geometry, wavelengths, eclipsed.solar_irradiance)
     fading = (v_magnitude_of_spectrum(wavelengths, eclipsed.irradiance)

@@ -12,7 +12,8 @@ moon's topocentric positions and the rotation from J2000 to the observer's east-
    in the source, so one set of tables serves both lights;
 3. the sun's disk at its refracted (apparent) position, its angular size from the distance of
    the date, limb-darkened and transmitted (red at sunset);
-4. the moon's disk (phase, earthshine, eclipses: `render.moon`, `render.lunar_eclipse`), and
+4. the moon's disk (phase, earthshine, eclipses: `render.moon`, `render.lunar_eclipse`, the
+   air's grazing transmittance and bending from `eclipse_optics`), and
    on Earth the airglow of the upper atmosphere seen through the air (`render.airglow`);
 5. the stars of the Hipparcos 2 catalogue moved by proper motion and precessed to the date,
    refracted, dimmed by the transmittance along each line of sight, optionally twinkling, and
@@ -70,10 +71,12 @@ from skyscatter.render.stars import (
 from skyscatter.render.surfaces import Ground
 from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, stellar_irradiance
 from skyscatter.spectrum.star import Star
+from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
 from skyscatter.transport.solvers import Solver, TableSolver
 
 __all__ = ["BODIES", "EclipseOptics", "Ephemeris", "MoonLight", "Observer", "SkyObjects",
-           "apparent_directions", "ephemeris", "moon_light", "render_sky_at", "star_field"]
+           "apparent_directions", "eclipse_optics", "ephemeris", "moon_light", "render_sky_at",
+           "star_field"]
 
 BODIES = ("earth", "mars")
 # Mean obliquity of the ecliptic at J2000, 84381.406" (IAU 2006, Hilton et al. 2006, Celest.
@@ -140,6 +143,24 @@ class EclipseOptics:
     grazing_deflection: Callable[[np.ndarray], np.ndarray]
     planet_radius_m: float
     top_altitude_m: float
+
+
+def eclipse_optics(solver: Solver) -> EclipseOptics | None:
+    """The grazing transmittance and bending of the planet's air (`transport.limb`), for the
+    light in the umbra; None when the solver has no transmittance table or the air no
+    Rayleigh gas."""
+    if not isinstance(solver, TableSolver):
+        return None
+    try:
+        grazing_deflection_rad(solver.profile, [0.0])
+    except InputError:
+        return None
+    profile = solver.profile
+    return EclipseOptics(
+        grazing_transmittance=lambda heights: grazing_transmittance(solver, heights),
+        grazing_deflection=lambda heights: grazing_deflection_rad(profile, heights),
+        planet_radius_m=profile.bottom_radius_m,
+        top_altitude_m=profile.top_radius_m - profile.bottom_radius_m)
 
 
 @dataclass(frozen=True)
