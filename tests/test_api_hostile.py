@@ -223,3 +223,39 @@ def test_render_cost_estimate_says_gib_and_the_way_past_it():
     # 2^40 pixels x (32 x 16 + 512) B = 1024 TiB
     assert "about 1,048,576 GiB" in message and "allow_large=True" in message
     api.check_render_cost(api.PerspectiveCamera(2**20, 2**20, 60.0), allow_large=True)
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("operator", "sepia"), ("operator", ["aces"]), ("colour_space", "cmyk"),
+    ("colour_space", None), ("exr_content", "depth"), ("ev100", math.nan),
+    ("compensation_ev", 41.0)])
+def test_image_options_refuse_unknown_names_and_exposures_when_made(field, value):
+    _refused(lambda: api.ImageOptions(**{field: value}), field)
+    _refused(lambda: api.save_image(_image(), **{"ev100": 0.0, field: value}), field)
+
+
+def test_image_options_accept_every_name_the_tone_curves_and_colour_spaces_accept():
+    # Membership in the tables must agree with what the curves and matrices run on: each
+    # accepted name works in tonemap / xyz_to_rgb (colour spaces in any case, as xyz_to_rgb).
+    from skyscatter.render.tonemap import OPERATORS, tonemap
+    from skyscatter.spectrum.colour import RGB_SPACES, xyz_to_rgb
+    for operator in OPERATORS:
+        api.ImageOptions(operator=operator)
+        assert np.isfinite(tonemap(np.ones(3), operator)).all()
+    for space in [*RGB_SPACES, "SRGB", "Display-P3"]:
+        api.ImageOptions(colour_space=space)
+        assert np.isfinite(xyz_to_rgb(np.ones(3), space)).all()
+
+
+def test_save_image_with_options_writes_the_same_bytes_as_with_its_parameters(tmp_path):
+    image = _image()
+    chosen = dict(ev100=2.5, compensation_ev=-0.5, operator="reinhard",
+                  colour_space="display-p3", balance_to_light=True, exr_content="luminance")
+    ev_plain = api.save_image(image, tmp_path / "a.png", tmp_path / "a.exr", **chosen)
+    ev_options = api.save_image(image, tmp_path / "b.png", tmp_path / "b.exr",
+                                options=api.ImageOptions(**chosen))
+    assert ev_plain == ev_options == 2.5
+    for suffix in ("png", "exr"):
+        assert (tmp_path / f"a.{suffix}").read_bytes() == (tmp_path / f"b.{suffix}").read_bytes()
+    _refused(lambda: api.save_image(image, tmp_path / "c.png", options={"ev100": 1.0}),
+             "options")

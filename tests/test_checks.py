@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from skyscatter.checks import checked_array, checked_integer, checked_number
+from skyscatter.checks import checked_array, checked_choice, checked_integer, checked_number
 from skyscatter.errors import InputError
 
 
@@ -45,3 +45,21 @@ def test_checked_array_names_the_first_bad_element_and_refuses_text_and_bools():
     for values in (["440"], [440.0, True], [[440.0], "x"]):
         with pytest.raises(InputError, match="is not allowed: numbers"):
             checked_array("wavelengths_nm", values, 280.0, 1690.0)
+
+
+@pytest.mark.parametrize("value", ["sepia", "ACES", None, 3, ["aces"], {"aces": 1}])
+def test_checked_choice_refuses_names_not_listed_and_non_text(value):
+    # a list or dict as the value (unhashable) must be refused like any other, not TypeError
+    with pytest.raises(InputError) as raised:
+        checked_choice("tone curve", "operator", value, ("aces", "clamp"))
+    assert raised.value.key == "operator"
+    assert str(raised.value).startswith("unknown tone curve ")
+    assert str(raised.value).endswith("choose one of: aces, clamp")
+
+
+def test_checked_choice_returns_the_name_as_given_and_folds_case_only_when_asked():
+    assert checked_choice("colour space", "colour_space", "sRGB", ("srgb",),
+                          fold_case=True) == "sRGB"
+    with pytest.raises(InputError):
+        checked_choice("colour space", "colour_space", "sRGB", ("srgb",))
+

@@ -67,6 +67,7 @@ from skyscatter.render.camera import (
 )
 from skyscatter.render.exposure import display_rgb8, metered_ev100
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer
+from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOptions
 from skyscatter.render.scene import (
     SkyImage,
     Viewpoint,
@@ -86,7 +87,6 @@ from skyscatter.render.sky_at_time import (
 from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
 from skyscatter.render.timelapse import write_frames
-from skyscatter.render.tonemap import tonemap
 from skyscatter.render.video_io import VideoWriter
 from skyscatter.spectrum.colour import xyz_to_rgb
 from skyscatter.spectrum.grid import (
@@ -112,6 +112,7 @@ from skyscatter.viewer.table_service import TableService
 __all__ = [
     "COLOUR_RANGE_NM",
     "DEFAULT_WAVELENGTH_BINS",
+    "EXR_CONTENTS",
     "MAX_FRAMES",
     "MAX_SAMPLES",
     "MAX_SCATTERING_ORDERS",
@@ -125,6 +126,7 @@ __all__ = [
     "FisheyeCamera",
     "Ground",
     "Heightfield",
+    "ImageOptions",
     "Observer",
     "PerspectiveCamera",
     "SkyImage",
@@ -157,9 +159,6 @@ __all__ = [
     "wavelength_grid",
 ]
 
-EXR_UNITS = {"rgb": "linear RGB, Y = 1 for 1 cd/m^2", "luminance": "cd/m^2",
-             "spectral": "W m^-2 sr^-1 nm^-1"}
-EXR_CONTENTS = tuple(EXR_UNITS)
 # The files of a time-lapse's frames folder: the folder holds these only, and is replaced whole
 FRAME_NAME = re.compile(r"frame_[0-9]{5,}\.png")
 
@@ -477,17 +476,21 @@ def orbit_field_of_view_deg(altitude_m: float, planet_radius_m: float,
 def check_image_options(operator: str = "aces", colour_space: str = "srgb",
                         exr_content: str = "rgb",
                         png_path: str | Path | BinaryIO | None = None,
-                        exr_path: str | Path | None = None) -> None:
-    """Raise InputError for an unknown tone-mapping operator, colour space or EXR content, and
-    for output paths that cannot be written (a suffix other than .png/.jpg/.jpeg for the
-    display image or .exr for the EXR, a directory, a read-only file or folder; see
-    `output_files.check_writable_file`), so that a caller can reject them before rendering;
-    `save_image` makes the same checks."""
-    if exr_content not in EXR_CONTENTS:
-        raise InputError(f"unknown EXR content {exr_content!r}; choose one of: "
-                         f"{', '.join(EXR_CONTENTS)}", key="exr_content", value=exr_content)
-    tonemap(np.zeros(3), operator)
-    xyz_to_rgb(np.zeros(3), colour_space)
+                        exr_path: str | Path | None = None, *,
+                        options: ImageOptions | None = None) -> None:
+    """Raise InputError for an unknown tone-mapping operator, colour space or EXR content
+    (`ImageOptions`; given `options`, checked when it was made, the first three arguments are
+    not used), and for output paths that cannot be written (a suffix other than
+    .png/.jpg/.jpeg for the display image or .exr for the EXR, a directory, a read-only file
+    or folder; see `output_files.check_writable_file`), so that a caller can reject them
+    before rendering; `save_image` makes the same checks."""
+    if options is None:
+        ImageOptions(operator=operator, colour_space=colour_space, exr_content=exr_content)
+    _check_image_paths(png_path, exr_path)
+
+
+def _check_image_paths(png_path: str | Path | BinaryIO | None,
+                       exr_path: str | Path | None) -> None:
     if png_path is not None and not hasattr(png_path, "write"):
         display_format(png_path)
         check_writable_file(png_path)
@@ -502,7 +505,8 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
                exr_path: str | Path | None = None, ev100: float | None = None,
                compensation_ev: float = 1.0, operator: str = "aces",
                colour_space: str = "srgb", balance_to_light: bool = False,
-               exr_content: str = "rgb", adapt_to_night: bool = False) -> float:
+               exr_content: str = "rgb", adapt_to_night: bool = False, *,
+               options: ImageOptions | None = None) -> float:
     """Write a tone-mapped 8-bit PNG (or JPEG: `png_path` named .jpg/.jpeg; or a PNG to a
     binary stream such as `sys.stdout.buffer`) and/or a linear float32 EXR; returns the EV100
     used. Both files are written to temporaries first and replace the old ones together, so a
@@ -513,24 +517,33 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
     `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
     views from space from the starlight (incident-light metering: sunlit white is white);
     `adapt_to_night` meters night skies as night (`night_adapted_exposure`: darker than a
-    daylight grey, the exposure returned includes that shift). InputError for an `ev100` or
-    `compensation_ev` outside [-40, 40] (`checks.EV`) or an unknown option."""
+    daylight grey, the exposure returned includes that shift). `options` (an `ImageOptions`)
+    holds these choices in one object and, when given, is used instead of `ev100` ...
+    `adapt_to_night`. InputError for an `ev100` or `compensation_ev` outside [-40, 40]
+    (`checks.EV`) or an unknown option."""
     if not isinstance(image, SkyImage):
         raise InputError(f"image = {image!r} is not allowed: a SkyImage from render or "
                          "render_at", key="image", value=image, allowed="a SkyImage")
-    if ev100 is not None:
-        EV.check("ev100", ev100)
-    EV.check("compensation_ev", compensation_ev)
-    check_image_options(operator, colour_space, exr_content, png_path, exr_path)
-    xyz = image.xyz(balance_to_light)
+    if options is None:
+        options = ImageOptions(ev100=ev100, compensation_ev=compensation_ev, operator=operator,
+                               colour_space=colour_space, balance_to_light=balance_to_light,
+                               exr_content=exr_content, adapt_to_night=adapt_to_night)
+    elif not isinstance(options, ImageOptions):
+        raise InputError(f"options = {options!r} is not allowed: an ImageOptions",
+                         key="options", value=options, allowed="an ImageOptions")
+    _check_image_paths(png_path, exr_path)
+    colour_space, exr_content = options.colour_space, options.exr_content
+    xyz = image.xyz(options.balance_to_light)
+    ev100 = options.ev100
     if ev100 is None:
-        ev100 = metered_ev100(image, xyz, adapt_to_night)
+        ev100 = metered_ev100(image, xyz, options.adapt_to_night)
     linear = xyz_to_rgb(xyz, colour_space)
     stream = png_path if hasattr(png_path, "write") else None
     with staged_outputs() as stage:
         if png_path is not None:
             write = display_image_writer(
-                display_rgb8(linear, image.valid, ev100, compensation_ev, operator),
+                display_rgb8(linear, image.valid, ev100, options.compensation_ev,
+                             options.operator),
                 {"Software": "skyscatter", "EV100": f"{ev100:.3f}", "ColourSpace": colour_space},
                 "PNG" if stream is not None else display_format(png_path))
             if stream is None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import reprlib
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,6 +32,7 @@ __all__ = [
     "ZENITH_DEG",
     "Bounds",
     "checked_array",
+    "checked_choice",
     "checked_integer",
     "checked_number",
 ]
@@ -81,6 +83,20 @@ def checked_integer(name: str, value: Any, low: int, high: int) -> int:
         raise InputError(f"{name} = {_shown(value)} is not allowed: {allowed}", key=name,
                          value=value, allowed=allowed)
     return int(value)
+
+
+def checked_choice(what: str, key: str, value: Any, allowed: Iterable[str], *,
+                   fold_case: bool = False) -> str:
+    """`value` when it is one of the names `allowed` (compared in lower case with `fold_case`),
+    else InputError "unknown {what} {value!r}; choose one of: ..." with `key`. A membership
+    test: nothing is run to see whether the name works."""
+    names = tuple(allowed)
+    text = value.lower() if fold_case and isinstance(value, str) else value
+    if not isinstance(value, str) or text not in names:
+        listed = ", ".join(names)
+        raise InputError(f"unknown {what} {_shown(value)}; choose one of: {listed}", key=key,
+                         value=value, allowed=listed)
+    return value
 
 
 def _all_numbers(values: Any) -> bool:

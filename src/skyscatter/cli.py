@@ -586,8 +586,12 @@ def _render(args: argparse.Namespace) -> None:
     from skyscatter.cli_progress import progress
 
     image_target = _image_target(args.output)
-    api.check_image_options(args.tonemap, args.colour_space, args.exr_content, image_target,
-                            args.exr)  # the outputs can be written: checked before any work
+    image_options = api.ImageOptions(
+        ev100=args.exposure, compensation_ev=args.exposure_compensation, operator=args.tonemap,
+        colour_space=args.colour_space, balance_to_light=args.white_balance == "star",
+        exr_content=args.exr_content, adapt_to_night=args.time is not None)
+    api.check_image_options(png_path=image_target, exr_path=args.exr,
+                            options=image_options)  # the outputs can be written: before any work
     atmosphere = api.load_atmosphere(args.atmosphere)
     observer = _observer(args) if args.time is not None else None
     summary = None
@@ -625,10 +629,7 @@ def _render(args: argparse.Namespace) -> None:
                                orbit_latitude_deg=latitude if orbit else None,
                                orbit_longitude_deg=longitude, ground=ground,
                                allow_large=args.allow_large)
-    ev100 = api.save_image(image, image_target, args.exr, args.exposure,
-                           args.exposure_compensation, args.tonemap, args.colour_space,
-                           args.white_balance == "star", args.exr_content,
-                           adapt_to_night=observer is not None)
+    ev100 = api.save_image(image, image_target, args.exr, options=image_options)
     written = ["the PNG to standard output" if image_target is not args.output
                else str(args.output)] + ([str(args.exr)] if args.exr else [])
     print(f"wrote {', '.join(written)} (EV100 {ev100:.2f})", file=sys.stderr)
