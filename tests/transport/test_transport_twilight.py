@@ -226,7 +226,8 @@ def test_aerial_perspective_by_day_is_the_table_difference_alone(profile, tables
     # `surface_radiance` too.
     lut = LutSolver(profile, tables=tables_two_orders)
     poisoned = LutSolver(profile, tables=tables_two_orders)
-    poisoned._single_factor = np.full_like(poisoned._single_factor, np.nan)
+    poisoned._lookup = poisoned._lookup._replace(
+        single_factor=np.full_like(poisoned._lookup.single_factor, np.nan))
     points = _ground_points([5e3, 20e3, 100e3], np.radians(np.arange(0, 181, 45)),
                             EARTH_RADIUS_M)
     normals = points / np.linalg.norm(points, axis=1, keepdims=True)

@@ -19,6 +19,7 @@ Kernels take arrays and floats only.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -47,6 +48,26 @@ from skyscatter.transport.table_parameterisation import (
 )
 
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loops of the lookups
+
+
+class LookupTables(NamedTuple):
+    """What the lookups read besides the rays, as one record (numba passes it as a typed
+    tuple): the tables of an `AtmosphereTables` and the profile arrays of the twilight march."""
+
+    bottom_radius: float  # R_b [m]
+    top_radius: float  # R_t [m]
+    mu_s_min: float  # smallest cos(sun zenith) tabulated [-]
+    scattering: np.ndarray  # the interleaved scattering tables, 1-D (`flat_tables`)
+    shape: tuple[int, int, int, int]  # (n_r, n_mu, n_mu_s, n_nu) of the scattering tables
+    phase_table: np.ndarray  # (n_s, n_angle, n_wl) phase functions [sr^-1]
+    transmittance: np.ndarray  # (n_r_t, n_mu_t, n_wl) to the top [-]
+    irradiance: np.ndarray  # (n_r_e, n_mu_s_e, n_wl) indirect irradiance [W m^-2 nm^-1]
+    sun_irradiance: np.ndarray  # (n_wl,) E_sun at the top [W m^-2 nm^-1]
+    sun_angular_radius: float  # [rad]
+    h_step: float  # spacing of the profile's levels [m]
+    density: np.ndarray  # (n_c, n_z) profile densities on those levels
+    scatterers: np.ndarray  # (n_s,) int64: the constituents that scatter
+    single_factor: np.ndarray  # (n_s, n_wl) E_sun beta_s per density
 
 
 # --------------------------------------------------------------------------------------------
@@ -370,8 +391,7 @@ def _view_sky_axis(mu, theta_h, n_half):
 
 
 @njit(parallel=True, cache=True)
-def single_scattering_view_table(r, mu_s, bottom_radius, top_radius, sun_angular_radius,
-                                 n_samples, h_step, density, scatterers, transmittance):
+def single_scattering_view_table(r, mu_s, n_samples, tables):
     """`lit_single_scattering` for every view direction of one observer at radius r [m]
     inside the atmosphere with the sun at zenith cosine mu_s: (VIEW_TABLE_MU, VIEW_TABLE_PHI,
     n_s, n_wl), the logarithm of each value (floored at VIEW_TABLE_FLOOR), on view zenith
@@ -381,7 +401,11 @@ def single_scattering_view_table(r, mu_s, bottom_radius, top_radius, sun_angular
     observer and sun the single scattering depends on (mu, phi) only, so a frame marches
     16 k rays instead of one per pixel and `view_table_lookup` interpolates (the sky-view
     table of Hillaire 2020, "A scalable and production ready sky and atmosphere rendering
-    technique", Comput. Graph. Forum 39(4), doi:10.1111/cgf.14050, §5.3)."""
+    technique", Comput. Graph. Forum 39(4), doi:10.1111/cgf.14050, §5.3).
+    `tables`: the `LookupTables` record of the tables and the profile."""
+    bottom_radius, top_radius = tables.bottom_radius, tables.top_radius
+    sun_angular_radius, h_step, density = tables.sun_angular_radius, tables.h_step, tables.density
+    scatterers, transmittance = tables.scatterers, tables.transmittance
     n_s = scatterers.size
     n_wl = transmittance.shape[2]
     table = np.zeros((VIEW_TABLE_MU, VIEW_TABLE_PHI, n_s, n_wl))
@@ -451,10 +475,7 @@ def view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius, t
 # --------------------------------------------------------------------------------------------
 
 @njit(parallel=True, cache=True)
-def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_radius, mu_s_min,
-                      scattering, shape, phase_table, transmittance, irradiance, sun_irradiance,
-                      ground_albedo, sun_angular_radius, h_step, density, scatterers,
-                      single_factor, view_table, out):
+def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo, view_table, out):
     """Radiance from the tables into out (n_ray, n_wl) [W m^-2 sr^-1 nm^-1]:
     sum_s p_s(nu) S_s + M (`scattering` = the interleaved (S_1..S_n_s, M) from `flat_tables`;
     shape = (n_r, n_mu, n_mu_s, n_nu)), plus for rays that hit the ground the Lambertian ground
@@ -469,7 +490,14 @@ def sky_radiance_rays(origins, directions, sun_direction, bottom_radius, top_rad
     once the sun at the ray's start nears the horizon, blended by `exact_single_weight`;
     for one origin inside the atmosphere it is read from `view_table`
     (`single_scattering_view_table` of that origin and sun), otherwise (view_table of size 0)
-    marched along each ray."""
+    marched along each ray.
+    `tables`: the `LookupTables` record of the tables and the profile."""
+    bottom_radius, top_radius, mu_s_min = tables.bottom_radius, tables.top_radius, tables.mu_s_min
+    scattering, shape, phase_table = tables.scattering, tables.shape, tables.phase_table
+    transmittance, irradiance = tables.transmittance, tables.irradiance
+    sun_irradiance, sun_angular_radius = tables.sun_irradiance, tables.sun_angular_radius
+    h_step, density, scatterers = tables.h_step, tables.density, tables.scatterers
+    single_factor = tables.single_factor
     n_ray = directions.shape[0]
     n_r, n_mu, n_mu_s, n_nu = shape
     n_wl = out.shape[1]
@@ -668,12 +696,16 @@ def _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, bottom_radius, 
 
 
 @njit(parallel=True, cache=True)
-def aerial_perspective_points(origins, points, sun_direction, bottom_radius, top_radius,
-                              mu_s_min, scattering, shape, phase_table, transmittance,
-                              sun_angular_radius, h_step, density, scatterers, single_factor,
-                              inscatter_out, transmittance_out):
+def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_out,
+                              transmittance_out):
     """`_aerial_point` (and in twilight `_aerial_lit_single`) from each origin ((1, 3) or
-    (n, 3)) to each point (n, 3), into inscatter_out and transmittance_out (n, n_wl)."""
+    (n, 3)) to each point (n, 3), into inscatter_out and transmittance_out (n, n_wl).
+    `tables`: the `LookupTables` record of the tables and the profile."""
+    bottom_radius, top_radius, mu_s_min = tables.bottom_radius, tables.top_radius, tables.mu_s_min
+    scattering, shape, phase_table = tables.scattering, tables.shape, tables.phase_table
+    transmittance, sun_angular_radius = tables.transmittance, tables.sun_angular_radius
+    h_step, density, scatterers = tables.h_step, tables.density, tables.scatterers
+    single_factor = tables.single_factor
     n_points = points.shape[0]
     n_wl = inscatter_out.shape[1]
     n_s = phase_table.shape[0]
@@ -697,15 +729,19 @@ def aerial_perspective_points(origins, points, sun_direction, bottom_radius, top
 
 
 @njit(parallel=True, cache=True)
-def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction, bottom_radius,
-                            top_radius, mu_s_min, scattering, shape, phase_table, transmittance,
-                            irradiance, sun_irradiance, sun_angular_radius, h_step, density,
-                            scatterers, single_factor, out):
+def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction, tables, out):
     """Radiance (n, n_wl) reaching `origin` (3,) from Lambertian surfaces at `points` (n, 3)
     facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the sun
     where `lit` (n,) (not in a terrain shadow):
     L_in + T albedo / pi (E_sun [lit] + E_sky), `_aerial_point` (with `_aerial_lit_single`)
-    and `_surface_irradiance` in one pass."""
+    and `_surface_irradiance` in one pass.
+    `tables`: the `LookupTables` record of the tables and the profile."""
+    bottom_radius, top_radius, mu_s_min = tables.bottom_radius, tables.top_radius, tables.mu_s_min
+    scattering, shape, phase_table = tables.scattering, tables.shape, tables.phase_table
+    transmittance, irradiance = tables.transmittance, tables.irradiance
+    sun_irradiance, sun_angular_radius = tables.sun_irradiance, tables.sun_angular_radius
+    h_step, density, scatterers = tables.h_step, tables.density, tables.scatterers
+    single_factor = tables.single_factor
     n_points = points.shape[0]
     n_wl = out.shape[1]
     n_s = phase_table.shape[0]
@@ -822,10 +858,13 @@ def _surface_irradiance(position, normal, sun_direction, bottom_radius, top_radi
 
 
 @njit(parallel=True, cache=True)
-def ground_irradiance_points(positions, normals, sun_direction, bottom_radius, top_radius,
-                             transmittance, irradiance, sun_irradiance, sun_angular_radius):
+def ground_irradiance_points(positions, normals, sun_direction, tables):
     """`_surface_irradiance` at `positions` (n, 3) facing unit `normals` (n, 3): (direct,
-    diffuse), each (n, n_wl) [W m^-2 nm^-1]."""
+    diffuse), each (n, n_wl) [W m^-2 nm^-1].
+    `tables`: the `LookupTables` record of the tables and the profile."""
+    bottom_radius, top_radius = tables.bottom_radius, tables.top_radius
+    transmittance, irradiance = tables.transmittance, tables.irradiance
+    sun_irradiance, sun_angular_radius = tables.sun_irradiance, tables.sun_angular_radius
     n = positions.shape[0]
     n_wl = transmittance.shape[2]
     direct = np.zeros((n, n_wl))

@@ -69,19 +69,24 @@ class LutSolver:
                              f"({profile.wavelengths_nm.size})", key="tables",
                              value=tables.wavelengths_nm, allowed="the profile's wavelengths")
         self.tables = tables
-        self._scattering = flat_tables(tables.scattering)
-        self._shape = tuple(int(n) for n in tables.scattering.shape[:4])
         self._albedo = np.ascontiguousarray(profile.ground_albedo, dtype=np.float64)
-        self._sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
-        # For single scattering ray-marched in twilight
-        # (`_table_lookup_kernels.lit_single_scattering`)
-        self._h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
-        self._density = np.ascontiguousarray(profile.density, dtype=np.float64)
-        self._scatterers = np.array(tables.scattering_constituents, dtype=np.int64)
-        self._single_factor = np.ascontiguousarray(  # E_sun beta_s, (n_s, n_wl)
-            self._sun_irradiance[None, :]
-            * profile.scattering_per_density[self._scatterers].reshape(
-                self._scatterers.size, profile.n_wavelengths), dtype=np.float64)
+        sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
+        scatterers = np.array(tables.scattering_constituents, dtype=np.int64)
+        # the tables, and for single scattering ray-marched in twilight
+        # (`_table_lookup_kernels.lit_single_scattering`) the profile
+        self._lookup = _table_lookup_kernels.LookupTables(
+            bottom_radius=tables.bottom_radius_m, top_radius=tables.top_radius_m,
+            mu_s_min=tables.min_cos_sun_zenith, scattering=flat_tables(tables.scattering),
+            shape=tuple(int(n) for n in tables.scattering.shape[:4]), phase_table=tables.phase,
+            transmittance=tables.transmittance, irradiance=tables.irradiance,
+            sun_irradiance=sun_irradiance,
+            sun_angular_radius=float(profile.sun_angular_radius_rad),
+            h_step=float(profile.altitudes_m[1] - profile.altitudes_m[0]),
+            density=np.ascontiguousarray(profile.density, dtype=np.float64),
+            scatterers=scatterers,
+            single_factor=np.ascontiguousarray(  # E_sun beta_s, (n_s, n_wl)
+                sun_irradiance[None, :] * profile.scattering_per_density[scatterers].reshape(
+                    scatterers.size, profile.n_wavelengths), dtype=np.float64))
 
     def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
                      sun_direction: ArrayLike,
@@ -98,18 +103,15 @@ class LutSolver:
         cosine leaks light into the planet's shadow in twilight (docs/physics/tables.md)."""
         origins, directions, shape = _rays(position, view_directions)
         sun = _sun(sun_direction)
-        p, t = self.profile, self.tables
+        p = self.profile
         result = np.empty((directions.shape[0], p.n_wavelengths))
         view_table = self._view_table(origins, sun)
         for start in range(0, directions.shape[0], CHUNK_RAYS):
             stop = min(start + CHUNK_RAYS, directions.shape[0])
             _table_lookup_kernels.sky_radiance_rays(
                 origins if origins.shape[0] == 1 else origins[start:stop],
-                directions[start:stop], sun, t.bottom_radius_m, t.top_radius_m,
-                t.min_cos_sun_zenith, self._scattering, self._shape, t.phase, t.transmittance,
-                t.irradiance, self._sun_irradiance, self._albedo,
-                float(p.sun_angular_radius_rad), self._h_step, self._density,
-                self._scatterers, self._single_factor, view_table, result[start:stop])
+                directions[start:stop], sun, self._lookup, self._albedo, view_table,
+                result[start:stop])
             if progress is not None:
                 progress(stop - start)
         return result.reshape(shape + (p.n_wavelengths,))
@@ -129,9 +131,7 @@ class LutSolver:
         if r > t.top_radius_m or _table_lookup_kernels.exact_single_weight(mu_s) <= 0.0:
             return empty
         return _table_lookup_kernels.single_scattering_view_table(
-            max(r, t.bottom_radius_m), mu_s, t.bottom_radius_m, t.top_radius_m,
-            float(self.profile.sun_angular_radius_rad), VIEW_TABLE_SAMPLES, self._h_step,
-            self._density, self._scatterers, t.transmittance)
+            max(r, t.bottom_radius_m), mu_s, VIEW_TABLE_SAMPLES, self._lookup)
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
                       distance_m: ArrayLike = np.inf) -> np.ndarray:
@@ -161,14 +161,11 @@ class LutSolver:
         the orders >= 2 interpolated geometrically in the sun's zenith cosine."""
         origins, targets, shape = _rays(position, points)
         sun = _sun(sun_direction)
-        p, t = self.profile, self.tables
+        p = self.profile
         inscattered = np.empty((targets.shape[0], p.n_wavelengths))
         transmittance = np.empty_like(inscattered)
         _table_lookup_kernels.aerial_perspective_points(
-            origins, targets, sun, t.bottom_radius_m, t.top_radius_m, t.min_cos_sun_zenith,
-            self._scattering, self._shape, t.phase, t.transmittance,
-            float(p.sun_angular_radius_rad), self._h_step, self._density, self._scatterers,
-            self._single_factor, inscattered, transmittance)
+            origins, targets, sun, self._lookup, inscattered, transmittance)
         return (inscattered.reshape(shape + (p.n_wavelengths,)),
                 transmittance.reshape(shape + (p.n_wavelengths,)))
 
@@ -181,7 +178,7 @@ class LutSolver:
         aerial perspective plus the reflected sun and sky light seen through it,
         L_in + T albedo / pi (E_sun + E_sky) (`aerial_perspective`, `ground_irradiance`; one
         pass over the points)."""
-        p, t = self.profile, self.tables
+        p = self.profile
         targets = _writable(np.asarray(points, dtype=np.float64).reshape(-1, 3))
         n = targets.shape[0]
         facing = _writable(np.broadcast_to(np.asarray(normals, dtype=np.float64), (n, 3)))
@@ -192,10 +189,7 @@ class LutSolver:
         out = np.empty((n, p.n_wavelengths))
         _table_lookup_kernels.surface_radiance_points(
             _writable(np.asarray(position, dtype=np.float64).reshape(3)), targets, facing,
-            sunlit, reflectance, _sun(sun_direction), t.bottom_radius_m, t.top_radius_m,
-            t.min_cos_sun_zenith, self._scattering, self._shape, t.phase, t.transmittance,
-            t.irradiance, self._sun_irradiance, float(p.sun_angular_radius_rad), self._h_step,
-            self._density, self._scatterers, self._single_factor, out)
+            sunlit, reflectance, _sun(sun_direction), self._lookup, out)
         return out
 
     def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike,
@@ -215,10 +209,9 @@ class LutSolver:
             facing = _writable(np.broadcast_to(np.asarray(normals, dtype=np.float64),
                                                positions.shape).reshape(-1, 3))
         sun = _sun(sun_direction)
-        p, t = self.profile, self.tables
-        direct, diffuse = _table_lookup_kernels.ground_irradiance_points(
-            flat, facing, sun, t.bottom_radius_m, t.top_radius_m, t.transmittance, t.irradiance,
-            self._sun_irradiance, float(p.sun_angular_radius_rad))
+        p = self.profile
+        direct, diffuse = _table_lookup_kernels.ground_irradiance_points(flat, facing, sun,
+                                                                         self._lookup)
         n_wl = p.n_wavelengths
         return direct.reshape(shape + (n_wl,)), diffuse.reshape(shape + (n_wl,))
 
