@@ -19,7 +19,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport import _table_lookup_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
@@ -56,7 +56,8 @@ class LutSolver:
     name = "lut"
 
     def __init__(self, profile: OpticalProfile, resolution: TableResolution | None = None,
-                 orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
+                 orders: int = DEFAULT_SCATTERING_ORDERS,
+                 min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                  tables: AtmosphereTables | None = None,
                  progress: Callable[[int, int, str], None] | None = None) -> None:
         self.profile = profile

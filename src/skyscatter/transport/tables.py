@@ -49,7 +49,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
@@ -223,7 +223,8 @@ def _phase_matrices(phase: np.ndarray, resolution: TableResolution) -> np.ndarra
 
 
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
-                      orders: int = 4, min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
+                      orders: int = DEFAULT_SCATTERING_ORDERS,
+                      min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                       wavelength_batch: int = 16,
                       progress: Callable[[int, int, str], None] | None = None,
                       on_order: Callable[[int, slice, np.ndarray, np.ndarray], None] | None = None
