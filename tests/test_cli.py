@@ -16,7 +16,7 @@ from PIL import Image
 
 from cli_runner import run_cli
 from skyscatter.atmosphere.config import PRESETS_DIR
-from skyscatter.cli import main
+from skyscatter.cli import build_parser, main
 from skyscatter.render.image_io import read_exr
 
 PERCENT = 1e-2
@@ -424,3 +424,38 @@ def test_bad_sky_options_are_refused_before_any_table_work(capsys, tmp_path, mon
     code, _, err = run_cli(capsys, [*argv, "-o", str(tmp_path / "x.gif")])
     assert code == 2 and expected in _error_line(err)
     assert not cache.exists()  # nothing computed or stored
+
+
+# --- options shared by render and timelapse ---------------------------------------------------
+
+def _options(command: str) -> dict:
+    """option string -> argparse action of one subcommand."""
+    parser = build_parser()
+    commands = next(a for a in parser._actions if a.dest == "command").choices
+    return {name: action for action in commands[command]._actions
+            for name in action.option_strings}
+
+
+def test_render_and_timelapse_describe_their_shared_options_alike():
+    # The two commands once said different things about the same option; one text each now.
+    # --size differs in its default (512 / 384), --fov in the orbit camera render alone has,
+    # --camera in the choices (timelapse has no orbit camera).
+    render, timelapse = _options("render"), _options("timelapse")
+    for option in ("--aspect", "--heading", "--pitch", "--wavelengths",
+                   "--exposure-compensation", "--tonemap", "--colour-space"):
+        assert render[option].help == timelapse[option].help, option
+        assert render[option].default == timelapse[option].default, option
+    assert (render["--size"].default, timelapse["--size"].default) == (512, 384)
+    assert timelapse["--camera"].choices == ("fisheye", "panorama", "perspective")
+    assert "orbit" not in timelapse["--camera"].help + timelapse["--fov"].help
+
+
+def test_image_option_help_names_every_tone_curve_and_colour_space():
+    from skyscatter.render.tonemap import OPERATORS
+    from skyscatter.spectrum.colour import RGB_SPACES
+    render = _options("render")
+    for name in OPERATORS:
+        assert name in render["--tonemap"].help
+    for name in RGB_SPACES:
+        assert name in render["--colour-space"].help
+

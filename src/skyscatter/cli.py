@@ -251,6 +251,60 @@ def _add_place_arguments(command: argparse.ArgumentParser, required: bool = Fals
                          "(default 0)")
 
 
+_CAMERA_HELP = {
+    "fisheye": "all-sky, zenith at centre, north up, east left",
+    "panorama": "equirectangular 2:1",
+    "perspective": "pinhole",
+    "orbit": "the planet from space, looking at its centre from --distance-km above --lat/--lon, "
+             "north up",
+}
+
+
+def _add_camera_arguments(command: argparse.ArgumentParser, cameras: Sequence[str],
+                          size_default: int) -> None:
+    """--camera (one of `cameras`), --size, --aspect, --fov, --heading, --pitch."""
+    command.add_argument("--camera", choices=cameras, default="fisheye",
+                         help="; ".join(f"{name}: {_CAMERA_HELP[name]}" for name in cameras)
+                         + " (default fisheye)")
+    command.add_argument("--size", type=_size, default=size_default, metavar="PIXELS",
+                         help="image height in pixels (panorama width = 2 x size; "
+                         f"perspective width from --aspect) (default {size_default})")
+    command.add_argument("--aspect", type=_number(checks.ASPECT), default=16 / 9,
+                         help="perspective width / height (default 16/9)")
+    orbit = "; orbit: the whole planet" if "orbit" in cameras else ""
+    command.add_argument("--fov", type=_number(checks.PERSPECTIVE_FOV_DEG), default=None,
+                         metavar="DEG", help="vertical field of view in degrees (default 60 "
+                         f"for perspective{orbit})")
+    command.add_argument("--heading", type=_number(checks.ANGLE_DEG), default=180.0,
+                         metavar="DEG",
+                         help="view azimuth from north towards east for perspective and "
+                         "panorama centre, degrees (default 180: south)")
+    command.add_argument("--pitch", type=_number(checks.ELEVATION_ANGLE_DEG), default=10.0,
+                         metavar="DEG",
+                         help="perspective view elevation in degrees (default 10)")
+
+
+def _add_wavelength_argument(command: argparse.ArgumentParser) -> None:
+    """--wavelengths of an image: N bins over the visible, or a list."""
+    command.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
+                         help="N bins over 360-830 nm, or a comma-separated list in nm "
+                         f"(default {DEFAULT_WAVELENGTH_BINS} bins)")
+
+
+def _add_image_arguments(command: argparse.ArgumentParser) -> None:
+    """--exposure-compensation, --tonemap, --colour-space (`api.ImageOptions`)."""
+    command.add_argument("--exposure-compensation", type=_number(checks.EV), default=1.0,
+                         metavar="EV",
+                         help="brightens the metered exposure by this many stops (default +1: "
+                         "a clear sky metered to middle grey looks a stop too dark)")
+    command.add_argument("--tonemap", default="aces",
+                         help="aces (filmic, default), exponential (Costa/Bruneton), "
+                         "reinhard or clamp")
+    command.add_argument("--colour-space", default="srgb",
+                         help="srgb (default), rec709, display-p3, rec2020, acescg or "
+                         "aces2065-1")
+
+
 def _add_sky_object_arguments(command: argparse.ArgumentParser) -> None:
     """What is drawn besides the atmosphere in skies at a date (--time)."""
     command.add_argument("--no-stars", action="store_true", help="leave out the stars")
@@ -306,20 +360,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--sun-azimuth", type=_number(checks.ANGLE_DEG), default=180.0,
                         metavar="DEG",
                         help="sun azimuth from north towards east in degrees (default 180)")
-    render.add_argument("--camera", choices=CAMERAS, default="fisheye",
-                        help="fisheye: all-sky, zenith at centre, north up, east left; "
-                        "panorama: equirectangular 2:1; perspective: pinhole; orbit: the planet "
-                        "from space, looking at its centre from --distance-km above "
-                        "--lat/--lon, north up (default fisheye)")
-    render.add_argument("--size", type=_size, default=512, metavar="PIXELS",
-                        help="image height in pixels (panorama width = 2 x size; "
-                        "perspective width from --aspect) (default 512)")
-    render.add_argument("--aspect", type=_number(checks.ASPECT), default=16 / 9,
-                        help="perspective width / height (default 16/9)")
-    render.add_argument("--fov", type=_number(checks.PERSPECTIVE_FOV_DEG), default=None,
-                        metavar="DEG",
-                        help="vertical field of view in degrees (default 60 for perspective; "
-                        "orbit: the whole planet)")
+    _add_camera_arguments(render, CAMERAS, 512)
     render.add_argument("--distance-km", type=_number(_DISTANCE_KM), default=None, metavar="KM",
                         help="orbit camera: height above the ground in km (default: the "
                         "planet's radius)")
@@ -327,16 +368,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--look-at", type=_look_at, default=None, metavar="LAT,LON[,ALT_KM]",
                         help="orbit camera: aim at this point instead of the planet's centre "
                         "(the local vertical stays up, so the horizon is level)")
-    render.add_argument("--heading", type=_number(checks.ANGLE_DEG), default=180.0,
-                        metavar="DEG",
-                        help="view azimuth from north towards east for perspective and "
-                        "panorama centre, degrees (default 180: south)")
-    render.add_argument("--pitch", type=_number(checks.ELEVATION_ANGLE_DEG), default=10.0,
-                        metavar="DEG",
-                        help="perspective view elevation in degrees (default 10)")
-    render.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
-                        help="N bins over 360-830 nm, or a comma-separated list in nm "
-                        f"(default {DEFAULT_WAVELENGTH_BINS} bins)")
+    _add_wavelength_argument(render)
     _add_solver_arguments(render, 64)
     render.add_argument("--albedo-map", type=Path, default=None, metavar="IMAGE",
                         help="equirectangular ground albedo (PNG/JPEG sRGB, EXR or .npy linear; "
@@ -356,15 +388,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_sky_object_arguments(render)
     render.add_argument("--exposure", type=_exposure, default=None, metavar="EV100|auto",
                         help="exposure value EV100, or auto (default auto)")
-    render.add_argument("--exposure-compensation", type=_number(checks.EV), default=1.0,
-                        metavar="EV",
-                        help="brightens the metered exposure by this many stops (default +1: "
-                        "a clear sky metered to middle grey looks a stop too dark)")
-    render.add_argument("--tonemap", default="aces",
-                        help="aces (filmic, default), exponential (Costa/Bruneton), "
-                        "reinhard or clamp")
-    render.add_argument("--colour-space", default="srgb",
-                        help="srgb (default), display-p3, rec2020 or acescg")
+    _add_image_arguments(render)
     render.add_argument("--white-balance", choices=("none", "star"), default="none",
                         help="none, or adapt the star's white (its top-of-atmosphere "
                         "spectrum) to D65 (default none)")
@@ -397,24 +421,8 @@ def build_parser() -> argparse.ArgumentParser:
     frames.add_argument("--frames", type=_frame_count, default=None, metavar="N",
                         help="number of frames, evenly spread from --start to --end")
     _add_place_arguments(timelapse, required=True)
-    timelapse.add_argument("--camera", choices=CAMERAS[:3], default="fisheye",
-                           help="fisheye (default), panorama or perspective")
-    timelapse.add_argument("--size", type=_size, default=384, metavar="PIXELS",
-                           help="image height in pixels (default 384)")
-    timelapse.add_argument("--aspect", type=_number(checks.ASPECT), default=16 / 9,
-                           help="perspective width / height (default 16/9)")
-    timelapse.add_argument("--fov", type=_number(checks.PERSPECTIVE_FOV_DEG), default=None,
-                           metavar="DEG",
-                           help="perspective vertical field of view (default 60)")
-    timelapse.add_argument("--heading", type=_number(checks.ANGLE_DEG), default=180.0,
-                           metavar="DEG",
-                           help="view azimuth for perspective and panorama (default 180)")
-    timelapse.add_argument("--pitch", type=_number(checks.ELEVATION_ANGLE_DEG), default=10.0,
-                           metavar="DEG",
-                           help="perspective view elevation (default 10)")
-    timelapse.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
-                           help="N bins over 360-830 nm or a list in nm "
-                           f"(default {DEFAULT_WAVELENGTH_BINS} bins)")
+    _add_camera_arguments(timelapse, CAMERAS[:3], 384)
+    _add_wavelength_argument(timelapse)
     _add_solver_arguments(timelapse, 64)
     _add_sky_object_arguments(timelapse)
     timelapse.add_argument("--fps", type=_number(_POSITIVE), default=12.0,
@@ -423,13 +431,7 @@ def build_parser() -> argparse.ArgumentParser:
                            metavar="MIN",
                            help="time constant of the exposure's adaptation, in simulated "
                            "minutes (default 10; 0 meters every frame on its own)")
-    timelapse.add_argument("--exposure-compensation", type=_number(checks.EV), default=1.0,
-                           metavar="EV",
-                           help="brightens the metered exposure by this many stops (default +1)")
-    timelapse.add_argument("--tonemap", default="aces", help="aces (default), exponential, "
-                           "reinhard or clamp")
-    timelapse.add_argument("--colour-space", default="srgb",
-                           help="srgb (default), display-p3, rec2020 or acescg")
+    _add_image_arguments(timelapse)
     timelapse.add_argument("-o", "--output", type=Path, default=Path("timelapse.mp4"),
                            help="video path, .mp4 or .gif (default timelapse.mp4)")
     timelapse.add_argument("--frames-dir", type=Path, default=None, metavar="DIR",
