@@ -614,20 +614,22 @@ def _render(args: argparse.Namespace) -> None:
                          "and --pitch", key="look_at", value=args.look_at)
     else:
         camera = _camera(args)
-    api.check_render_cost(camera, args.wavelengths, args.solver, args.samples,
-                          args.allow_large)  # memory and time, before any allocation
+    api.check_render_cost(camera, args.wavelengths, solver=args.solver, n_samples=args.samples,
+                          allow_large=args.allow_large)  # memory and time, before allocating
     ground = _ground(args, radius)
     objects = _sky_objects(args)  # checked before the tables are computed
     with _solver_options(args, atmosphere) as options, progress(
             int(camera.valid_mask().sum()), "rendering", unit="ray") as bar:
         if observer is not None:
-            image = api.render_at(atmosphere, camera, observer, objects,
-                                  args.wavelengths, args.solver, options, bar.update,
+            image = api.render_at(atmosphere, camera, observer, objects=objects,
+                                  wavelengths_nm=args.wavelengths, solver=args.solver,
+                                  options=options, progress=bar.update,
                                   orbit_altitude_m=altitude if orbit else None, ground=ground,
                                   allow_large=args.allow_large)
         else:
-            image = api.render(atmosphere, camera, zenith, args.sun_azimuth, altitude,
-                               args.wavelengths, args.solver, options, bar.update,
+            image = api.render(atmosphere, camera, zenith, sun_azimuth_deg=args.sun_azimuth,
+                               altitude_m=altitude, wavelengths_nm=args.wavelengths,
+                               solver=args.solver, options=options, progress=bar.update,
                                orbit_latitude_deg=latitude if orbit else None,
                                orbit_longitude_deg=longitude, ground=ground,
                                allow_large=args.allow_large)
@@ -709,18 +711,19 @@ def _timelapse(args: argparse.Namespace) -> None:
     atmosphere = api.load_atmosphere(args.atmosphere)
     api.sky_ephemeris(atmosphere, _observer(args, args.start))  # checks before the tables
     camera = _camera(args)
-    api.check_render_cost(camera, args.wavelengths, args.solver, args.samples,
-                          args.allow_large, count)
+    api.check_render_cost(camera, args.wavelengths, solver=args.solver, n_samples=args.samples,
+                          allow_large=args.allow_large, frames=count)
     frames_dir = args.frames_dir or args.output.with_name(f"{args.output.stem}_frames")
     objects = _sky_objects(args)
     with _solver_options(args, atmosphere) as options, progress(count, "time-lapse",
                                                                 unit="frame") as bar:
         result = api.timelapse(
-            atmosphere, camera, times, args.lat, args.lon, args.output, frames_dir,
-            args.altitude, args.fps, objects, args.wavelengths,
-            args.solver, options, args.exposure_compensation, args.tonemap, args.colour_space,
-            args.adaptation_minutes * 60.0, on_frame=lambda *_: bar.update(1),
-            allow_large=args.allow_large)
+            atmosphere, camera, times, args.lat, args.lon, video_path=args.output,
+            frames_dir=frames_dir, elevation_m=args.altitude, fps=args.fps, objects=objects,
+            wavelengths_nm=args.wavelengths, solver=args.solver, options=options,
+            compensation_ev=args.exposure_compensation, operator=args.tonemap,
+            colour_space=args.colour_space, adaptation_time_s=args.adaptation_minutes * 60.0,
+            on_frame=lambda *_: bar.update(1), allow_large=args.allow_large)
     print(f"wrote {result.video} and {len(result.frames)} frames in {frames_dir} (EV100 "
           f"{min(result.ev100):.1f} to {max(result.ev100):.1f})", file=sys.stderr)
 
@@ -776,9 +779,10 @@ def _solver_options(args: argparse.Namespace, atmosphere) -> Iterator:
         def log(message: str) -> None:
             bar.write(f"skyscatter: {message}", file=sys.stderr)
 
-        yield api.solver_options(atmosphere, args.orders, getattr(args, "samples", 64),
-                                 args.cache_dir, not args.no_cache, getattr(args, "force", False),
-                                 advance, log)
+        yield api.solver_options(atmosphere, orders=args.orders,
+                                 n_samples=getattr(args, "samples", 64),
+                                 cache_dir=args.cache_dir, use_cache=not args.no_cache,
+                                 force=getattr(args, "force", False), progress=advance, log=log)
 
 
 def _camera(args: argparse.Namespace):
@@ -803,8 +807,9 @@ def _radiance(args: argparse.Namespace) -> None:
         sun_zenith = [sky.sun_zenith_deg]
     with _solver_options(args, atmosphere) as options:
         rows = api.sky_radiance_rows(atmosphere, sun_zenith, args.view_zenith,
-                                     args.view_azimuth, args.wavelengths, args.altitude,
-                                     args.solver, options, allow_large=args.allow_large)
+                                     args.view_azimuth, args.wavelengths,
+                                     altitude_m=args.altitude, solver=args.solver,
+                                     options=options, allow_large=args.allow_large)
     if args.format == "json":
         json.dump(rows, sys.stdout, indent=1, allow_nan=False)  # strict JSON: jq, JSON.parse
         sys.stdout.write("\n")
@@ -828,8 +833,8 @@ def _precompute(args: argparse.Namespace) -> None:
                              value=args.wavelengths) from None
     start = time.perf_counter()
     with _solver_options(args, atmosphere) as options:
-        tables = api.load_solver(atmosphere, args.wavelengths, "lut", options,
-                                 args.monochromatic).tables
+        tables = api.load_solver(atmosphere, args.wavelengths, solver="lut", options=options,
+                                 monochromatic=args.monochromatic).tables
     print(f"{args.atmosphere}: {tables.orders} orders, {tables.wavelengths_nm.size} "
           f"wavelengths, {tables.nbytes / 2**20:.0f} MiB of tables, "
           f"{time.perf_counter() - start:.1f} s", file=sys.stderr)
@@ -841,8 +846,9 @@ def _view(args: argparse.Namespace) -> None:
     def log(message: str) -> None:
         print(f"skyscatter: {message}", file=sys.stderr, flush=True)
 
-    server = api.viewer_server(args.atmosphere, args.host, args.port, args.cache_dir,
-                               not args.no_cache, log if args.verbose else None)
+    server = api.viewer_server(args.atmosphere, host=args.host, port=args.port,
+                               cache_dir=args.cache_dir, use_cache=not args.no_cache,
+                               log=log if args.verbose else None)
     if not api.is_loopback(args.host):
         print(f"skyscatter: WARNING: the viewer listens on {args.host}, not only on this "
               "computer: anyone on the network can reach it, over plain unencrypted HTTP.\n"
