@@ -9,9 +9,10 @@ The whole sky at a date and place (sun, moon, stars; Earth and Mars presets):
 
     berlin = api.make_observer("2024-06-21T21:30+02:00", 52.52, 13.40)
     image = api.render_at(atmosphere, api.FisheyeCamera(512), berlin)
-    api.save_image(image, png_path="berlin.png", adapt_to_night=True)
-    api.timelapse(atmosphere, api.FisheyeCamera(256), times, 52.52, 13.40, "night.mp4",
-                  "night_frames")
+    api.save_image(image, png_path="berlin.png",
+                   options=api.ImageOptions(adapt_to_night=True, operator="reinhard"))
+    api.timelapse(atmosphere, api.FisheyeCamera(256), times, 52.52, 13.40,
+                  video_path="night.mp4", frames_dir="night_frames")
 
 Every function checks its arguments before any work and raises `skyscatter.InputError` (the
 message the command line prints) for a value that is not finite, out of its range, of the
