@@ -21,6 +21,8 @@ from skyscatter.errors import InputError
 
 EARTH = api.load_atmosphere("earth")
 CAMERA = api.FisheyeCamera(8)
+# A time-lapse's outputs (never written: every call below is refused first)
+OUTPUTS = {"video_path": "x.mp4", "frames_dir": "frames"}
 FINITE = (-math.inf, math.inf)
 
 
@@ -110,7 +112,7 @@ hostile_number = st.one_of(
 def options(tmp_path, monkeypatch):
     """Solver options whose cache lives in tmp_path/cache, which must stay absent."""
     monkeypatch.chdir(tmp_path)
-    return api.solver_options(EARTH, 2, 8, tmp_path / "cache")
+    return api.solver_options(EARTH, orders=2, n_samples=8, cache_dir=tmp_path / "cache")
 
 
 def _refused(call, name):
@@ -187,18 +189,18 @@ def test_a_whole_number_outside_its_range_raises_input_error_naming_it(options, 
      "wavelengths_nm"),
     (lambda o: api.sky_radiance_rows(EARTH, [30.0], list(np.linspace(0, 90, 100)),
                                      list(range(100)), [550.0], solver="montecarlo",
-                                     options=api.solver_options(EARTH, 2, 10**6,
+                                     options=api.solver_options(EARTH, orders=2, n_samples=10**6,
                                                                 use_cache=False)),
      "samples"),
     (lambda o: api.timelapse(EARTH, CAMERA, [datetime.datetime(2024, 1, 1, tzinfo=datetime.UTC)],
-                             0.0, 0.0, "x.mp4", "frames", compensation_ev=math.nan, options=o),
+                             0.0, 0.0, **OUTPUTS, compensation_ev=math.nan, options=o),
      "compensation_ev"),
     (lambda o: api.timelapse(EARTH, CAMERA, [datetime.datetime(2024, 1, 1, tzinfo=datetime.UTC)],
-                             0.0, 0.0, "x.mp4", "frames", adaptation_time_s=-1.0, options=o),
+                             0.0, 0.0, **OUTPUTS, adaptation_time_s=-1.0, options=o),
      "adaptation_time_s"),
     (lambda o: api.timelapse(EARTH, CAMERA, [datetime.datetime(2024, 1, 1, tzinfo=datetime.UTC)],
-                             0.0, 0.0, "x.mp4", "frames", fps=math.nan, options=o), "fps"),
-    (lambda o: api.timelapse(EARTH, CAMERA, [], 0.0, 0.0, "x.mp4", "frames", options=o),
+                             0.0, 0.0, **OUTPUTS, fps=math.nan, options=o), "fps"),
+    (lambda o: api.timelapse(EARTH, CAMERA, [], 0.0, 0.0, **OUTPUTS, options=o),
      "time-lapse"),
     (lambda o: api.look_at_direction(api.viewpoint_at(1e6, 6.4e6, 0.0, 0.0), 0.0, math.inf,
                                      0.0, 6.4e6), "target_longitude_deg"),

@@ -41,7 +41,6 @@ from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS, Atmosphere
 from skyscatter.checks import (
     ALTITUDE_M,
     ANGLE_DEG,
-    EV,
     LATITUDE_DEG,
     ZENITH_DEG,
     Bounds,
@@ -164,7 +163,7 @@ __all__ = [
 FRAME_NAME = re.compile(r"frame_[0-9]{5,}\.png")
 
 
-def solver_options(atmosphere: Atmosphere, orders: int | None = None, n_samples: int = 64,
+def solver_options(atmosphere: Atmosphere, *, orders: int | None = None, n_samples: int = 64,
                    cache_dir: str | Path | None = None, use_cache: bool = True,
                    force: bool = False,
                    progress: Callable[[int, int, str], None] | None = None,
@@ -215,7 +214,7 @@ def _checked_wavelength_list(wavelengths_nm: Sequence[float] | None,
 
 
 def check_render_cost(camera: Camera, wavelengths_nm: Sequence[float] | None = None,
-                      solver: str = "lut", n_samples: int = 64, allow_large: bool = False,
+                      solver: str = "lut", *, n_samples: int = 64, allow_large: bool = False,
                       frames: int = 1) -> None:
     """InputError when rendering `frames` images of `camera` on `wavelengths_nm` (default 16)
     would need more memory than this computer has, or with the "single" and "montecarlo"
@@ -250,12 +249,12 @@ def _samples(options: SolverOptions | None) -> int:
 
 
 def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
-           sun_azimuth_deg: float = 180.0, altitude_m: float = 0.0,
+           sun_azimuth_deg: float = 180.0, altitude_m: float = 0.0, *,
            wavelengths_nm: Sequence[float] | None = None, solver: str = "lut",
            options: SolverOptions | None = None,
            progress: Callable[[int], None] | None = None,
            orbit_latitude_deg: float | None = None, orbit_longitude_deg: float = 0.0,
-           ground: Ground | None = None, *, allow_large: bool = False) -> SkyImage:
+           ground: Ground | None = None, allow_large: bool = False) -> SkyImage:
     """Render what `camera` sees from `altitude_m` [m] above the ground, with the sun at
     `sun_zenith_deg` and `sun_azimuth_deg` (from north towards east) in the observer's local
     frame. Spectral, on `wavelengths_nm` (default: 16 bins over 360-830 nm). With
@@ -272,7 +271,8 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
         LATITUDE_DEG.check("orbit_latitude_deg", orbit_latitude_deg)
         ANGLE_DEG.check("orbit_longitude_deg", orbit_longitude_deg)
     wavelengths = _checked_wavelength_list(wavelengths_nm, False)
-    check_render_cost(camera, wavelengths, solver, _samples(options), allow_large)
+    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
+                      allow_large=allow_large)
     engine = load_solver(atmosphere, wavelengths, solver, options)
     viewpoint = viewpoint_at(altitude_m, engine.profile.bottom_radius_m, orbit_latitude_deg,
                              orbit_longitude_deg)
@@ -319,10 +319,11 @@ def sky_ephemeris(atmosphere: Atmosphere, observer: Observer) -> Ephemeris:
 
 
 def render_at(atmosphere: Atmosphere, camera: Camera, observer: Observer,
-              objects: SkyObjects | None = None, wavelengths_nm: Sequence[float] | None = None,
-              solver: str = "lut", options: SolverOptions | None = None,
+              objects: SkyObjects | None = None, *,
+              wavelengths_nm: Sequence[float] | None = None, solver: str = "lut",
+              options: SolverOptions | None = None,
               progress: Callable[[int], None] | None = None,
-              orbit_altitude_m: float | None = None, ground: Ground | None = None, *,
+              orbit_altitude_m: float | None = None, ground: Ground | None = None,
               allow_large: bool = False) -> SkyImage:
     """The whole sky for `observer` (`make_observer`): the atmosphere lit by the sun and the
     moon, the sun's and moon's disks, the stars (`objects`). The camera stands at the
@@ -334,7 +335,8 @@ def render_at(atmosphere: Atmosphere, camera: Camera, observer: Observer,
     if orbit_altitude_m is not None:
         ALTITUDE_M.check("orbit_altitude_m", orbit_altitude_m)
     wavelengths = _checked_wavelength_list(wavelengths_nm, False)
-    check_render_cost(camera, wavelengths, solver, _samples(options), allow_large)
+    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
+                      allow_large=allow_large)
     engine = load_solver(atmosphere, wavelengths, solver, options)
     return _render_at(engine, atmosphere, camera, observer, objects or SkyObjects(), progress,
                       orbit_altitude_m, ground)
@@ -372,15 +374,15 @@ class Timelapse:
 
 
 def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.datetime],
-              latitude_deg: float, longitude_deg: float, video_path: str | Path,
+              latitude_deg: float, longitude_deg: float, *, video_path: str | Path,
               frames_dir: str | Path, elevation_m: float = 0.0, fps: float = 24.0,
               objects: SkyObjects | None = None,
               wavelengths_nm: Sequence[float] | None = None, solver: str = "lut",
-              options: SolverOptions | None = None, compensation_ev: float = 1.0,
-              operator: str = "aces", colour_space: str = "srgb",
+              options: SolverOptions | None = None, image: ImageOptions | None = None,
+              compensation_ev: float = 1.0, operator: str = "aces", colour_space: str = "srgb",
               adaptation_time_s: float = 600.0,
               on_frame: Callable[[int, datetime.datetime, float], None] | None = None,
-              orbit_altitude_m: float | None = None, *, allow_large: bool = False) -> Timelapse:
+              orbit_altitude_m: float | None = None, allow_large: bool = False) -> Timelapse:
     """Render the sky at each of `times` (aware datetimes) for one place and write the frames
     (PNG, `frames_dir/frame_00001.png` ...) and a video (`video_path`, .mp4 or .gif).
 
@@ -391,6 +393,11 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     twinkle, a new draw each frame. `on_frame(index, time, ev100)` is called after each
     frame.
 
+    `image` (an `ImageOptions`) holds the display choices in one object and, when given, is
+    used instead of `compensation_ev`, `operator` and `colour_space` (kept for existing
+    callers); a time-lapse meters each frame itself, so its `ev100` must be None, and its
+    other fields do not apply.
+
     The outputs are checked before any work (`check_writable_file`, `check_writable_folder`:
     `frames_dir` may hold only frames, `FRAME_NAME`). The frames go to a new temporary folder
     and the video to a temporary file; only when all are done do they replace `frames_dir`
@@ -398,17 +405,17 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     interrupted run leaves the previous frames and video as they were.
 
     InputError before any work for bad arguments (as `render`), more than `MAX_FRAMES` times,
-    `compensation_ev` outside [-40, 40] or a negative `adaptation_time_s`."""
+    `compensation_ev` outside [-40, 40], an `image` with a fixed `ev100` or a negative
+    `adaptation_time_s`."""
     _check_atmosphere(atmosphere)
     if not 1 <= len(times) <= MAX_FRAMES:
         raise InputError(f"a time-lapse of {len(times)} times is not allowed: from 1 to "
                          f"{MAX_FRAMES} frames", key="times", value=len(times),
                          allowed=f"1 to {MAX_FRAMES} frames")
-    EV.check("compensation_ev", compensation_ev)
+    image = _timelapse_image_options(image, compensation_ev, operator, colour_space)
     checked_number("adaptation_time_s", adaptation_time_s, 0.0, 1e9)
     if orbit_altitude_m is not None:
         ALTITUDE_M.check("orbit_altitude_m", orbit_altitude_m)
-    check_image_options(operator, colour_space)
     VideoWriter(video_path, fps)  # checks the format and the rate before any work
     check_writable_file(video_path)
     check_writable_folder(frames_dir, FRAME_NAME)
@@ -418,7 +425,8 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
                          value=str(video_path))
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
     wavelengths = _checked_wavelength_list(wavelengths_nm, False)
-    check_render_cost(camera, wavelengths, solver, _samples(options), allow_large, len(times))
+    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
+                      allow_large=allow_large, frames=len(times))
     engine = load_solver(atmosphere, wavelengths, solver, options)
     objects = objects or SkyObjects()
     frames_dir = Path(frames_dir)
@@ -430,9 +438,26 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     with staged_outputs() as stage, VideoWriter(video_path, fps, stage) as video:
         frames, exposures = write_frames(
             render_frame, observers, video, stage.folder(frames_dir), frames_dir,
-            compensation_ev=compensation_ev, operator=operator, colour_space=colour_space,
-            adaptation_time_s=adaptation_time_s, on_frame=on_frame)
+            compensation_ev=image.compensation_ev, operator=image.operator,
+            colour_space=image.colour_space, adaptation_time_s=adaptation_time_s,
+            on_frame=on_frame)
     return Timelapse(Path(video_path), frames, exposures)
+
+
+def _timelapse_image_options(image: ImageOptions | None, compensation_ev: float, operator: str,
+                             colour_space: str) -> ImageOptions:
+    """`image`, checked, or an `ImageOptions` of the separate arguments."""
+    if image is None:
+        return ImageOptions(compensation_ev=compensation_ev, operator=operator,
+                            colour_space=colour_space)
+    if not isinstance(image, ImageOptions):
+        raise InputError(f"image = {image!r} is not allowed: an ImageOptions", key="image",
+                         value=image, allowed="an ImageOptions")
+    if image.ev100 is not None:
+        raise InputError(f"image.ev100 = {image.ev100!r} is not allowed in a time-lapse, which "
+                         "meters each frame: leave it None (use compensation_ev to shift the "
+                         "exposure)", key="ev100", value=image.ev100, allowed="None")
+    return image
 
 
 def viewpoint_at(altitude_m: float, planet_radius_m: float, latitude_deg: float | None = None,
@@ -503,10 +528,10 @@ def _check_image_paths(png_path: str | Path | BinaryIO | None,
 
 
 def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
-               exr_path: str | Path | None = None, ev100: float | None = None,
+               exr_path: str | Path | None = None, *, ev100: float | None = None,
                compensation_ev: float = 1.0, operator: str = "aces",
                colour_space: str = "srgb", balance_to_light: bool = False,
-               exr_content: str = "rgb", adapt_to_night: bool = False, *,
+               exr_content: str = "rgb", adapt_to_night: bool = False,
                options: ImageOptions | None = None) -> float:
     """Write a tone-mapped 8-bit PNG (or JPEG: `png_path` named .jpg/.jpeg; or a PNG to a
     binary stream such as `sys.stdout.buffer`) and/or a linear float32 EXR; returns the EV100
@@ -568,8 +593,8 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
 
 def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                       view_zeniths_deg: Sequence[float], relative_azimuths_deg: Sequence[float],
-                      wavelengths_nm: Sequence[float], altitude_m: float = 0.0,
-                      solver: str = "lut", options: SolverOptions | None = None, *,
+                      wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
+                      solver: str = "lut", options: SolverOptions | None = None,
                       allow_large: bool = False) -> list[dict[str, float]]:
     """Diffuse sky radiance for every combination of the inputs, one dict per row with the keys
     sun_zenith_deg, view_zenith_deg, relative_azimuth_deg, wavelength_nm, radiance
@@ -626,7 +651,7 @@ def _angle_list(name: str, values: Sequence[float], bounds: Bounds) -> np.ndarra
     return array
 
 
-def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0,
+def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0, *,
                   cache_dir: str | Path | None = None, use_cache: bool = True,
                   log: Callable[[str], None] | None = None) -> ViewerServer:
     """The real-time viewer's web server (`viewer.server`), not yet serving: `config` (a

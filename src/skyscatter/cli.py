@@ -721,8 +721,9 @@ def _timelapse(args: argparse.Namespace) -> None:
             atmosphere, camera, times, args.lat, args.lon, video_path=args.output,
             frames_dir=frames_dir, elevation_m=args.altitude, fps=args.fps, objects=objects,
             wavelengths_nm=args.wavelengths, solver=args.solver, options=options,
-            compensation_ev=args.exposure_compensation, operator=args.tonemap,
-            colour_space=args.colour_space, adaptation_time_s=args.adaptation_minutes * 60.0,
+            image=api.ImageOptions(compensation_ev=args.exposure_compensation,
+                                   operator=args.tonemap, colour_space=args.colour_space),
+            adaptation_time_s=args.adaptation_minutes * 60.0,
             on_frame=lambda *_: bar.update(1), allow_large=args.allow_large)
     print(f"wrote {result.video} and {len(result.frames)} frames in {frames_dir} (EV100 "
           f"{min(result.ev100):.1f} to {max(result.ev100):.1f})", file=sys.stderr)

@@ -65,7 +65,8 @@ def test_bright_stars_land_where_pyephem_puts_them(earth):
     camera = api.FisheyeCamera(512)
     observer = api.make_observer(when, *BERLIN)
     image = api.render_at(atmosphere, camera, observer, api.SkyObjects(magnitude_limit=1.0),
-                          wavelength_grid(4), options=api.solver_options(atmosphere, orders=2))
+                          wavelengths_nm=wavelength_grid(4),
+                          options=api.solver_options(atmosphere, orders=2))
     luminance = image.xyz()[..., 1]
     site = _ephem_observer(when, *BERLIN, pressure_hpa=1010.0)
     checked = 0
@@ -89,7 +90,7 @@ def test_the_sun_disk_is_at_pyephems_refracted_position(earth):
     when = datetime.datetime(2024, 12, 21, 11, 0, tzinfo=datetime.UTC)
     camera = api.FisheyeCamera(256)
     image = api.render_at(atmosphere, camera, api.make_observer(when, *BERLIN),
-                          api.SkyObjects(stars=False), wavelength_grid(4),
+                          api.SkyObjects(stars=False), wavelengths_nm=wavelength_grid(4),
                           options=api.solver_options(atmosphere, orders=2))
     sun = ephem.Sun()
     sun.compute(_ephem_observer(when, *BERLIN, pressure_hpa=1010.0))
@@ -136,7 +137,7 @@ def test_the_lit_side_of_a_waxing_moon_faces_the_sun(earth):
     moon, sun = sky.moon.direction(), sky.sun.direction()
     camera = api.PerspectiveCamera.from_forward_up(64, 64, 1.0, moon, (0.0, 0.0, 1.0))
     image = api.render_at(atmosphere, camera, api.make_observer(when, *BERLIN),
-                          api.SkyObjects(stars=False), wavelength_grid(4),
+                          api.SkyObjects(stars=False), wavelengths_nm=wavelength_grid(4),
                           options=api.solver_options(atmosphere, orders=2))
     luminance = image.xyz()[..., 1]
     moon_pixels = luminance > 50.0 * np.median(luminance)

@@ -958,7 +958,7 @@ def _spectral_noise(rng: np.random.Generator, size: int, spacing_m: float, beta:
     return (field_ - field_.mean()) / field_.std()
 
 
-def demo_mountains(size: int = 512, spacing_m: float = 250.0, peak_m: float = 4500.0,
+def demo_mountains(size: int = 512, *, spacing_m: float = 250.0, peak_m: float = 4500.0,
                    seed: int = 0, planet_radius_m: float = EARTH_RADIUS_M,
                    range_azimuth_deg: float = 180.0,
                    frame: ArrayLike | None = None) -> Heightfield:
