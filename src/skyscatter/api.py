@@ -12,7 +12,10 @@ The whole sky at a date and place (sun, moon, stars; Earth and Mars presets):
     api.save_image(image, png_path="berlin.png",
                    options=api.ImageOptions(adapt_to_night=True, operator="reinhard"))
     api.timelapse(atmosphere, api.FisheyeCamera(256), times, 52.52, 13.40,
-                  video_path="night.mp4", frames_dir="night_frames")
+                  video_path="night.mp4", frames_dir="night_frames",
+                  image=api.ImageOptions(operator="reinhard"))
+
+Past the leading arguments (at most five) every option is keyword-only: name it.
 
 Every function checks its arguments before any work and raises `skyscatter.InputError` (the
 message the command line prints) for a value that is not finite, out of its range, of the
