@@ -117,3 +117,15 @@ def test_key_is_deterministic_and_includes_the_phase_function_classes():
     assert table_metadata(profile, TableResolution(), 2, -0.5)["code"] == first
     with_phase = set(reached_definitions([ROOT, ("skyscatter.optics.phase", "RayleighPhase")]))
     assert ("skyscatter.optics.phase", "rayleigh") in with_phase
+
+
+def test_the_key_covers_the_order_of_the_kernels_record_fields():
+    # The typed records the build kernels take are build code: a change to one (here the
+    # order of two fields, which numba's typed tuple follows) must change the key.
+    base = _fingerprint()
+    swapped = _fingerprint(_edited(BUILD, "    bottom_radius: float  # R_b [m]\n"
+                                          "    top_radius: float  # R_t [m]\n",
+                                   "    top_radius: float  # R_t [m]\n"
+                                   "    bottom_radius: float  # R_b [m]\n"))
+    assert swapped[(BUILD, "TableGrid")] != base[(BUILD, "TableGrid")]
+    assert swapped != base

@@ -16,12 +16,16 @@ Conventions (docs/physics/tables.md, Bruneton 2017 functions.glsl; the table lay
   coefficient) on (r_k, mu_s_l) nodes of the scattering table times outgoing directions
   (theta_o, phi_o) on a regular grid, phi measured from the sun's vertical plane (J is even in
   phi); rays multiply it by the exact beta_s at each sample.
-Kernels take arrays and floats only.
+Kernels take arrays, floats and the typed records below (numba passes a NamedTuple of them as
+a typed tuple): `TableGrid` (the scattering table's axes and the atmosphere's bounds),
+`RayMedium` (what a ray's samples read: the profile and the column table) and `LitOrder` (the
+radiance of the previous scattering order).
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -56,6 +60,36 @@ from skyscatter.transport.table_parameterisation import (
 )
 
 
+class TableGrid(NamedTuple):
+    """The scattering table's axes and the atmosphere it covers."""
+
+    n_r: int  # radii of the scattering table
+    n_mu: int  # view zenith cosines
+    n_mu_s: int  # sun zenith cosines
+    n_nu: int  # cosines of the scattering angle
+    bottom_radius: float  # R_b [m]
+    top_radius: float  # R_t [m]
+    mu_s_min: float  # smallest cos(sun zenith) tabulated [-]
+
+
+class RayMedium(NamedTuple):
+    """What the samples of a ray read for one wavelength batch."""
+
+    h_step: float  # spacing of the profile's levels [m]
+    density: np.ndarray  # (n_c, n_z) profile densities on those levels
+    columns: np.ndarray  # (n_c, n_r_t, n_mu_t) column densities to the top [density m]
+    extinction: np.ndarray  # (n_c, n_wl) extinction per density of the batch
+
+
+class LitOrder(NamedTuple):
+    """The radiance of the previous scattering order, as the next one reads it."""
+
+    tables: np.ndarray  # the interleaved tables, 1-D (`flat_tables`)
+    n_t: int  # tables interleaved: n_s single-scattering tables or 1 multiple
+    use_phase: bool  # apply the phase functions (the single-scattering tables)
+    phase_table: np.ndarray  # (n_s, n_angle, n_wl) phase functions [sr^-1]
+
+
 @njit(cache=True)
 def columns_to_top(r, mu, bottom_radius, top_radius, columns, out):
     """Column densities from (r, mu) to the top, bilinear in `columns` (n_c, n_r_t, n_mu_t),
@@ -69,12 +103,14 @@ def columns_to_top(r, mu, bottom_radius, top_radius, columns, out):
 
 
 @njit(cache=True)
-def _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step, density,
-                 columns, t, radius, mu_t, weight, dens, col_view):
+def _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, weight, dens,
+                 col_view):
     """Samples of the table ray (r, mu) up to the ground or the top (`table_ray_distances`):
     distances t, radii, cosines mu_t, trapezoid weights [m], densities dens (n, n_c) and view
     columns col_view (n, n_c) from the start. Returns the number of samples (0 for a ray of
     zero length)."""
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
+    h_step, density, columns = medium.h_step, medium.density, medium.columns
     n_c = density.shape[0]
     if hits_ground:
         d = distance_to_bottom_boundary(r, mu, bottom_radius)
@@ -122,11 +158,13 @@ def _view_transmittance(total, weight, col_view, extinction, out):
 
 
 @njit(cache=True)
-def _table_ray(i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
-               columns, extinction):
+def _table_ray(i_r, i_mu, n_samples, grid, medium):
     """The ray of scattering-table cell (i_r, i_mu): (r, mu, total, t, radius, mu_t, dens,
     view) with its `total` samples (`_ray_samples`) and the transmittance from the cell's point
     to each sample, view (total, n_wl)."""
+    n_r, n_mu = grid.n_r, grid.n_mu
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
+    extinction = medium.extinction
     n_c, n_wl = extinction.shape
     n_max = n_samples + 8
     r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
@@ -138,23 +176,26 @@ def _table_ray(i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_ste
     weight = np.empty(n_max)
     dens = np.empty((n_max, n_c))
     col_view = np.empty((n_max, n_c))
-    total = _ray_samples(r, mu, hits_ground, n_samples, bottom_radius, top_radius, h_step,
-                         density, columns, t, radius, mu_t, weight, dens, col_view)
+    total = _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, weight,
+                         dens, col_view)
     view = np.empty((total, n_wl))
     _view_transmittance(total, weight, col_view, extinction, view)
     return r, mu, total, t, radius, mu_t, dens, view
 
 
 @njit(parallel=True, cache=True)
-def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
-                            mu_s_min, h_step, density, columns, extinction, transmittance,
-                            scatterers, factor, sun_angular_radius):
+def single_scattering_table(grid, medium, n_samples, transmittance, scatterers, factor,
+                            sun_angular_radius):
     """Single scattering without phase function, per scattering constituent:
     table[s, cell, w] = factor[s, w] * int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt, with
     factor = E_sun beta_s,s [W m^-2 nm^-1 / density]; (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl)
     float32 (interleaved, `scattering_lookup`). T(x, p) from the column table, T_sun from the
     transmittance table (n_r_t, n_mu_t, n_wl) (no exponential per cell). Bruneton 2017,
-    `ComputeSingleScattering`; V = visible part of the sun disk."""
+    `ComputeSingleScattering`; V = visible part of the sun disk. `grid`: a `TableGrid`,
+    `medium`: a `RayMedium`."""
+    n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
+    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
+    extinction = medium.extinction
     n_s = scatterers.size
     n_wl = extinction.shape[1]
     table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_s, n_wl), dtype=np.float32)
@@ -165,9 +206,8 @@ def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, t
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r, mu, total, t, radius, mu_t, dens, view = _table_ray(
-            i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
-            columns, extinction)
+        r, mu, total, t, radius, mu_t, dens, view = _table_ray(i_r, i_mu, n_samples, grid,
+                                                               medium)
         if total == 0:
             continue
         # Per sample: the horizon, and the r part of the transmittance lookup towards the sun.
@@ -214,10 +254,12 @@ def single_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, t
 
 
 @njit(cache=True)
-def direct_ground_irradiance(n_points, bottom_radius, top_radius, columns, extinction,
-                             sun_irradiance, sun_angular_radius):
+def direct_ground_irradiance(n_points, grid, medium, sun_irradiance, sun_angular_radius):
     """Direct sun irradiance on the ground E_sun T_sun max(mu_s, 0) V at mu_s = -1 + 2 i /
-    (n_points - 1), (n_points, n_wl) [W m^-2 nm^-1]."""
+    (n_points - 1), (n_points, n_wl) [W m^-2 nm^-1]. `grid`: a `TableGrid`, `medium`: a
+    `RayMedium`."""
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
+    columns, extinction = medium.columns, medium.extinction
     n_c, n_wl = extinction.shape
     out = np.zeros((n_points, n_wl))
     for i in range(n_points):
@@ -264,11 +306,13 @@ def phase_matrices(phase_table, cos_direct, cos_mirror, solid_angle):
 
 
 @njit(cache=True)
-def _ground_radiance(r, mu, mu_s, nu, bottom_radius, top_radius, columns, extinction,
-                     ground_irradiance, albedo, col_a, col_b, out):
+def _ground_radiance(r, mu, mu_s, nu, grid, medium, ground_irradiance, albedo, col_a, col_b,
+                     out):
     """out[w] += radiance of the Lambertian ground seen from (r, mu) through the atmosphere:
     T(x, g) albedo / pi E(mu_s(g)), E from `ground_irradiance` (n_g, n_wl) on mu_s = -1 + 2 i /
     (n_g - 1). For rays that hit the ground."""
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
+    columns, extinction = medium.columns, medium.extinction
     n_c, n_wl = extinction.shape
     d = distance_to_bottom_boundary(r, mu, bottom_radius)
     mu_g = min(max((r * mu + d) / bottom_radius, -1.0), 1.0)
@@ -286,16 +330,19 @@ def _ground_radiance(r, mu, mu_s, nu, bottom_radius, top_radius, columns, extinc
 
 
 @njit(parallel=True, cache=True)
-def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, mu_s_min,
-                      tables, n_mu, n_nu, n_t, use_phase, phase_table, ground_irradiance, albedo,
-                      columns, extinction):
-    """Radiance of the previous order arriving at the scattering-density nodes, from the
-    directions (theta_in[a], phi_in[p]) (phi from the sun's vertical plane): the scattering
-    lookup (with phase functions when `use_phase`, i.e. the single-scattering tables; `tables`
-    as from `flat_tables`, n_mu and n_nu their axes, n_t tables) plus the ground lit by
-    `ground_irradiance` for directions that hit it. Returns
+def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradiance, albedo):
+    """Radiance of the previous order arriving at the scattering-density nodes (the (r, mu_s)
+    nodes of `grid`, a `TableGrid`), from the directions (theta_in[a], phi_in[p]) (phi from the
+    sun's vertical plane): the scattering lookup in `previous` (a `LitOrder`; with phase
+    functions when its `use_phase`, i.e. the single-scattering tables) plus the ground lit by
+    `ground_irradiance` for directions that hit it (`medium`: a `RayMedium`). Returns
     (n_wl, n_a n_p, n_r n_mu_s), the layout of the matrix product that follows.
     Bruneton 2017, `ComputeScatteringDensity`, the inner part."""
+    n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
+    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
+    tables, n_t = previous.tables, previous.n_t
+    use_phase, phase_table = previous.use_phase, previous.phase_table
+    extinction = medium.extinction
     n_c, n_wl = extinction.shape
     n_a = theta_in.size
     n_p = phi_in.size
@@ -326,22 +373,25 @@ def incoming_radiance(n_r, n_mu_s, theta_in, phi_in, bottom_radius, top_radius, 
                 scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 if hits_ground:
-                    _ground_radiance(r, mu_in, mu_s, nu_in, bottom_radius, top_radius, columns,
-                                     extinction, ground_irradiance, albedo, col_a, col_b, value)
+                    _ground_radiance(r, mu_in, mu_s, nu_in, grid, medium, ground_irradiance,
+                                     albedo, col_a, col_b, value)
                 for w in range(n_wl):
                     radiance[w, a * n_p + p, kl] = value[w]
     return radiance
 
 
 @njit(parallel=True, cache=True)
-def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radius, mu_s_min,
-                        tables, n_r, n_mu, n_mu_s, n_nu, n_t, use_phase, phase_table):
+def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
     """Irradiance on a horizontal surface from the sky radiance of one order,
     E = int_{mu > 0} L(r, mu, mu_s, nu) mu d omega, on the irradiance nodes (r = R_b + i (R_t -
     R_b) / (n_r_e - 1), mu_s = -1 + 2 j / (n_mu_s_e - 1)); midpoint rule with n_theta polar
-    angles in [0, pi/2] and n_phi azimuths in [0, pi] (L is even in the azimuth); `tables`
-    from `flat_tables`, (n_r, n_mu, n_mu_s, n_nu) their axes. Returns (n_r_e, n_mu_s_e,
+    angles in [0, pi/2] and n_phi azimuths in [0, pi] (L is even in the azimuth); L from
+    `previous` (a `LitOrder`) on the axes of `grid` (a `TableGrid`). Returns (n_r_e, n_mu_s_e,
     n_wl). Bruneton 2017, `ComputeIndirectIrradiance`."""
+    n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
+    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
+    tables, n_t = previous.tables, previous.n_t
+    use_phase, phase_table = previous.use_phase, previous.phase_table
     n_wl = phase_table.shape[2]
     out = np.zeros((n_r_e, n_mu_s_e, n_wl))
     d_theta = 0.5 * math.pi / n_theta
@@ -376,9 +426,7 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, bottom_radius, top_radi
 
 
 @njit(parallel=True, cache=True)
-def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius, top_radius,
-                              mu_s_min, h_step, density, columns, extinction, scattering,
-                              source, n_phi):
+def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi):
     """One order of multiple scattering: int_0^d T(x, p) J(p, v) dt for every cell, with
     J(p, v) = beta_s(p) S(r, theta, mu_s, phi): beta_s(p) = sum_c n_c(p) scattering[c] the
     exact scattering coefficient at the sample, S the source function J / beta_s interpolated
@@ -386,7 +434,11 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
     theta = view zenith and phi = azimuth from the sun on regular grids over [0, pi]). For each
     ray sample the (r, theta) interpolation is done once, to a (mu_s, phi) slab shared by the
     n_mu_s x n_nu cells of the ray. Returns (n_r, n_mu, n_mu_s, n_nu, n_wl) float32.
-    Bruneton 2017, `ComputeMultipleScattering`."""
+    Bruneton 2017, `ComputeMultipleScattering`. `grid`: a `TableGrid`, `medium`: a
+    `RayMedium`."""
+    n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
+    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
+    extinction = medium.extinction
     n_c, n_wl = extinction.shape
     n_theta = source.shape[1]
     n_block = source.shape[2]
@@ -399,9 +451,8 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r, mu, total, t, radius, mu_t, dens, view = _table_ray(
-            i_r, i_mu, n_r, n_mu, n_samples, bottom_radius, top_radius, h_step, density,
-            columns, extinction)
+        r, mu, total, t, radius, mu_t, dens, view = _table_ray(i_r, i_mu, n_samples, grid,
+                                                               medium)
         if total == 0:
             continue
         for j in range(total):  # T(x, p) dt beta_s(p)
@@ -469,11 +520,12 @@ def multiple_scattering_table(n_r, n_mu, n_mu_s, n_nu, n_samples, bottom_radius,
 
 
 @njit(cache=True)
-def order_statistics(tables, use_phase, phase_table, bottom_radius, top_radius, mu_s_min):
+def order_statistics(tables, use_phase, phase_table, grid):
     """(mean over all cells, value at the ground looking at the zenith with the sun there) of
     the radiance of one order [W m^-2 sr^-1 nm^-1], each (n_wl,), from interleaved tables
-    (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl); with phase functions applied (`use_phase`) for the
-    single-scattering tables."""
+    (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl) on `grid` (a `TableGrid`); with phase functions
+    applied (`use_phase`) for the single-scattering tables."""
+    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
     n_r, n_mu, n_mu_s, n_nu, n_t, n_wl = tables.shape
     partial = np.zeros((n_r, n_wl))
     for i_r in range(n_r):

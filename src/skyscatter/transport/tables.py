@@ -314,11 +314,14 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     irradiance = np.zeros((res.irradiance_r, res.irradiance_mu_s, n_wl))
     order_mean = np.zeros((orders, n_wl))
     order_zenith = np.zeros((orders, n_wl))
-    shape = (res.scattering_r, res.scattering_mu, res.scattering_mu_s, res.scattering_nu)
-    geometry = (bottom, top, mu_s_min)
+    grid = _table_build_kernels.TableGrid(
+        n_r=res.scattering_r, n_mu=res.scattering_mu, n_mu_s=res.scattering_mu_s,
+        n_nu=res.scattering_nu, bottom_radius=bottom, top_radius=top, mu_s_min=mu_s_min)
 
     for batch in batches:
-        extinction = np.ascontiguousarray(profile.extinction_per_density[:, batch])
+        medium = _table_build_kernels.RayMedium(
+            h_step=h_step, density=density, columns=columns,
+            extinction=np.ascontiguousarray(profile.extinction_per_density[:, batch]))
         sun = np.ascontiguousarray(profile.toa_irradiance[batch], dtype=np.float64)
         albedo = np.ascontiguousarray(profile.ground_albedo[batch], dtype=np.float64)
         phase_b = np.ascontiguousarray(phase[:, :, batch])
@@ -327,12 +330,11 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         label = f"wavelengths {batch.start + 1}-{batch.stop} of {n_wl}"
 
         single = _table_build_kernels.single_scattering_table(
-            *shape, res.ray_samples, *geometry, h_step, density, columns, extinction,
-            np.ascontiguousarray(transmittance[..., batch]), scatterer_index, factor,
-            float(profile.sun_angular_radius_rad))
+            grid, medium, res.ray_samples, np.ascontiguousarray(transmittance[..., batch]),
+            scatterer_index, factor, float(profile.sun_angular_radius_rad))
         scattering[..., :n_s, batch] = single
         order_mean[0, batch], order_zenith[0, batch] = _table_build_kernels.order_statistics(
-            single, True, phase_b, *geometry)
+            single, True, phase_b, grid)
         report(f"single scattering, {label}")
         if on_order is not None:
             on_order(1, batch, _read_only(scattering[..., n_s, :]),
@@ -343,30 +345,28 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
         previous, use_phase = single, True
         ground = _table_build_kernels.direct_ground_irradiance(
-            DIRECT_GROUND_SAMPLES, bottom, top, columns, extinction, sun,
-            float(profile.sun_angular_radius_rad))
+            DIRECT_GROUND_SAMPLES, grid, medium, sun, float(profile.sun_angular_radius_rad))
         for order in range(2, orders + 1):
-            previous_flat = flat_tables(previous)
-            n_t = previous.shape[4]
+            lit = _table_build_kernels.LitOrder(tables=flat_tables(previous),
+                                                n_t=previous.shape[4], use_phase=use_phase,
+                                                phase_table=phase_b)
             incoming = _table_build_kernels.incoming_radiance(
-                res.scattering_r, res.scattering_mu_s, theta_in, phi_in, *geometry,
-                previous_flat, res.scattering_mu, res.scattering_nu, n_t, use_phase, phase_b,
-                ground, albedo, columns, extinction).astype(np.float32)
+                grid, medium, theta_in, phi_in, lit, ground, albedo).astype(np.float32)
             source = _source_function(matrices, incoming, beta_s, node_density, res)
             del incoming
             delta_irradiance = _table_build_kernels.indirect_irradiance(
                 res.irradiance_r, res.irradiance_mu_s, res.irradiance_theta,
-                res.irradiance_phi, *geometry, previous_flat, *shape, n_t, use_phase, phase_b)
+                res.irradiance_phi, grid, lit)
             irradiance[..., batch] += delta_irradiance
             ground = np.ascontiguousarray(delta_irradiance[0])
             delta = _table_build_kernels.multiple_scattering_table(
-                *shape, res.multiple_ray_samples, *geometry, h_step, density, columns, extinction,
+                grid, medium, res.multiple_ray_samples,
                 np.ascontiguousarray(scattering_all[:, batch]), source, res.density_phi)
-            del source, previous_flat
+            del source, lit
             scattering[..., n_s, batch] += delta
             previous, use_phase = delta[..., None, :], False
             order_mean[order - 1, batch], order_zenith[order - 1, batch] = (
-                _table_build_kernels.order_statistics(previous, False, phase_b, *geometry))
+                _table_build_kernels.order_statistics(previous, False, phase_b, grid))
             report(f"order {order}, {label}")
             if on_order is not None:
                 on_order(order, batch, _read_only(scattering[..., n_s, :]),
