@@ -5,6 +5,7 @@ import os
 import numpy as np
 import OpenEXR
 import pytest
+from failing_exr import FailingExrFile
 from PIL import Image
 
 from skyscatter.errors import InputError
@@ -85,29 +86,11 @@ def test_writers_create_missing_directories_with_the_usual_file_mode(tmp_path):
     assert os.listdir(target.parent) == ["sky.png"]
 
 
-class _FailingExrFile:
-    """Stands in for OpenEXR.File: writes half a file, then fails like a full disk."""
-
-    def __init__(self, header, channels):
-        pass
-
-    def write(self, path):
-        with open(path, "wb") as stream:
-            stream.write(b"v/1\x01partial")
-        raise RuntimeError("No space left on device")
-
-
-class _FakeOpenEXR:
-    File = _FailingExrFile
-    ZIP_COMPRESSION = OpenEXR.ZIP_COMPRESSION
-    scanlineimage = OpenEXR.scanlineimage
-
-
 def test_failed_exr_write_keeps_the_old_file_and_leaves_no_partial_file(tmp_path, hdr_image,
                                                                        monkeypatch):
     path = write_exr(tmp_path / "sky.exr", hdr_image)
     before = path.read_bytes()
-    monkeypatch.setattr(image_io, "OpenEXR", _FakeOpenEXR)
+    monkeypatch.setattr(image_io.OpenEXR, "File", FailingExrFile)
     with pytest.raises(InputError, match=r"cannot write .*sky\.exr: No space left on device"):
         write_exr(path, np.zeros((2, 2, 3)))
     assert path.read_bytes() == before

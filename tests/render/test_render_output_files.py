@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from failing_exr import FailingExrFile
 from PIL import Image
 
 from skyscatter import api, output_files
@@ -134,22 +135,10 @@ def old_pair(tmp_path):
     return png, exr, png.read_bytes(), exr.read_bytes()
 
 
-class _FailingExrFile:
-    """Stands in for OpenEXR.File: writes half a file, then fails like a full disk."""
-
-    def __init__(self, header, channels):
-        pass
-
-    def write(self, path):
-        with open(path, "wb") as stream:
-            stream.write(b"v/1\x01half")
-        raise RuntimeError("No space left on device")
-
-
 def test_a_failing_exr_write_leaves_the_old_png_and_exr(old_pair, monkeypatch):
     # Before: the PNG was replaced first, so a failed EXR left a new PNG beside the old EXR.
     png, exr, png_bytes, exr_bytes = old_pair
-    monkeypatch.setattr(image_io.OpenEXR, "File", _FailingExrFile)
+    monkeypatch.setattr(image_io.OpenEXR, "File", FailingExrFile)
     with pytest.raises(InputError, match=r"cannot write .*sky\.exr: No space left on device"):
         api.save_image(_sky_image(0.05), png, exr, ev100=10.0)
     assert png.read_bytes() == png_bytes and exr.read_bytes() == exr_bytes
