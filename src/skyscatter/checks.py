@@ -35,13 +35,19 @@ __all__ = [
     "checked_choice",
     "checked_integer",
     "checked_number",
+    "shown",
 ]
 
 
-def _shown(value: Any) -> str:
-    """`value` as a message shows it: repr, shortened (a 400-digit integer or a long text stays
-    one readable line)."""
-    return reprlib.repr(value)
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxdict = 3, 8, 4
+_SHORT.maxstring, _SHORT.maxlong, _SHORT.maxother = 60, 40, 60
+
+
+def shown(value: Any) -> str:
+    """`value` as a message shows it: `repr(value)` shortened to about 100 characters (a
+    400-digit integer, nested lists or a long text cut with '...'), escaped: one readable line."""
+    return _SHORT.repr(value)
 
 
 def _bounds_text(low: float | None, high: float | None, low_open: bool,
@@ -60,7 +66,7 @@ def checked_number(name: str, value: Any, low: float | None = None, high: float 
     naming `name`, the value and the allowed range. Booleans and strings are refused."""
     allowed = _bounds_text(low, high, low_open, high_open)
     if isinstance(value, bool | str | bytes) or not isinstance(value, int | float | np.number):
-        raise InputError(f"{name} = {_shown(value)} is not allowed: {allowed}", key=name,
+        raise InputError(f"{name} = {shown(value)} is not allowed: {allowed}", key=name,
                          value=value, allowed=allowed)
     try:
         number = float(value)
@@ -70,7 +76,7 @@ def checked_number(name: str, value: Any, low: float | None = None, high: float 
         low is None or (number > low if low_open else number >= low)) and (
         high is None or (number < high if high_open else number <= high))
     if not inside:
-        raise InputError(f"{name} = {_shown(value)} is not allowed: {allowed}", key=name,
+        raise InputError(f"{name} = {shown(value)} is not allowed: {allowed}", key=name,
                          value=value, allowed=allowed)
     return number
 
@@ -80,7 +86,7 @@ def checked_integer(name: str, value: Any, low: int, high: int) -> int:
     allowed = f"a whole number from {low} to {high}"
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or not (
             low <= value <= high):
-        raise InputError(f"{name} = {_shown(value)} is not allowed: {allowed}", key=name,
+        raise InputError(f"{name} = {shown(value)} is not allowed: {allowed}", key=name,
                          value=value, allowed=allowed)
     return int(value)
 
@@ -94,7 +100,7 @@ def checked_choice(what: str, key: str, value: Any, allowed: Iterable[str], *,
     text = value.lower() if fold_case and isinstance(value, str) else value
     if not isinstance(value, str) or text not in names:
         listed = ", ".join(names)
-        raise InputError(f"unknown {what} {_shown(value)}; choose one of: {listed}", key=key,
+        raise InputError(f"unknown {what} {shown(value)}; choose one of: {listed}", key=key,
                          value=value, allowed=listed)
     return value
 
@@ -119,7 +125,7 @@ def checked_array(name: str, values: Any, low: float | None = None, high: float 
     except (TypeError, ValueError):
         raw = np.asarray([None])
     if raw.dtype.kind not in "iuf" or not _all_numbers(values):
-        raise InputError(f"{name} = {_shown(values)} is not allowed: numbers", key=name,
+        raise InputError(f"{name} = {shown(values)} is not allowed: numbers", key=name,
                          value=values, allowed="numbers")
     array = raw.astype(np.float64)
     for element in array.reshape(-1):

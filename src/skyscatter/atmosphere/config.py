@@ -21,7 +21,7 @@ import numpy as np
 
 from skyscatter.atmosphere import config_ranges as ranges
 from skyscatter.atmosphere.config_file import read_toml, read_utf8
-from skyscatter.atmosphere.config_table import ConfigTable, shown
+from skyscatter.atmosphere.config_table import ConfigTable
 from skyscatter.atmosphere.gas import (
     GasLayer,
     number_density_from_mass_density,
@@ -44,6 +44,7 @@ from skyscatter.atmosphere.profiles import (
     TabulatedProfile,
     vertical_column,
 )
+from skyscatter.checks import shown
 from skyscatter.errors import ConfigError, InputError
 from skyscatter.optics.absorption import DOBSON_UNIT_M2, AbsorberOptics
 from skyscatter.optics.aerosol import AngstromOptics

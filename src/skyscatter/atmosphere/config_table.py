@@ -13,7 +13,6 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-import reprlib
 from pathlib import Path
 from typing import Any
 
@@ -25,30 +24,21 @@ from skyscatter.atmosphere.config_ranges import (
     MAX_TEXT_LENGTH,
     WAVELENGTH_NM,
 )
-from skyscatter.checks import Bounds
+from skyscatter.checks import Bounds, shown
 from skyscatter.errors import ConfigError, InputError
 from skyscatter.spectrum.tabulated import SpectralParameter
 
-__all__ = ["POLYNOMIAL_STEP_NM", "ConfigTable", "shown"]
+__all__ = ["POLYNOMIAL_STEP_NM", "ConfigTable"]
 
 # A spectral polynomial is tabulated in steps of at most this [nm] over its range_nm and held
 # constant beyond: a quadratic with |c2| < 1e-5 nm^-2 is then interpolated to within
 # |c2| (10 nm)^2 / 8 < 1.3e-4. range_nm lies within `WAVELENGTH_NM`: at most 1e4 points.
 POLYNOMIAL_STEP_NM = 10.0
 
-_SHORT = reprlib.Repr()
-_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxdict = 3, 8, 4
-_SHORT.maxstring, _SHORT.maxlong, _SHORT.maxother = 60, 40, 60
 # Characters that make a string print as something else: controls (newline, NUL, escape) and
 # the bidirectional overrides of "Trojan source" text.
 _HIDDEN = {chr(c) for c in range(32)} | {"\x7f"} | set("\u202a\u202b\u202c\u202d\u202e"
                                                        "\u2066\u2067\u2068\u2069")
-
-
-def shown(value: Any) -> str:
-    """`repr(value)` shortened to about 100 characters (nested lists and long strings cut with
-    '...'), escaped, for one-line messages."""
-    return _SHORT.repr(value)
 
 
 @dataclasses.dataclass
