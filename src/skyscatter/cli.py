@@ -48,16 +48,16 @@ def _number(bounds: Bounds) -> Callable[[str], float]:
 
 
 def _whole(low: int, high: int) -> Callable[[str], int]:
-    """An argparse type: a whole number from `low` to `high`."""
+    """An argparse type: a whole number from `low` to `high` (`checks.checked_integer`)."""
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"{value} is not allowed: a whole number from "
-                                             f"{low} to {high}")
-        return value
+        try:
+            return checks.checked_integer("value", value, low, high)
+        except InputError as error:
+            raise argparse.ArgumentTypeError(f"{value} is not allowed: {error.allowed}") from None
     return parse
 
 
