@@ -345,22 +345,22 @@ class Handler(BaseHTTPRequestHandler):
         if len(hosts) != 1 or not self.server.host_allowed(host):
             self.close_connection = True
             raise _RefusedError(HTTPStatus.MISDIRECTED_REQUEST,
-                           f"this viewer does not answer for host {host!r}; open the address "
-                           "that `skyscatter view` printed")
+                                f"this viewer does not answer for host {host!r}; open the address "
+                                "that `skyscatter view` printed")
         origin = self.headers.get("Origin")
         if origin is not None and origin.strip().lower() != f"http://{host.strip().lower()}":
             self.close_connection = True
             raise _RefusedError(HTTPStatus.FORBIDDEN,
-                           f"requests from {origin!r} are refused; the viewer answers only "
-                           "its own page")
+                                f"requests from {origin!r} are refused; the viewer answers only "
+                                "its own page")
 
     def _check_token(self, query: dict[str, str]) -> None:
         in_query = query.pop("token", "")
         given = self.headers.get(TOKEN_HEADER) or in_query
         if not hmac.compare_digest(given.encode("utf-8", "replace"), self.server.token.encode()):
             raise _RefusedError(HTTPStatus.FORBIDDEN,
-                           "missing or wrong token: open the address that `skyscatter view` "
-                           "printed (it ends in ?token=...)")
+                                "missing or wrong token: open the address that `skyscatter view` "
+                                "printed (it ends in ?token=...)")
 
     def _refuse_method(self) -> None:
         self.close_connection = True  # its body is not read: it must not become a request
@@ -383,7 +383,7 @@ class Handler(BaseHTTPRequestHandler):
             self._answer()
         except _RefusedError as refused:
             self._error(refused.status, str(refused), refused.headers)
-        except (InputError, SkyscatterError) as error:
+        except SkyscatterError as error:  # InputError, ConfigError: the request's fault
             self._error(HTTPStatus.BAD_REQUEST, str(error))
         except SupersededError as error:
             self._error(HTTPStatus.CONFLICT, str(error))
@@ -410,7 +410,7 @@ class Handler(BaseHTTPRequestHandler):
             fields = parse_qsl(parts.query, keep_blank_values=True, max_num_fields=MAX_FIELDS)
         except ValueError:
             raise _RefusedError(HTTPStatus.BAD_REQUEST,
-                           f"more than {MAX_FIELDS} query parameters") from None
+                                f"more than {MAX_FIELDS} query parameters") from None
         query = dict(fields)
         if len(query) != len(fields):
             twice = sorted({key for key, _ in fields if sum(k == key for k, _ in fields) > 1})
