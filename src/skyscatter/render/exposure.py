@@ -31,6 +31,13 @@ from skyscatter.spectrum.colour import spectral_to_xyz
 __all__ = ["display_rgb8", "frame_ev100", "metered_ev100"]
 
 
+def _night_adapted_ev100(image: SkyImage, xyz: np.ndarray) -> float:
+    """The reflected-light meter over the sky pixels of `xyz` with the night key, the night
+    shift included. [EV]"""
+    metered, night = night_adapted_exposure(xyz[..., 1], image.sky)
+    return metered - night
+
+
 def metered_ev100(image: SkyImage, xyz: np.ndarray, adapt_to_night: bool = False) -> float:
     """The EV100 of `image` when none is given: incident-light metering of the starlight for
     views from space, else the reflected-light meter over the sky pixels of `xyz` (the
@@ -40,8 +47,7 @@ def metered_ev100(image: SkyImage, xyz: np.ndarray, adapt_to_night: bool = False
         return incident_ev100(float(spectral_to_xyz(image.light_spectrum,
                                                     image.wavelengths_nm)[1]))
     if adapt_to_night:
-        metered, night = night_adapted_exposure(xyz[..., 1], image.sky)
-        return metered - night
+        return _night_adapted_ev100(image, xyz)
     return auto_ev100(xyz[..., 1], image.sky)
 
 
@@ -50,8 +56,8 @@ def frame_ev100(previous_ev100: float | None, image: SkyImage, xyz: np.ndarray,
     """The EV100 of a time-lapse frame: the night-adapted meter of `image` (XYZ `xyz`)
     followed from `previous_ev100` (None for the first frame) through a low-pass of time
     constant `adaptation_time_s` over `elapsed_s` of simulated time (`adapted_ev100`). [EV]"""
-    metered, night = night_adapted_exposure(xyz[..., 1], image.sky)
-    return adapted_ev100(previous_ev100, metered - night, abs(elapsed_s), adaptation_time_s)
+    return adapted_ev100(previous_ev100, _night_adapted_ev100(image, xyz), abs(elapsed_s),
+                         adaptation_time_s)
 
 
 def display_rgb8(linear_rgb: np.ndarray, valid: np.ndarray, ev100: float,
