@@ -25,12 +25,14 @@ Peck & Khanna's data at 15 °C agrees within 0.02 %). Reference number densities
 P / (k T); the gases' non-ideality at 1 atm (compressibility Z = 0.993 for CO2 at 0 °C, closer to
 1 for the others) is left out, so CO2's cross-section is about 1.4 % high.
 
+Each Sellmeier-form formula is one `DispersionFormula` (coefficients, number density, source);
 `gas_refractivity(gas, wavelengths_nm)` picks one of these by name.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -40,6 +42,7 @@ from skyscatter.spectrum.star import BOLTZMANN
 
 __all__ = [
     "AIR_NUMBER_DENSITY_288K_M3",
+    "DispersionFormula",
     "GASES",
     "LOSCHMIDT_M3",
     "NUMBER_DENSITY_293K_M3",
@@ -77,26 +80,45 @@ def inverse_square_micrometres(wavelengths_nm: ArrayLike) -> np.ndarray:
     return (1.0e3 / wl) ** 2
 
 
-def refractivity_air_peck_reeder_1972(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""Refractivity of standard dry air with 300 ppm CO2, at 15 °C and 1013.25 hPa.
+@dataclass(frozen=True)
+class DispersionFormula:
+    r"""A dispersion formula of Sellmeier form and the number density at which it holds.
 
-    (n - 1) 10^8 = 8060.51 + 2480990 / (132.274 - sigma^2) + 17455.7 / (39.32957 - sigma^2),
-    sigma = 1 / lambda[µm]. Peck & Reeder (1972), J. Opt. Soc. Am. 62, 958,
-    doi:10.1364/JOSA.62.000958, as quoted by Bodhaine et al. (1999). Fitted to measurements
-    from 230 nm to 1690 nm. Holds at the number density `AIR_NUMBER_DENSITY_288K_M3`.
+    n - 1 = scale (constant + sum_i b_i / (c_i - x)),   x = sigma^2 x_per_sigma2,
+    sigma = 1 / lambda[µm]; each instance below names its source. Calling one returns n - 1.
 
-    Parameters
-    ----------
+    Parameters (of the call)
+    ------------------------
     wavelengths_nm : array_like, shape S
         Wavelength. [nm]
 
-    Returns
-    -------
+    Returns (of the call)
+    ---------------------
     ndarray, shape S
         n - 1. [-]
     """
-    s2 = inverse_square_micrometres(wavelengths_nm)
-    return 1.0e-8 * (8060.51 + 2480990.0 / (132.274 - s2) + 17455.7 / (39.32957 - s2))
+
+    constant: float
+    terms: tuple[tuple[float, float], ...]  # (b_i, c_i), in the units of x
+    number_density_m3: float  # m^-3, the density the formula holds at
+    source: str
+    scale: float = 1.0
+    x_per_sigma2: float = 1.0  # 1e8 for x = nu^2 in cm^-2
+
+    def __call__(self, wavelengths_nm: ArrayLike) -> np.ndarray:
+        x = inverse_square_micrometres(wavelengths_nm) * self.x_per_sigma2
+        total = np.full(x.shape, self.constant)
+        for b, c in self.terms:
+            total = total + b / (c - x)
+        return self.scale * total
+
+
+refractivity_air_peck_reeder_1972 = DispersionFormula(
+    8060.51, ((2480990.0, 132.274), (17455.7, 39.32957)), AIR_NUMBER_DENSITY_288K_M3, scale=1.0e-8,
+    source="""Standard dry air with 300 ppm CO2, at 15 °C and 1013.25 hPa.
+    (n - 1) 10^8 = 8060.51 + 2480990 / (132.274 - sigma^2) + 17455.7 / (39.32957 - sigma^2).
+    Peck & Reeder (1972), J. Opt. Soc. Am. 62, 958, doi:10.1364/JOSA.62.000958, as quoted by
+    Bodhaine et al. (1999). Fitted to measurements from 230 nm to 1690 nm.""")
 
 
 def refractivity_air_bodhaine_1999(wavelengths_nm: ArrayLike,
@@ -127,32 +149,25 @@ def refractivity_air_bodhaine_1999(wavelengths_nm: ArrayLike,
     return refractivity_air_peck_reeder_1972(wavelengths_nm) * (1.0 + 0.54 * (c_co2 - 0.0003))
 
 
-def refractivity_co2_bideau_mehu_1973(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""Refractivity of pure CO2 gas at 0 °C and 101325 Pa.
-
+refractivity_co2_bideau_mehu_1973 = DispersionFormula(
+    0.0, ((6.99100e-2, 166.175), (1.44720e-3, 79.609), (6.42941e-5, 56.3064),
+          (5.21306e-5, 46.0196), (1.46847e-6, 0.0584738)), LOSCHMIDT_M3,
+    source="""Pure CO2 gas at 0 °C and 101325 Pa.
     n - 1 = 6.99100e-2 / (166.175 - sigma^2) + 1.44720e-3 / (79.609 - sigma^2)
           + 6.42941e-5 / (56.3064 - sigma^2) + 5.21306e-5 / (46.0196 - sigma^2)
-          + 1.46847e-6 / (0.0584738 - sigma^2),           sigma = 1 / lambda[µm].
+          + 1.46847e-6 / (0.0584738 - sigma^2).
     Bideau-Mehu et al. (1973), Opt. Commun. 9, 432, doi:10.1016/0030-4018(73)90289-7; measured
-    from 181 nm to 1695 nm. Holds at the number density `LOSCHMIDT_M3`. Costa et al. (2020),
-    Table 1, print n_CO2 = (1.00044661, 1.00045019, 1.00045558) at (680, 550, 440) nm; this
-    formula gives the first two to every printed digit and 1.00045588 at 440 nm (the printed
-    value is reached at 444.3 nm: 0.07 % of n - 1, probably a transposed digit).
+    from 181 nm to 1695 nm. Costa et al. (2020), Table 1, print n_CO2 = (1.00044661, 1.00045019,
+    1.00045558) at (680, 550, 440) nm; this formula gives the first two to every printed digit and
+    1.00045588 at 440 nm (the printed value is reached at 444.3 nm: 0.07 % of n - 1, probably a
+    transposed digit).""")
 
-    Parameters
-    ----------
-    wavelengths_nm : array_like, shape S
-        Wavelength. [nm]
-
-    Returns
-    -------
-    ndarray, shape S
-        n - 1. [-]
-    """
-    s2 = inverse_square_micrometres(wavelengths_nm)
-    return (6.99100e-2 / (166.175 - s2) + 1.44720e-3 / (79.609 - s2)
-            + 6.42941e-5 / (56.3064 - s2) + 5.21306e-5 / (46.0196 - s2)
-            + 1.46847e-6 / (0.0584738 - s2))
+_N2_PECK_KHANNA_1966 = DispersionFormula(
+    6498.2, ((307.43305e12, 14.4e9),), AIR_NUMBER_DENSITY_288K_M3, scale=1.0e-8,
+    x_per_sigma2=1.0e8, source="N2, Peck & Khanna (1966); see refractivity_n2_peck_khanna_1966")
+_N2_BATES_1984 = DispersionFormula(
+    5677.465, ((318.81874e12, 14.4e9),), AIR_NUMBER_DENSITY_288K_M3, scale=1.0e-8,
+    x_per_sigma2=1.0e8, source="N2, Bates (1984); see refractivity_n2_peck_khanna_1966")
 
 
 def refractivity_n2_peck_khanna_1966(wavelengths_nm: ArrayLike) -> np.ndarray:
@@ -177,148 +192,75 @@ def refractivity_n2_peck_khanna_1966(wavelengths_nm: ArrayLike) -> np.ndarray:
         n - 1. [-]
     """
     nu2 = inverse_square_micrometres(wavelengths_nm) * 1.0e8  # cm^-2
-    visible = 1.0e-8 * (6498.2 + 307.43305e12 / (14.4e9 - nu2))
-    ultraviolet = 1.0e-8 * (5677.465 + 318.81874e12 / (14.4e9 - nu2))
-    return np.where(nu2 <= 21360.0**2, visible, ultraviolet)
+    return np.where(nu2 <= 21360.0**2, _N2_PECK_KHANNA_1966(wavelengths_nm),
+                    _N2_BATES_1984(wavelengths_nm))
 
 
-def refractivity_o2_zhang_2008(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""Refractivity of pure O2 at 20 °C and 101325 Pa.
-
-    n - 1 = 1.181494e-4 + 9.708931e-3 / (75.4 - sigma^2),   sigma = 1 / lambda[µm].
+refractivity_o2_zhang_2008 = DispersionFormula(
+    1.181494e-4, ((9.708931e-3, 75.4),), NUMBER_DENSITY_293K_M3,
+    source="""Pure O2 at 20 °C and 101325 Pa.
+    n - 1 = 1.181494e-4 + 9.708931e-3 / (75.4 - sigma^2).
     Zhang, Lu & Wang (2008), Appl. Opt. 47, 3143, doi:10.1364/AO.47.003143, with Křen (2011),
-    Appl. Opt. 50, 6484, doi:10.1364/AO.50.006484; fitted from 400 nm to 1800 nm. Holds at the
-    number density `NUMBER_DENSITY_293K_M3`.
+    Appl. Opt. 50, 6484, doi:10.1364/AO.50.006484; fitted from 400 nm to 1800 nm.""")
 
-    Parameters
-    ----------
-    wavelengths_nm : array_like, shape S
-        Wavelength. [nm]
-
-    Returns
-    -------
-    ndarray, shape S
-        n - 1. [-]
-    """
-    s2 = inverse_square_micrometres(wavelengths_nm)
-    return 1.181494e-4 + 9.708931e-3 / (75.4 - s2)
-
-
-def refractivity_ar_peck_fisher_1964(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""Refractivity of argon at 15 °C and 101325 Pa.
-
-    n - 1 = 6.432135e-5 + 2.8606021e-2 / (144 - sigma^2),   sigma = 1 / lambda[µm].
+refractivity_ar_peck_fisher_1964 = DispersionFormula(
+    6.432135e-5, ((2.8606021e-2, 144.0),), AIR_NUMBER_DENSITY_288K_M3,
+    source="""Argon at 15 °C and 101325 Pa.
+    n - 1 = 6.432135e-5 + 2.8606021e-2 / (144 - sigma^2).
     Peck & Fisher (1964), J. Opt. Soc. Am. 54, 1362, doi:10.1364/JOSA.54.001362; measured from
-    468 nm to 2059 nm. Holds at the number density `AIR_NUMBER_DENSITY_288K_M3`.
+    468 nm to 2059 nm.""")
 
-    Parameters
-    ----------
-    wavelengths_nm : array_like, shape S
-        Wavelength. [nm]
-
-    Returns
-    -------
-    ndarray, shape S
-        n - 1. [-]
-    """
-    s2 = inverse_square_micrometres(wavelengths_nm)
-    return 6.432135e-5 + 2.8606021e-2 / (144.0 - s2)
-
-
-def refractivity_h2_peck_huang_1977(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""Refractivity of H2 at 0 °C and 101325 Pa.
-
-    n - 1 = 0.0148956 / (180.7 - sigma^2) + 0.0049037 / (92 - sigma^2),  sigma = 1 / lambda[µm].
+refractivity_h2_peck_huang_1977 = DispersionFormula(
+    0.0, ((0.0148956, 180.7), (0.0049037, 92.0)), LOSCHMIDT_M3,
+    source="""H2 at 0 °C and 101325 Pa.
+    n - 1 = 0.0148956 / (180.7 - sigma^2) + 0.0049037 / (92 - sigma^2).
     Peck & Huang (1977), J. Opt. Soc. Am. 67, 1550, doi:10.1364/JOSA.67.001550; measured from
-    168 nm to 1695 nm. Holds at the number density `LOSCHMIDT_M3`.
+    168 nm to 1695 nm.""")
 
-    Parameters
-    ----------
-    wavelengths_nm : array_like, shape S
-        Wavelength. [nm]
-
-    Returns
-    -------
-    ndarray, shape S
-        n - 1. [-]
-    """
-    s2 = inverse_square_micrometres(wavelengths_nm)
-    return 0.0148956 / (180.7 - s2) + 0.0049037 / (92.0 - s2)
-
-
-def refractivity_he_mansfield_peck_1969(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""Refractivity of helium at 0 °C and 101325 Pa.
-
-    n - 1 = 0.01470091 / (423.98 - sigma^2),   sigma = 1 / lambda[µm].
+refractivity_he_mansfield_peck_1969 = DispersionFormula(
+    0.0, ((0.01470091, 423.98),), LOSCHMIDT_M3,
+    source="""Helium at 0 °C and 101325 Pa.
+    n - 1 = 0.01470091 / (423.98 - sigma^2).
     Mansfield & Peck (1969), J. Opt. Soc. Am. 59, 199, doi:10.1364/JOSA.59.000199; measured from
-    480 nm to 2059 nm. Holds at the number density `LOSCHMIDT_M3`.
+    480 nm to 2059 nm.""")
 
-    Parameters
-    ----------
-    wavelengths_nm : array_like, shape S
-        Wavelength. [nm]
-
-    Returns
-    -------
-    ndarray, shape S
-        n - 1. [-]
-    """
-    s2 = inverse_square_micrometres(wavelengths_nm)
-    return 0.01470091 / (423.98 - s2)
-
-
-def refractivity_ch4_kaye_laby(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""Refractivity of methane at 0 °C and 101325 Pa, one value for every wavelength.
-
+refractivity_ch4_kaye_laby = DispersionFormula(
+    REFRACTIVITY_CH4_KAYE_LABY, (), LOSCHMIDT_M3,
+    source="""Methane at 0 °C and 101325 Pa, one value for every wavelength.
     n - 1 = 4.44e-4 (`REFRACTIVITY_CH4_KAYE_LABY`), measured at 589.3 nm: Kaye & Laby, Tables of
     Physical and Chemical Constants (NPL), section 2.5.7. A deliberate simplification: the
     dispersion is left out, for want of a formula whose coefficients we could check; that of
     comparable gases (N2: n - 1 is 1.3 % larger at 440 nm than at 589 nm) makes the cross-section
-    a few percent low in the blue. Holds at the number density `LOSCHMIDT_M3`.
-
-    Parameters
-    ----------
-    wavelengths_nm : array_like, shape S
-        Wavelength. [nm]
-
-    Returns
-    -------
-    ndarray, shape S
-        n - 1. [-]
-    """
-    s2 = inverse_square_micrometres(wavelengths_nm)
-    return np.full(s2.shape, REFRACTIVITY_CH4_KAYE_LABY)
+    a few percent low in the blue.""")
 
 
 def _air(wavelengths_nm: ArrayLike, co2_ppm: float) -> tuple[np.ndarray, float]:
     return refractivity_air_bodhaine_1999(wavelengths_nm, co2_ppm), AIR_NUMBER_DENSITY_288K_M3
 
 
-def _pure(function: Callable[[ArrayLike], np.ndarray], number_density_m3: float
-          ) -> Callable[[ArrayLike, float], tuple[np.ndarray, float]]:
+def _pure(formula: DispersionFormula) -> Callable[[ArrayLike, float], tuple[np.ndarray, float]]:
     """A pure gas's formula as a `GASES` entry (co2_ppm does not apply)."""
     def refractivity(wavelengths_nm: ArrayLike, co2_ppm: float) -> tuple[np.ndarray, float]:
-        return function(wavelengths_nm), number_density_m3
+        return formula(wavelengths_nm), formula.number_density_m3
     return refractivity
+
+
+def _n2(wavelengths_nm: ArrayLike, co2_ppm: float) -> tuple[np.ndarray, float]:
+    return refractivity_n2_peck_khanna_1966(wavelengths_nm), AIR_NUMBER_DENSITY_288K_M3
 
 
 # name -> (refractivity function, description); co2_ppm only affects "air".
 GASES: dict[str, tuple[Callable[[ArrayLike, float], tuple[np.ndarray, float]], str]] = {
     "air": (_air, "dry air, Peck & Reeder 1972 + Bodhaine 1999 CO2 correction, 288.15 K"),
-    "ar": (_pure(refractivity_ar_peck_fisher_1964, AIR_NUMBER_DENSITY_288K_M3),
-           "argon, Peck & Fisher 1964, 288.15 K"),
-    "ch4": (_pure(refractivity_ch4_kaye_laby, LOSCHMIDT_M3),
+    "ar": (_pure(refractivity_ar_peck_fisher_1964), "argon, Peck & Fisher 1964, 288.15 K"),
+    "ch4": (_pure(refractivity_ch4_kaye_laby),
             "methane, Kaye & Laby (589.3 nm, no dispersion), 273.15 K"),
-    "co2": (_pure(refractivity_co2_bideau_mehu_1973, LOSCHMIDT_M3),
+    "co2": (_pure(refractivity_co2_bideau_mehu_1973),
             "carbon dioxide, Bideau-Mehu et al. 1973, 273.15 K"),
-    "h2": (_pure(refractivity_h2_peck_huang_1977, LOSCHMIDT_M3),
-           "hydrogen, Peck & Huang 1977, 273.15 K"),
-    "he": (_pure(refractivity_he_mansfield_peck_1969, LOSCHMIDT_M3),
-           "helium, Mansfield & Peck 1969, 273.15 K"),
-    "n2": (_pure(refractivity_n2_peck_khanna_1966, AIR_NUMBER_DENSITY_288K_M3),
-           "nitrogen, Peck & Khanna 1966 / Bates 1984 (Sneep & Ubachs 2005), 288.15 K"),
-    "o2": (_pure(refractivity_o2_zhang_2008, NUMBER_DENSITY_293K_M3),
-           "oxygen, Zhang et al. 2008, 293.15 K"),
+    "h2": (_pure(refractivity_h2_peck_huang_1977), "hydrogen, Peck & Huang 1977, 273.15 K"),
+    "he": (_pure(refractivity_he_mansfield_peck_1969), "helium, Mansfield & Peck 1969, 273.15 K"),
+    "n2": (_n2, "nitrogen, Peck & Khanna 1966 / Bates 1984 (Sneep & Ubachs 2005), 288.15 K"),
+    "o2": (_pure(refractivity_o2_zhang_2008), "oxygen, Zhang et al. 2008, 293.15 K"),
 }
 
 
