@@ -36,6 +36,7 @@ __all__ = [
     "KING_FACTOR_AR_BODHAINE_1999",
     "KING_FACTOR_CO2_BODHAINE_1999",
     "KING_FACTOR_MODELS",
+    "KingFactorPolynomial",
     "RAYLEIGH_PHASES",
     "RayleighOptics",
     "TabulatedScatteringOptics",
@@ -77,46 +78,48 @@ def king_factor_from_depolarization(depolarization: ArrayLike) -> np.ndarray:
     return (6.0 + 3.0 * delta) / (6.0 - 7.0 * delta)
 
 
-def king_factor_n2_bates_1984(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""King factor of N2, F_N2 = 1.034 + 3.17e-4 lam^-2, lam in µm.
+@dataclass(frozen=True)
+class KingFactorPolynomial:
+    r"""A King factor polynomial in sigma^2 = lam^-2 (lam in µm), F = sum_k a_k sigma^(2k).
 
-    Bates (1984), Planet. Space Sci. 32, 785, doi:10.1016/0032-0633(84)90102-8, as quoted by
-    Bodhaine et al. (1999), J. Atmos. Oceanic Technol. 16, 1854, eqs. 23-27,
-    doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2. F_N2(550 nm) = 1.0350.
+    Each instance below names its source. Calling one returns F.
 
-    Parameters
-    ----------
+    Parameters (of the call)
+    ------------------------
     wavelengths_nm : array_like, shape S
         Wavelength. [nm]
 
-    Returns
-    -------
+    Returns (of the call)
+    ---------------------
     ndarray, shape S
         King factor F. [-]
     """
-    inv2 = inverse_square_micrometres(wavelengths_nm)
-    return 1.034 + 3.17e-4 * inv2
+
+    coefficients: tuple[float, ...]  # a_0, a_1, ...; a_k in µm^(2k)
+    source: str
+
+    def __call__(self, wavelengths_nm: ArrayLike) -> np.ndarray:
+        inv2 = inverse_square_micrometres(wavelengths_nm)
+        total = np.full(inv2.shape, self.coefficients[0])
+        for power, coefficient in enumerate(self.coefficients[1:], start=1):
+            term = coefficient
+            for _ in range(power):
+                term = term * inv2
+            total = total + term
+        return total
 
 
-def king_factor_o2_bates_1984(wavelengths_nm: ArrayLike) -> np.ndarray:
-    r"""King factor of O2, F_O2 = 1.096 + 1.385e-3 lam^-2 + 1.448e-4 lam^-4, lam in µm.
+king_factor_n2_bates_1984 = KingFactorPolynomial((1.034, 3.17e-4), source="""King factor of N2,
+    F_N2 = 1.034 + 3.17e-4 lam^-2. Bates (1984), Planet. Space Sci. 32, 785,
+    doi:10.1016/0032-0633(84)90102-8, as quoted by Bodhaine et al. (1999), J. Atmos. Oceanic
+    Technol. 16, 1854, eqs. 23-27, doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2.
+    F_N2(550 nm) = 1.0350.""")
 
-    Bates (1984), Planet. Space Sci. 32, 785, doi:10.1016/0032-0633(84)90102-8, as quoted by
-    Bodhaine et al. (1999), J. Atmos. Oceanic Technol. 16, 1854, eqs. 23-27,
-    doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2. F_O2(550 nm) = 1.1021.
-
-    Parameters
-    ----------
-    wavelengths_nm : array_like, shape S
-        Wavelength. [nm]
-
-    Returns
-    -------
-    ndarray, shape S
-        King factor F. [-]
-    """
-    inv2 = inverse_square_micrometres(wavelengths_nm)
-    return 1.096 + 1.385e-3 * inv2 + 1.448e-4 * inv2 * inv2
+king_factor_o2_bates_1984 = KingFactorPolynomial((1.096, 1.385e-3, 1.448e-4), source="""King
+    factor of O2, F_O2 = 1.096 + 1.385e-3 lam^-2 + 1.448e-4 lam^-4. Bates (1984), Planet. Space
+    Sci. 32, 785, doi:10.1016/0032-0633(84)90102-8, as quoted by Bodhaine et al. (1999), J. Atmos.
+    Oceanic Technol. 16, 1854, eqs. 23-27, doi:10.1175/1520-0426(1999)016<1854:ORODC>2.0.CO;2.
+    F_O2(550 nm) = 1.1021.""")
 
 
 def king_factor_air_bodhaine_1999(wavelengths_nm: ArrayLike, co2_ppm: float = 360.0) -> np.ndarray:
