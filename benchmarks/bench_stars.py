@@ -50,7 +50,7 @@ def main() -> None:
             catalogue.v_magnitude, colour_temperature_from_b_minus_v(catalogue.b_minus_v),
             wavelengths),
         f"add_stars, {SIZE}^2 fisheye": lambda: add_stars(
-            image, camera, valid, directions, irradiance, transmittance),
+            image, camera, valid, directions, irradiance, transmittance=transmittance),
         "integrated_starlight_radiance, 1M dirs": lambda: integrated_starlight_radiance(
             sky, wavelengths, 6.0),
     }

@@ -230,7 +230,7 @@ def check_render_cost(camera: Camera, wavelengths_nm: Sequence[float] | None = N
     if frames > 1:
         what = f"{frames} frames of {what[2:]}"
     check_cost(what, image_memory_bytes(width, height, n_wl), float(width) * height * frames,
-               n_wl, solver, n_samples, allow_large)
+               n_wl, solver=solver, n_samples=n_samples, allow_large=allow_large)
 
 
 def _check_atmosphere(atmosphere: Atmosphere) -> None:
@@ -279,7 +279,8 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
     engine = load_solver(atmosphere, wavelengths, solver, options)
     viewpoint = viewpoint_at(altitude_m, engine.profile.bottom_radius_m, orbit_latitude_deg,
                              orbit_longitude_deg)
-    return render_sky(engine, camera, viewpoint, sun, atmosphere.planet.star, progress, ground)
+    return render_sky(engine, camera, viewpoint, sun, atmosphere.planet.star, progress=progress,
+                      ground=ground)
 
 
 def make_observer(time: str | datetime.datetime, latitude_deg: float, longitude_deg: float,
@@ -356,8 +357,9 @@ def _render_at(engine, atmosphere: Atmosphere, camera: Camera, observer: Observe
         viewpoint = viewpoint_at(orbit_altitude_m, radius, observer.latitude_deg,
                                  observer.longitude_deg)
     optics = eclipse_optics(engine) if sky.moon is not None else None
-    return render_sky_at(engine, camera, viewpoint, atmosphere.planet.star, sky, objects,
-                         progress, ground, optics)
+    return render_sky_at(engine, camera, viewpoint, atmosphere.planet.star, sky,
+                         objects=objects, progress=progress, ground=ground,
+                         eclipse_optics=optics)
 
 
 def _check_observer(observer: Observer) -> None:
@@ -616,8 +618,8 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     wavelengths = _checked_wavelength_list(wavelengths_nm, True)
     rays = sun_zeniths_deg.size * view_zeniths_deg.size * relative_azimuths_deg.size
     check_cost(f"a radiance table of {rays * wavelengths.size} rows",
-               rays * wavelengths.size * BYTES_PER_ROW, rays, wavelengths.size, solver,
-               _samples(options), allow_large)
+               rays * wavelengths.size * BYTES_PER_ROW, rays, wavelengths.size, solver=solver,
+               n_samples=_samples(options), allow_large=allow_large)
     engine = load_solver(atmosphere, wavelengths, solver, options, monochromatic=True)
     profile = engine.profile
     position = observer_position(altitude_m, profile.bottom_radius_m)

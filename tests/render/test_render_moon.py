@@ -202,7 +202,8 @@ def test_image_integral_of_large_disk_equals_moon_irradiance(phase_deg):
     directions, valid = camera.directions()
     image = np.zeros((240, 240, WL.size))
     trans = np.linspace(0.5, 0.9, WL.size)
-    moon.add_moon_disk(image, camera, directions, valid, g, WL, E_SUN, trans)
+    moon.add_moon_disk(image, camera, directions, valid, g, wavelengths_nm=WL,
+                       solar_irradiance_at_moon=E_SUN, transmittance=trans)
     total = np.einsum("ijk,ij->k", image, camera.pixel_solid_angles())
     expected = moon.moon_irradiance(g, WL, E_SUN) * trans
     np.testing.assert_allclose(total, expected, rtol=1.0 * PERCENT)
@@ -214,7 +215,8 @@ def test_sub_pixel_disk_deposits_its_whole_irradiance_in_one_pixel():
     camera = _camera_on(g, 40.0, 64)  # pixel 0.625°: disk (0.52°) < 4 pixels
     directions, valid = camera.directions()
     image = np.zeros((64, 64, WL.size))
-    moon.add_moon_disk(image, camera, directions, valid, g, WL, E_SUN, np.ones(WL.size))
+    moon.add_moon_disk(image, camera, directions, valid, g, wavelengths_nm=WL,
+                       solar_irradiance_at_moon=E_SUN, transmittance=np.ones(WL.size))
     assert np.count_nonzero(image[..., I550]) == 1
     total = np.einsum("ijk,ij->k", image, camera.pixel_solid_angles())
     np.testing.assert_allclose(total, moon.moon_irradiance(g, WL, E_SUN), rtol=1e-12)

@@ -51,7 +51,7 @@ def test_each_star_inside_the_image_keeps_its_flux_exactly(name):
     for k in range(400):  # one star at a time, to check each one
         image = np.zeros((camera.height, camera.width, N_WL))
         count = add_stars(image, camera, valid, directions[k:k + 1], irradiance[k:k + 1],
-                          transmittance[k:k + 1])
+                          transmittance=transmittance[k:k + 1])
         total = np.einsum("hwk,hw->k", image, omega)
         if count:
             deposited += 1
@@ -68,11 +68,11 @@ def test_many_stars_at_once_equal_the_sum_of_single_stars():
     directions = random_up_directions(rng, 300)
     irradiance = rng.uniform(size=(300, N_WL))
     together = np.zeros((64, 64, N_WL))
-    add_stars(together, camera, camera.valid_mask(), directions, irradiance, 1.0)
+    add_stars(together, camera, camera.valid_mask(), directions, irradiance, transmittance=1.0)
     apart = np.zeros((64, 64, N_WL))
     for k in range(300):
         add_stars(apart, camera, camera.valid_mask(), directions[k:k + 1], irradiance[k:k + 1],
-                  1.0)
+                  transmittance=1.0)
     np.testing.assert_allclose(together, apart, rtol=1e-12, atol=0.0)
 
 
@@ -80,7 +80,7 @@ def test_star_at_a_pixel_centre_goes_into_that_pixel():
     camera = FisheyeCamera(9)
     directions, valid = camera.directions()
     image = np.zeros((9, 9, 1))
-    add_stars(image, camera, valid, directions[4, 4][None], np.ones((1, 1)), 1.0)
+    add_stars(image, camera, valid, directions[4, 4][None], np.ones((1, 1)), transmittance=1.0)
     omega = camera.pixel_solid_angles()
     assert image[4, 4, 0] == pytest.approx(1.0 / omega[4, 4], rel=1e-9)
     assert np.count_nonzero(image) == 1
@@ -90,10 +90,12 @@ def test_stars_below_horizon_or_behind_camera_are_skipped():
     image = np.zeros((10, 10, 1))
     camera = FisheyeCamera(10)
     below = np.array([[0.0, 0.6, -0.8], [1.0, 0.0, 0.0]])
-    assert add_stars(image, camera, camera.valid_mask(), below, np.ones((2, 1)), 1.0) == 0
+    assert add_stars(image, camera, camera.valid_mask(), below, np.ones((2, 1)),
+                     transmittance=1.0) == 0
     behind = PerspectiveCamera(10, 10, 40.0, heading_deg=0.0, pitch_deg=10.0)
     back = np.array([[0.0, -0.9, 0.3]])
-    assert add_stars(image, behind, behind.valid_mask(), back, np.ones((1, 1)), 1.0) == 0
+    assert add_stars(image, behind, behind.valid_mask(), back, np.ones((1, 1)),
+                     transmittance=1.0) == 0
     assert not image.any()
 
 
@@ -101,9 +103,9 @@ def test_transmittance_and_scintillation_multiply():
     camera = FisheyeCamera(16)
     d = np.array([[0.1, 0.2, 0.97]])
     a, b = np.zeros((16, 16, 2)), np.zeros((16, 16, 2))
-    add_stars(a, camera, camera.valid_mask(), d, np.ones((1, 2)), 1.0)
-    add_stars(b, camera, camera.valid_mask(), d, np.ones((1, 2)), np.array([[0.5, 0.25]]),
-              scintillation=np.array([2.0]))
+    add_stars(a, camera, camera.valid_mask(), d, np.ones((1, 2)), transmittance=1.0)
+    add_stars(b, camera, camera.valid_mask(), d, np.ones((1, 2)),
+              transmittance=np.array([[0.5, 0.25]]), scintillation=np.array([2.0]))
     np.testing.assert_allclose(b[..., 0], a[..., 0])
     np.testing.assert_allclose(b[..., 1], 0.5 * a[..., 1])
 
@@ -112,9 +114,11 @@ def test_add_stars_errors():
     camera = FisheyeCamera(8)
     image = np.zeros((8, 8, 3))
     with pytest.raises(InputError, match="star_irradiance must have shape"):
-        add_stars(image, camera, camera.valid_mask(), np.zeros((2, 3)), np.ones((2, 2)), 1.0)
+        add_stars(image, camera, camera.valid_mask(), np.zeros((2, 3)), np.ones((2, 2)),
+                  transmittance=1.0)
     with pytest.raises(InputError, match=r"shape \(n, 3\)"):
-        add_stars(image, camera, camera.valid_mask(), np.zeros((2, 2)), np.ones((2, 3)), 1.0)
+        add_stars(image, camera, camera.valid_mask(), np.zeros((2, 2)), np.ones((2, 3)),
+                  transmittance=1.0)
 
 
 # --- air mass and scintillation ------------------------------------------------------------------
@@ -237,7 +241,8 @@ def test_add_star_background_rotates_to_icrs_and_applies_transmittance():
     to_horizon = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
     image = np.zeros((24, 24, 4))
     add_star_background(image, valid, directions, to_horizon, grid,
-                        lambda rays: np.full((rays.shape[0], 4), 0.5), magnitude_limit=7.0)
+                        transmittance_of=lambda rays: np.full((rays.shape[0], 4), 0.5),
+                        magnitude_limit=7.0)
     expected = 0.5 * integrated_starlight_radiance(directions[valid] @ to_horizon, grid, 7.0)
     np.testing.assert_allclose(image[valid], expected, rtol=1e-12)
     assert np.all(image[~valid] == 0.0)

@@ -21,7 +21,8 @@ def _disk(elevation_deg: float, camera: PerspectiveCamera, horizon_cos_zenith: f
     directions, valid = camera.directions()
     spectral = np.zeros(directions.shape[:2] + (WAVELENGTHS_NM.size,))
     add_sun_disk(spectral, camera, directions, valid, sun_direction(90.0 - elevation_deg, 270.0),
-                 Star.sun(), WAVELENGTHS_NM, np.ones(WAVELENGTHS_NM.size),
+                 star=Star.sun(), wavelengths_nm=WAVELENGTHS_NM,
+                 transmittance=np.ones(WAVELENGTHS_NM.size),
                  horizon_cos_zenith=horizon_cos_zenith)
     return spectral, directions
 

@@ -104,7 +104,8 @@ def test_night_stars_match_cpu_renderer(page, viewer_url, tmp_path):
     image = render_sky_at(LutSolver(profile, tables=tables), api.FisheyeCamera(size),
                           api.viewpoint_at(0.0, profile.bottom_radius_m), atmosphere.planet.star,
                           api.sky_ephemeris(atmosphere, observer),
-                          api.SkyObjects(moon=False, airglow=False, magnitude_limit=6.5))
+                          objects=api.SkyObjects(moon=False, airglow=False,
+                                                 magnitude_limit=6.5))
     api.save_image(image, tmp_path / "night.png", ev100=ev100)
     cpu = np.asarray(Image.open(tmp_path / "night.png").convert("RGB"))
     gpu = open_view(page, viewer_url, {"projection": "fisheye", "altitude_m": 0, "lat": lat,

@@ -305,7 +305,7 @@ def shadow_axis_distance_rad(moon_geocentric_m: ArrayLike,
     return _angle(moon, -sun)
 
 
-def eclipse_magnitudes(moon_geocentric_m: ArrayLike, sun_geocentric_m: ArrayLike,
+def eclipse_magnitudes(moon_geocentric_m: ArrayLike, sun_geocentric_m: ArrayLike, *,
                        enlargement: str = "danjon",
                        earth_radius_m: float = EARTH_SHADOW_RADIUS_M,
                        moon_radius_m: float = MOON_RADIUS_M,

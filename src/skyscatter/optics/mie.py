@@ -336,7 +336,7 @@ def _cache_metadata(distribution: SizeDistribution, radii: np.ndarray, weights: 
 
 
 def particle_optics(distribution: SizeDistribution, index: ComplexIndex,
-                    wavelengths_nm: ArrayLike, n_radii: int = 5000,
+                    wavelengths_nm: ArrayLike, *, n_radii: int = 5000,
                     phase_average: str = "scattering", method: str = "mie",
                     cache_directory: Path | str | None | bool = None,
                     progress: Callable[[int, int, str], None] | None = None,

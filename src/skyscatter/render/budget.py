@@ -62,8 +62,8 @@ def _gib(size_bytes: float) -> str:
     return f"{gib:.3g}" if gib < 1000.0 else f"{gib:,.0f}"
 
 
-def check_cost(what: str, memory_bytes: float, rays: float, n_wavelengths: int, solver: str,
-               n_samples: int, allow_large: bool = False) -> None:
+def check_cost(what: str, memory_bytes: float, rays: float, n_wavelengths: int, *,
+               solver: str, n_samples: int, allow_large: bool = False) -> None:
     """InputError naming `what` (e.g. "a 512 x 512-pixel image at 16 wavelengths") when it
     would need more memory than this computer has, or (solvers "single" and "montecarlo")
     more than an hour for `rays` view rays x `n_samples` x `n_wavelengths`; nothing when

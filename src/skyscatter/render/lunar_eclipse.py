@@ -116,7 +116,7 @@ def default_altitude_edges_m(top_altitude_m: float = DEFAULT_TOP_ALTITUDE_M) -> 
 
 def eclipse_factor(points_geocentric_m: ArrayLike, sun_geocentric_m: ArrayLike,
                    grazing_transmittance: Callable[[np.ndarray], np.ndarray],
-                   grazing_deflection_rad: Callable[[np.ndarray], np.ndarray],
+                   grazing_deflection_rad: Callable[[np.ndarray], np.ndarray], *,
                    earth_radius_m: float = EARTH_SHADOW_RADIUS_M,
                    sun_radius_m: float = SUN_RADIUS_M,
                    top_altitude_m: float = DEFAULT_TOP_ALTITUDE_M,

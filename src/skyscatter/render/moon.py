@@ -485,7 +485,7 @@ def earthshine_irradiance(geometry: MoonGeometry, wavelengths_nm: ArrayLike,
 
 
 def moon_disk_radiance(view_directions: ArrayLike, geometry: MoonGeometry,
-                       wavelengths_nm: ArrayLike, solar_irradiance_at_moon: ArrayLike,
+                       wavelengths_nm: ArrayLike, solar_irradiance_at_moon: ArrayLike, *,
                        earthshine: bool = True,
                        eclipse: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     """Spectral radiance of the Moon along view rays, eq. (1) of the module docstring.
@@ -579,7 +579,7 @@ def _disk_quadrature(geometry: MoonGeometry, n_radial: int,
 
 
 def moon_irradiance(geometry: MoonGeometry, wavelengths_nm: ArrayLike,
-                    solar_irradiance_at_moon: ArrayLike, earthshine: bool = True,
+                    solar_irradiance_at_moon: ArrayLike, *, earthshine: bool = True,
                     eclipse: Callable[[np.ndarray], np.ndarray] | None = None,
                     n_radial: int = 48, n_azimuth: int = 96) -> np.ndarray:
     """Disk-integrated spectral irradiance of the Moon at the observer (no atmosphere).
@@ -605,12 +605,12 @@ def moon_irradiance(geometry: MoonGeometry, wavelengths_nm: ArrayLike,
     """
     dirs, weights = _disk_quadrature(geometry, int(n_radial), int(n_azimuth))
     radiance = moon_disk_radiance(dirs, geometry, wavelengths_nm, solar_irradiance_at_moon,
-                                  earthshine, eclipse)
+                                  earthshine=earthshine, eclipse=eclipse)
     return weights @ radiance
 
 
 def add_moon_disk(spectral: np.ndarray, camera, directions: np.ndarray, valid: np.ndarray,
-                  geometry: MoonGeometry, wavelengths_nm: ArrayLike,
+                  geometry: MoonGeometry, *, wavelengths_nm: ArrayLike,
                   solar_irradiance_at_moon: ArrayLike, transmittance: ArrayLike,
                   earthshine: bool = True,
                   eclipse: Callable[[np.ndarray], np.ndarray] | None = None,
@@ -645,17 +645,18 @@ def add_moon_disk(spectral: np.ndarray, camera, directions: np.ndarray, valid: n
     trans = np.asarray(transmittance, dtype=np.float64)
     if not np.any(trans > 0.0) or deposit_small_disk(
             spectral, camera, valid, geometry.moon_direction, geometry.solid_angle_sr,
-            lambda: (moon_irradiance(geometry, wavelengths_nm, solar_irradiance_at_moon,
-                                     earthshine, eclipse)
-                     if irradiance is None else irradiance) * trans):
+            irradiance=lambda: (
+                moon_irradiance(geometry, wavelengths_nm, solar_irradiance_at_moon,
+                                earthshine=earthshine, eclipse=eclipse)
+                if irradiance is None else irradiance) * trans):
         return
     cos_angle = directions @ geometry.moon_direction
     inside = valid & (cos_angle > math.cos(geometry.angular_radius_rad))
     if not np.any(inside):
         return
     spectral[inside] += moon_disk_radiance(directions[inside], geometry, wavelengths_nm,
-                                           solar_irradiance_at_moon, earthshine,
-                                           eclipse) * trans
+                                           solar_irradiance_at_moon, earthshine=earthshine,
+                                           eclipse=eclipse) * trans
 
 
 def allen_phase_curve_v(phase_angle_deg: ArrayLike) -> np.ndarray:

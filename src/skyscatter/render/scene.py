@@ -121,7 +121,7 @@ def orbit_viewpoint(altitude_m: float, latitude_deg: float, longitude_deg: float
     return Viewpoint((bottom_radius_m + altitude_m) * up, np.column_stack([east, north, up]))
 
 
-def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray, star: Star,
+def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray, star: Star, *,
                progress: Callable[[int], None] | None = None,
                ground: Ground | None = None) -> SkyImage:
     """Spectral image seen by `camera` from `viewpoint` with the sun along `sun_dir` (both in
@@ -132,7 +132,8 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     directions, valid = camera.directions()
     world_sun = viewpoint.direction_to_world(sun_dir)
     spectral = camera_image(directions, valid, profile.n_wavelengths, lambda rays: (
-        diffuse_radiance(solver, viewpoint.position_m, rays, world_sun, ground, progress)),
+        diffuse_radiance(solver, viewpoint.position_m, rays, world_sun, ground=ground,
+                         progress=progress)),
         viewpoint)
     # The visible part of a setting disk shines along the grazing ray; the planet hides the rest
     position = viewpoint.position_m
@@ -141,8 +142,8 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     if ground is not None and ground.terrain is not None and ground.terrain.shadowed(
             position, world_sun)[0]:
         sun_transmittance = np.zeros_like(sun_transmittance)  # the sun is behind a mountain
-    add_sun_disk(spectral, camera, directions, valid, sun_dir, star,
-                 profile.wavelengths_nm, sun_transmittance,
+    add_sun_disk(spectral, camera, directions, valid, sun_dir, star=star,
+                 wavelengths_nm=profile.wavelengths_nm, transmittance=sun_transmittance,
                  horizon_cos_zenith=horizon_cos_zenith(float(np.linalg.norm(position)),
                                                        profile.bottom_radius_m))
     return sky_image(spectral, directions, valid, viewpoint, profile)
@@ -163,7 +164,7 @@ def camera_image(directions: np.ndarray, valid: np.ndarray, n_wavelengths: int,
 
 
 def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light: np.ndarray,
-                     ground: Ground | None = None,
+                     *, ground: Ground | None = None,
                      progress: Callable[[int], None] | None = None) -> np.ndarray:
     """Sky (and, with `ground`, surface) radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along world
     `rays` (n, 3) from `position`, lit from `world_light` with the profile's top-of-atmosphere
@@ -203,7 +204,7 @@ def cached_pixel_solid_angles(camera: Camera) -> np.ndarray:
 
 
 def deposit_small_disk(spectral: np.ndarray, camera: Camera, valid: np.ndarray,
-                       direction: np.ndarray, disk_solid_angle_sr: float,
+                       direction: np.ndarray, disk_solid_angle_sr: float, *,
                        irradiance: Callable[[], np.ndarray]) -> bool:
     """For a disk (sun, moon) smaller than `SPLAT_PIXELS` times the pixel that holds its centre:
     add its whole `irradiance()` (n_wl) [W m^-2 nm^-1] to that pixel as radiance (divided by
@@ -235,7 +236,7 @@ def disk_visible_fraction(direction: np.ndarray, radius_rad: float,
 
 
 def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
-                 valid: np.ndarray, sun_dir: np.ndarray, star: Star,
+                 valid: np.ndarray, sun_dir: np.ndarray, *, star: Star,
                  wavelengths_nm: np.ndarray, transmittance: np.ndarray,
                  occluder: tuple[np.ndarray, float] | None = None,
                  horizon_cos_zenith: float = -1.0) -> None:
@@ -251,7 +252,7 @@ def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
                                    star.angular_radius_rad)
     if not np.any(transmittance > 0.0) or visible <= 0.0 or deposit_small_disk(
             spectral, camera, valid, sun_dir, star.solid_angle_sr,
-            lambda: star.irradiance_toa(wavelengths_nm) * transmittance * visible):
+            irradiance=lambda: star.irradiance_toa(wavelengths_nm) * transmittance * visible):
         return
     sin_alpha = np.sin(star.angular_radius_rad)
     cos_angle = np.clip(directions @ sun_dir, -1.0, 1.0)

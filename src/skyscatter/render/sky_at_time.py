@@ -199,7 +199,7 @@ def ephemeris(body: str, observer: Observer) -> Ephemeris:
         j2000_to_horizon_matrix(o.time_utc, o.latitude_deg, o.longitude_deg), sun_geo, moon_geo)
 
 
-def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky: Ephemeris,
+def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky: Ephemeris, *,
                   objects: SkyObjects | None = None,
                   progress: Callable[[int], None] | None = None,
                   ground: Ground | None = None,
@@ -237,8 +237,8 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     def radiance_of(rays: np.ndarray) -> np.ndarray:
         total = np.zeros((rays.shape[0], profile.n_wavelengths)) if not lights else None
         for index, (world_light, scale) in enumerate(lights):  # the solver chunks the rays
-            lit = diffuse_radiance(solver, position, rays, world_light, ground,
-                                   progress if index == 0 else None)  # count rays once
+            lit = diffuse_radiance(solver, position, rays, world_light, ground=ground,
+                                   progress=progress if index == 0 else None)  # count once
             lit *= scale
             if index == 0:
                 total = lit
@@ -256,22 +256,25 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     pressure, temperature = _REFRACTION_AIR[sky.body]
     sun_seen = refract(sun_true, pressure, temperature)
     moon_seen = None if moon is None else refract(sky.moon.direction(), pressure, temperature)
-    add_sun_disk(spectral, camera, directions, valid, sun_seen, sun_today, wavelengths,
-                 _transmittance(solver, viewpoint, sun_seen[None], ground)[0],
-                 None if moon is None else (moon_seen, moon.geometry.angular_radius_rad))
+    add_sun_disk(spectral, camera, directions, valid, sun_seen, star=sun_today,
+                 wavelengths_nm=wavelengths,
+                 transmittance=_transmittance(solver, viewpoint, sun_seen[None], ground)[0],
+                 occluder=None if moon is None else (moon_seen,
+                                                     moon.geometry.angular_radius_rad))
     if moon is not None:
         seen = dataclasses.replace(moon.geometry, moon_direction=moon_seen)
-        add_moon_disk(spectral, camera, directions, valid, seen, wavelengths,
-                      moon.solar_irradiance,
-                      _transmittance(solver, viewpoint, moon_seen[None], ground)[0],
+        add_moon_disk(spectral, camera, directions, valid, seen, wavelengths_nm=wavelengths,
+                      solar_irradiance_at_moon=moon.solar_irradiance,
+                      transmittance=_transmittance(solver, viewpoint, moon_seen[None], ground)[0],
                       eclipse=moon.eclipse, irradiance=moon.irradiance)
     if objects.stars:
         _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky, objects,
                              wavelengths, ground)
     if objects.milky_way:
         add_star_background(spectral, valid, directions, sky.to_horizon, wavelengths,
-                            lambda rays: _transmittance(solver, viewpoint, rays, ground),
-                            objects.magnitude_limit)
+                            transmittance_of=lambda rays: _transmittance(solver, viewpoint,
+                                                                         rays, ground),
+                            magnitude_limit=objects.magnitude_limit)
     return sky_image(spectral, directions, valid, viewpoint, profile)
 
 
@@ -353,7 +356,7 @@ def _eclipse(sky: Ephemeris, optics: EclipseOptics | None, wavelengths: np.ndarr
     def eclipse(points_enu: np.ndarray) -> np.ndarray:
         points = observer_j2000 + points_enu @ sky.to_horizon
         return eclipse_factor(points, sky.sun_geocentric_m, optics.grazing_transmittance,
-                              optics.grazing_deflection, optics.planet_radius_m,
+                              optics.grazing_deflection, earth_radius_m=optics.planet_radius_m,
                               top_altitude_m=optics.top_altitude_m)
 
     return eclipse
@@ -386,7 +389,8 @@ def _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky: Epheme
         airmass = airmass_kasten_young_1989(np.degrees(np.arccos(seen[:, 2])))
         twinkle = scintillation_factors(airmass, objects.scintillation,
                                         altitude_m=sky.observer.elevation_m)
-    add_stars(spectral, camera, valid, seen, irradiance, transmittance, twinkle)
+    add_stars(spectral, camera, valid, seen, irradiance, transmittance=transmittance,
+              scintillation=twinkle)
 
 
 @functools.lru_cache(maxsize=4)

@@ -202,7 +202,7 @@ def _splat_weights(camera: Camera, valid: np.ndarray, directions: np.ndarray
 
 
 def add_stars(spectral: np.ndarray, camera: Camera, valid: np.ndarray,
-              star_directions_enu: ArrayLike, star_irradiance: ArrayLike,
+              star_directions_enu: ArrayLike, star_irradiance: ArrayLike, *,
               transmittance: ArrayLike, scintillation: ArrayLike | None = None) -> int:
     """Deposit point-like stars into a spectral image, in place, conserving each star's flux.
 
@@ -403,7 +403,7 @@ def integrated_starlight_radiance(directions_icrs: ArrayLike, wavelengths_nm: Ar
 
 
 def add_star_background(spectral: np.ndarray, valid: np.ndarray, directions_enu: ArrayLike,
-                        to_horizon: ArrayLike, wavelengths_nm: ArrayLike,
+                        to_horizon: ArrayLike, wavelengths_nm: ArrayLike, *,
                         transmittance_of: Callable[[np.ndarray], np.ndarray],
                         magnitude_limit: float | None = None) -> None:
     """Add the unresolved-star glow, seen through the air, to a spectral image in place.
