@@ -153,6 +153,17 @@ def test_help_of_each_command_exits_0_and_lists_its_options(capsys, command, opt
         assert option in out
 
 
+@pytest.mark.parametrize("command", ["render", "timelapse", "radiance"])
+def test_solver_help_lists_every_registered_solver(capsys, command):
+    # the help is read from the registry: a solver registered with a description shows up
+    from skyscatter.transport.solvers import SOLVERS
+    code, out, _ = run_cli(capsys, [command, "--help"])
+    text = " ".join(out.split())  # argparse wraps the help
+    assert code == 0 and set(SOLVERS) >= {"lut", "single", "montecarlo"}
+    for name, description in SOLVERS.items():
+        assert f"{name}{' (default)' if name == 'lut' else ''}: {description}" in text
+
+
 # --- bad arguments: exit 2, one line, no traceback -------------------------------------------
 
 @pytest.mark.parametrize(("argv", "expected"), [
@@ -165,6 +176,9 @@ def test_help_of_each_command_exits_0_and_lists_its_options(capsys, command, opt
     (["radiance", "earth", "--sun-zenith", "30", "--wavelengths", "-5"], "wavelength"),
     (["radiance", "earth", "--sun-zenith", "30", "--format", "xml"], "invalid choice: 'xml'"),
     (["render", "earth", "--size", "0"], "--size: 0 is not allowed: a whole number from 1"),
+    (["render", "earth", "--wavelengths", "472"], "more than the 471 1-nm bins of 360-830 nm"),
+    (["radiance", "earth", "--sun-zenith", "30", "--solver", "lutt"],
+     "unknown solver 'lutt'; available: lut, single, montecarlo"),
     (["render", "earth", "--camera", "orthographic"], "invalid choice: 'orthographic'"),
     (["render", "earth", "--sun-zenith", "30", "--sun-elevation", "60"], "not allowed with"),
     (["render", "earth", "--time", "2024-06-21T21:30", "--lat", "52", "--lon", "13"],

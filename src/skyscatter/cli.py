@@ -19,7 +19,12 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from skyscatter import __version__, checks
-from skyscatter.api_constants import DEFAULT_WAVELENGTH_BINS, VALIDATION_CASES  # no solver
+from skyscatter.api_constants import (  # no solver
+    COLOUR_RANGE_NM,
+    DEFAULT_WAVELENGTH_BINS,
+    VALIDATION_CASES,
+    solver_descriptions,
+)
 from skyscatter.checks import Bounds
 from skyscatter.errors import InputError
 
@@ -170,7 +175,8 @@ def _duration_s(text: str) -> float:
         f"{text!r} is not a duration; write a number with a unit: 30s, 10min, 1.5h, 1d")
 
 
-MAX_BINS = 471  # 1 nm bins over 360-830 nm, the resolution of the CIE tables
+# 471: the 1 nm bins over COLOUR_RANGE_NM (360-830 nm), the resolution of the CIE tables
+MAX_BINS = round(COLOUR_RANGE_NM[1] - COLOUR_RANGE_NM[0]) + 1
 
 
 def _wavelengths(text: str) -> list[float]:
@@ -179,7 +185,8 @@ def _wavelengths(text: str) -> list[float]:
         count = _positive_int(text)
         if count > MAX_BINS:
             raise argparse.ArgumentTypeError(
-                f"{count} bins is more than the {MAX_BINS} 1-nm bins of 360-830 nm; for one "
+                f"{count} bins is more than the {MAX_BINS} 1-nm bins of "
+                f"{COLOUR_RANGE_NM[0]:g}-{COLOUR_RANGE_NM[1]:g} nm; for one "
                 "wavelength write it as a list, e.g. 550,")
         from skyscatter import api
         return list(api.wavelength_grid(count))
@@ -208,13 +215,15 @@ _ALLOW_LARGE_HELP = ("run even when the estimated memory exceeds this computer's
                      "computing time exceeds an hour (refused by default, with the estimate)")
 
 
+def _add_atmosphere_argument(command: argparse.ArgumentParser) -> None:
+    """The atmosphere a command works on, a preset name or a TOML file."""
+    command.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
+                         help="a preset name (see `skyscatter presets`) or a TOML file")
+
+
 def _add_solver_arguments(command: argparse.ArgumentParser, samples_default: int) -> None:
     """--solver, --orders, --samples and the table cache options."""
-    command.add_argument("--solver", default="lut",
-                         help="lut: precomputed tables with multiple scattering (default; "
-                         "computed once per atmosphere and wavelength set, then cached); "
-                         "single: ray-marched single scattering, the independent check; "
-                         "montecarlo: reference path tracer, all orders, noisy and slow")
+    command.add_argument("--solver", default="lut", metavar="NAME")  # help: _Parser
     command.add_argument("--orders", type=_orders, default=None,
                          help="scattering orders of the tables (default: the config's "
                          "[tables] orders: 8 for the earth preset)")
@@ -324,8 +333,21 @@ def _add_sky_object_arguments(command: argparse.ArgumentParser) -> None:
                          "frame)")
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose --solver help lists the registered solvers
+    (`api_constants.solver_descriptions`), read only when a help text is shown."""
+
+    def format_help(self) -> str:
+        for action in self._actions:
+            if action.dest == "solver" and action.help is None:
+                action.help = "; ".join(
+                    f"{name}{' (default)' if name == action.default else ''}: {description}"
+                    for name, description in solver_descriptions().items())
+        return super().format_help()
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="skyscatter", description="Physically based skies of Earth, Mars and other "
         "planets: spectral radiance and images from atmosphere descriptions (TOML).")
     parser.add_argument("--version", action="version", version=f"skyscatter {__version__}")
@@ -346,8 +368,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Render the sky seen from the ground or the air to a tone-mapped PNG and "
         "optionally a linear EXR in physical units. Example: skyscatter render earth "
         "--sun-elevation 5 --camera panorama -o sunset.png --exr sunset.exr")
-    render.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
-                        help="a preset name (see `skyscatter presets`) or a TOML file")
+    _add_atmosphere_argument(render)
     sun = render.add_mutually_exclusive_group()
     sun.add_argument("--sun-zenith", type=_number(checks.ZENITH_DEG), metavar="DEG",
                      help="sun zenith angle in degrees (0 = overhead)")
@@ -445,8 +466,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Print diffuse spectral sky radiance [W m^-2 sr^-1 nm^-1] (the sun disk "
         "itself not included) for every combination of the lists. View zenith 0 looks straight "
         "up; relative azimuth 0 looks towards the sun.")
-    radiance.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
-                          help="a preset name (see `skyscatter presets`) or a TOML file")
+    _add_atmosphere_argument(radiance)
     radiance_sun = radiance.add_mutually_exclusive_group(required=True)
     radiance_sun.add_argument("--sun-zenith", type=_number_list(checks.ZENITH_DEG),
                               metavar="DEG,...",
@@ -476,8 +496,7 @@ def build_parser() -> argparse.ArgumentParser:
         "them in the cache, so that later renders start at once. The cache entry is keyed by "
         "the atmosphere's optical profile, the orders, the table resolution, the wavelengths "
         "and the package version; a stale or damaged entry is recomputed.")
-    precompute.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
-                            help="a preset name (see `skyscatter presets`) or a TOML file")
+    _add_atmosphere_argument(precompute)
     precompute.add_argument("--wavelengths", default=None, metavar="N|LIST",
                             help="as for render: N bins over 360-830 nm or a list in nm "
                             f"(default {DEFAULT_WAVELENGTH_BINS} bins, what render uses); with "
