@@ -1,0 +1,324 @@
+"""Benchmark: the viewer's GPU frame time on a real GPU (issue 18's "Measured").
+
+The viewer's own GLSL ES 3.00 shaders (static/shaders, static/generated, composed as
+viewer.js's PROGRAMS with its PREFIX) draw the viewer's frame off-screen in a native OpenGL
+context (moderngl on EGL) from the same tables the server sends (`TableService.tables`, the
+message of `gpu_tables.encode`, uploaded as tables.js does: RGB16F textures). Per frame, as
+`Viewer.draw` with float render targets: the sky pass (main.frag, output "exposed") into an
+RGBA16F target, then the composite pass (composite.frag) into an RGBA8 target of the same size
+(the canvas); no stars (a clear sky without a date). Timed per frame with a GL_TIME_ELAPSED
+query (GPU time) and as wall time from the first GL call to glFinish; the median and the 95th
+percentile of N frames after a warm-up.
+
+The viewer shows one atmosphere at a time; "one more atmosphere on screen" is measured as a
+second sky pass from a second, separately uploaded copy of the same tables, added into the same
+target (what drawing a second body's atmosphere over the first would cost at full screen).
+
+Two steps, so that the GPU machine needs neither skyscatter's dependencies nor its tables:
+
+  1. where skyscatter runs (the full Earth tables come from the table cache, computed first
+     when missing: about a minute on 2 cores):
+       PYTHONPATH=src python benchmarks/bench_viewer_gpu.py prepare --out .bench_gpu
+     writes .bench_gpu/earth-full.npz and earth-preview.npz (the decoded table message and the
+     view's uniforms: bench_viewer.py's view, 2 m above ground at 45 deg N, sun zenith 60 deg);
+  2. on the GPU machine (numpy and moderngl only):
+       python benchmarks/bench_viewer_gpu.py run --tables .bench_gpu [--frames 500]
+     prints the GL renderer and driver and one line per case; --png DIR saves the frames.
+
+moderngl (and its glcontext) is a benchmark-only install (`pip install moderngl`), not a
+skyscatter dependency; it needs an EGL driver (libEGL from glvnd and the GPU vendor's EGL).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+STATIC = Path(__file__).resolve().parents[1] / "src" / "skyscatter" / "viewer" / "static"
+# viewer.js: PREFIX, LIBRARY, FULL_SCREEN and the sources of the "sky" and "composite" programs
+PREFIX = ("#version 300 es\nprecision highp float;\nprecision highp int;\n"
+          "precision highp sampler3D;\n")
+FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n"
+LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
+           "shaders/sky.glsl", "shaders/tonemap.glsl"]
+PROGRAMS = {"sky": [*LIBRARY, "shaders/main.frag"],
+            "composite": ["generated/constants.glsl", "shaders/tonemap.glsl",
+                          "shaders/composite.frag"]}
+# bench_viewer.py's VIEW and the page's defaults (controls.js NUMBERS)
+VIEW = {"sun_zenith": 60.0, "sun_azimuth": 200.0, "heading": 180.0, "pitch": 10.0,
+        "roll": 0.0, "fov": 60.0, "fisheye_fov": 180.0, "altitude_m": 2.0, "lat": 45.0,
+        "lon": 0.0, "ev100": 13.0, "operator": "aces"}
+CASES = (("perspective", 1920, 1080), ("fisheye", 1080, 1080))
+CASE_DRAWS = (("sky pass", 1, False), ("frame (sky + composite)", 1, True),  # atmospheres,
+              ("frame, 2 atmospheres", 2, True))                           # composite pass
+
+
+def prepare(out: Path, cache_dir: str | None) -> None:
+    """Write out/earth-{full,preview}.npz: the table message the server sends, decoded, and
+    the view's uniforms that do not depend on the image size (viewer.js viewUniforms)."""
+    from skyscatter.disk_cache import TableCache, default_cache_directory
+    from skyscatter.render.camera import _basis
+    from skyscatter.render.scene import orbit_viewpoint, sun_direction
+    from skyscatter.render.tonemap import OPERATORS, exposure_scale
+    from skyscatter.viewer.gpu_tables import decode
+    from skyscatter.viewer.table_service import TableRequest, TableService
+
+    cache = TableCache(cache_dir or default_cache_directory())
+    service = TableService(cache=cache, log=print)
+    out.mkdir(parents=True, exist_ok=True)
+    for quality in ("full", "preview"):
+        start = time.perf_counter()
+        message = service.tables(TableRequest("earth", (), None, quality))
+        tables = decode(message)
+        header = tables.header
+        site = orbit_viewpoint(VIEW["altitude_m"], VIEW["lat"], VIEW["lon"],
+                               header["bottom_radius_m"])
+        right, up, forward = _basis(*np.radians([VIEW["heading"], VIEW["pitch"], VIEW["roll"]]))
+        view = {
+            "u_tan_half_fov": float(np.tan(np.radians(VIEW["fov"]) / 2)),
+            "u_camera_basis": np.concatenate([right, up, forward]).tolist(),
+            "u_fisheye_theta_max": float(np.radians(VIEW["fisheye_fov"]) / 2),
+            "u_local_to_world": site.to_world.T.reshape(-1).tolist(),  # columns
+            "u_camera_position": site.position_m.tolist(),
+            "u_sun_direction": site.direction_to_world(
+                sun_direction(VIEW["sun_zenith"], VIEW["sun_azimuth"])).tolist(),
+            "u_exposure": exposure_scale(VIEW["ev100"]),
+            "u_operator": list(OPERATORS).index(VIEW["operator"]),
+        }
+        np.savez(out / f"earth-{quality}.npz", header=json.dumps(header), view=json.dumps(view),
+                 message_bytes=len(message), **tables.arrays)
+        print(f"{quality}: {len(message) / 2**20:.1f} MiB message, scattering "
+              f"{header['scattering_shape']}, {header['n_wavelengths']} wavelengths, "
+              f"{header['orders']} orders ({time.perf_counter() - start:.1f} s)")
+
+
+def _source(names: list[str]) -> str:
+    return "\n".join((STATIC / name).read_text() for name in names)
+
+
+class Frame:
+    """The viewer's sky and composite programs and one set of uploaded tables per atmosphere,
+    drawing Viewer.draw's frame into off-screen targets (`resize`)."""
+
+    def __init__(self, ctx, tables: list[dict]) -> None:
+        self.ctx = ctx
+        self.version_line = "#version 300 es"
+        self.programs = {key: self._program(_source(names)) for key, names in PROGRAMS.items()}
+        quad = ctx.buffer(np.array([-1, -1, 3, -1, -1, 3], dtype="f4").tobytes())
+        self.quads = {key: ctx.vertex_array(program, [(quad, "2f", "position")])
+                      for key, program in self.programs.items()}
+        self.tables = [self._upload(t) for t in tables]
+
+    def resize(self, width: int, height: int) -> None:
+        """Targets of w x h: the float frame (RGBA16F, as Viewer.target) and the canvas (RGBA8)."""
+        import moderngl
+
+        self.width, self.height = width, height
+        self.frame = self.ctx.texture((width, height), 4, dtype="f2")
+        self.frame.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.frame_buffer = self.ctx.framebuffer([self.frame])
+        self.screen = self.ctx.framebuffer([self.ctx.renderbuffer((width, height), 4)])
+
+    def _program(self, fragment: str):
+        """Compiles as the page does; NVIDIA's desktop GL takes `#version 300 es` under
+        ARB_ES3_compatibility, else the version line becomes desktop GLSL 3.30 (here only)."""
+        import moderngl
+
+        try:
+            return self.ctx.program(vertex_shader=PREFIX + FULL_SCREEN,
+                                    fragment_shader=PREFIX + fragment)
+        except moderngl.Error:
+            self.version_line = "#version 330 core"
+            prefix = PREFIX.replace("#version 300 es", self.version_line)
+            return self.ctx.program(vertex_shader=prefix + FULL_SCREEN,
+                                    fragment_shader=prefix + fragment)
+
+    def _upload(self, data: dict) -> dict:
+        """tables.js uploadTables: RGB16F textures, linear (nearest for the phase texture)."""
+        import moderngl
+
+        header = data["header"]
+        n_r, n_mu, n_mu_s, n_nu, n_t = header["scattering_shape"]
+        textures = {}
+        for name, filtering in (("transmittance", moderngl.LINEAR),
+                                ("irradiance", moderngl.LINEAR), ("phase", moderngl.NEAREST)):
+            array = data[name]
+            texture = self.ctx.texture((array.shape[1], array.shape[0]), 3, array.tobytes(),
+                                       dtype="f2", alignment=1)
+            texture.filter = (filtering, filtering)
+            texture.repeat_x = texture.repeat_y = False
+            textures[name] = texture
+        scattering = self.ctx.texture3d((n_nu * n_mu_s, n_mu, n_t * n_r), 3,
+                                        data["scattering"].tobytes(), dtype="f2", alignment=1)
+        scattering.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        scattering.repeat_x = scattering.repeat_y = scattering.repeat_z = False
+        textures["scattering"] = scattering
+        scales = header["scales"]
+        uniforms = {
+            "u_transmittance_size": tuple(data["transmittance"].shape[1::-1]),
+            "u_irradiance_size": tuple(data["irradiance"].shape[1::-1]),
+            "u_scattering_shape": (n_r, n_mu, n_mu_s, n_nu), "u_n_tables": n_t,
+            "u_phase_angles": header["phase_angles"], "u_phase_rows": header["phase_rows"],
+            "u_transmittance_scale": scales["transmittance"],
+            "u_irradiance_scale": scales["irradiance"], "u_phase_scale": scales["phase"],
+            "u_scattering_scales": scales["scattering"],
+            "u_bottom_radius": header["bottom_radius_m"], "u_top_radius": header["top_radius_m"],
+            "u_mu_s_min": header["mu_s_min"], "u_ground_albedo": header["ground_albedo_xyz"],
+            "u_sun_irradiance": header["sun_irradiance_xyz"],
+            "u_sun_angular_radius": header["sun_angular_radius_rad"],
+            "u_sun_solid_angle": header["sun_solid_angle_sr"],
+            "u_sun_disk": np.asarray(header["sun_disk_xyz"]).reshape(-1),
+        }
+        return {"textures": textures, "uniforms": uniforms, "view": data["view"]}
+
+    def _set(self, program, values: dict) -> None:
+        """viewer.js setUniforms: arrays and matrices as written, the rest by value."""
+        for name, value in values.items():
+            uniform = program.get(name, None)
+            if uniform is None:
+                continue  # optimised out (viewer.js: location null)
+            if uniform.array_length > 1 or uniform.dimension > 4:  # arrays, matrices
+                flat = np.zeros(uniform.array_length * uniform.dimension, dtype="f4")
+                flat[:len(value)] = value
+                uniform.write(flat.tobytes())
+            else:
+                uniform.value = tuple(value) if isinstance(value, (list, tuple)) else value
+
+    def draw_sky(self, tables: dict, projection: int) -> None:
+        """Viewer.drawSky(w, h, "exposed") with `tables` bound."""
+        program = self.programs["sky"]
+        for unit, name in enumerate(("transmittance", "irradiance", "scattering", "phase")):
+            tables["textures"][name].use(location=unit)
+            program[f"u_{name}"].value = unit
+        self._set(program, tables["uniforms"])
+        view = dict(tables["view"])
+        tan_v = view.pop("u_tan_half_fov")
+        self._set(program, {**view, "u_resolution": (self.width, self.height),
+                            "u_projection": projection, "u_output": 2,  # OUTPUT_EXPOSED
+                            "u_half_extent": (tan_v * self.width / self.height, tan_v)})
+        self.quads["sky"].render(vertices=3)
+
+    def draw(self, projection: int, atmospheres: int, composite: bool = True) -> None:
+        """Viewer.draw: the sky of `atmospheres` table sets (added) into the float frame, then
+        the composite into the RGBA8 target."""
+        import moderngl
+
+        self.frame_buffer.use()
+        for index in range(atmospheres):
+            if index == 1:
+                self.ctx.enable(moderngl.BLEND)
+                self.ctx.blend_func = moderngl.ONE, moderngl.ONE
+            self.draw_sky(self.tables[index], projection)
+        self.ctx.disable(moderngl.BLEND)
+        if composite:
+            self.screen.use()
+            self.frame.use(location=0)
+            program = self.programs["composite"]
+            program["u_frame"].value = 0
+            program["u_operator"].value = self.tables[0]["view"]["u_operator"]
+            self.quads["composite"].render(vertices=3)
+
+
+def _time(ctx, draw, frames: int, warm_up: int) -> tuple[np.ndarray, np.ndarray]:
+    """(GPU ms, wall ms) of `frames` calls of `draw` after `warm_up` untimed ones."""
+    query = ctx.query(time=True)
+    for _ in range(warm_up):
+        draw()
+    ctx.finish()
+    gpu, wall = np.empty(frames), np.empty(frames)
+    for i in range(frames):
+        start = time.perf_counter()
+        with query:
+            draw()
+        ctx.finish()
+        wall[i] = (time.perf_counter() - start) * 1e3
+        gpu[i] = query.elapsed / 1e6
+    return gpu, wall
+
+
+def _load(path: Path) -> dict:
+    with np.load(path) as npz:
+        data = {name: npz[name] for name in ("transmittance", "irradiance", "scattering", "phase")}
+        data["header"] = json.loads(str(npz["header"]))
+        data["view"] = json.loads(str(npz["view"]))
+        data["message_bytes"] = int(npz["message_bytes"])
+    return data
+
+
+def run(directory: Path, frames: int, warm_up: int, png: Path | None) -> None:
+    """Times every case and prints one line each; ends with a summary table."""
+    import moderngl
+
+    ctx = moderngl.create_standalone_context(backend="egl", require=330)
+    print(f"GL_RENDERER {ctx.info['GL_RENDERER']}; GL_VERSION {ctx.info['GL_VERSION']}")
+    rows = []
+    for quality in ("full", "preview"):
+        data = _load(directory / f"earth-{quality}.npz")
+        header = data["header"]
+        label = (f"earth {quality} ({header['n_wavelengths']} wavelengths, scattering "
+                 f"{header['scattering_shape']}, {data['message_bytes'] / 2**20:.1f} MiB)")
+        frame = Frame(ctx, [data, data])  # two uploads: the second atmosphere's own textures
+        for projection, width, height in CASES:
+            frame.resize(width, height)
+            index = ["perspective", "fisheye"].index(projection)
+            for name, atmospheres, composite in CASE_DRAWS:
+                draw = partial(frame.draw, index, atmospheres, composite)
+                gpu, wall = _time(ctx, draw, frames, warm_up)
+                row = (quality, f"{projection} {width}x{height}", name,
+                       np.median(gpu), np.percentile(gpu, 95), np.median(wall),
+                       np.percentile(wall, 95))
+                rows.append(row)
+                print(f"{label} {row[1]} {name}: GPU {row[3]:.3f} ms (p95 {row[4]:.3f}), "
+                      f"wall {row[5]:.3f} ms (p95 {row[6]:.3f}); shaders {frame.version_line}")
+            frame.draw(index, 1)
+            _check(frame, f"{quality}-{projection}", png)
+    print(f"\n{'tables':8s} {'image':22s} {'case':24s} {'GPU median':>10s} {'p95':>7s} "
+          f"{'wall median':>11s} {'p95':>7s}  [ms], {frames} frames")
+    for row in rows:
+        print(f"{row[0]:8s} {row[1]:22s} {row[2]:24s} {row[3]:10.3f} {row[4]:7.3f} "
+              f"{row[5]:11.3f} {row[6]:7.3f}")
+
+
+def _check(frame: Frame, name: str, png: Path | None) -> None:
+    """Prints what the frame holds (a wrong upload shows as NaN, black or saturated pixels);
+    saves it as PNG under `png`."""
+    exposed = np.frombuffer(frame.frame.read(), dtype="f2").reshape(frame.height, frame.width, 4)
+    shown = np.frombuffer(frame.screen.read(components=4), dtype="u1")
+    shown = shown.reshape(frame.height, frame.width, 4)[::-1]
+    inside = exposed[..., 3] > 0
+    finite = np.isfinite(exposed[inside][:, :3]).all(axis=1)
+    print(f"  {name}: {inside.mean():.3f} of pixels inside, {1 - finite.mean():.2e} not finite; "
+          f"exposed sRGB mean {exposed[inside][finite][:, :3].astype('f8').mean(axis=0).round(4)}"
+          f"; 8-bit mean {shown[..., :3].reshape(-1, 3).mean(axis=0).round(1)}")
+    if png is not None:
+        from PIL import Image
+
+        png.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(np.ascontiguousarray(shown[..., :3])).save(png / f"{name}.png")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    step = commands.add_parser("prepare", help="write the tables and view (needs skyscatter)")
+    step.add_argument("--out", type=Path, default=Path(".bench_gpu"))
+    step.add_argument("--cache-dir", default=None, help="table cache (default: skyscatter's)")
+    step = commands.add_parser("run", help="time the frames (needs moderngl and a GPU)")
+    step.add_argument("--tables", type=Path, default=Path(".bench_gpu"))
+    step.add_argument("--frames", type=int, default=500)
+    step.add_argument("--warm-up", type=int, default=50)
+    step.add_argument("--png", type=Path, default=None, help="save each case's frame here")
+    args = parser.parse_args()
+    if args.command == "prepare":
+        prepare(args.out, args.cache_dir)
+    else:
+        run(args.tables, args.frames, args.warm_up, args.png)
+
+
+if __name__ == "__main__":
+    main()
