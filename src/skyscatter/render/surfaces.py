@@ -62,4 +62,4 @@ def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarra
         albedo = ground.albedo_map.spectral(points, profile.wavelengths_nm)
     else:
         albedo = profile.ground_albedo
-    return solver.surface_radiance(origin, points, normals, albedo, sun_direction, lit), hit
+    return solver.surface_radiance(origin, points, normals, albedo, sun_direction, lit=lit), hit

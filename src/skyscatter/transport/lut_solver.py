@@ -56,14 +56,14 @@ class LutSolver:
     name = "lut"
 
     def __init__(self, profile: OpticalProfile, resolution: TableResolution | None = None,
-                 orders: int = DEFAULT_SCATTERING_ORDERS,
+                 orders: int = DEFAULT_SCATTERING_ORDERS, *,
                  min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                  tables: AtmosphereTables | None = None,
                  progress: Callable[[int, int, str], None] | None = None) -> None:
         self.profile = profile
         if tables is None:
-            tables = precompute_tables(profile, resolution, orders, min_cos_sun_zenith,
-                                       progress=progress)
+            tables = precompute_tables(profile, resolution, orders,
+                                       min_cos_sun_zenith=min_cos_sun_zenith, progress=progress)
         elif not np.array_equal(tables.wavelengths_nm, profile.wavelengths_nm):
             raise InputError("LutSolver: the tables were computed for other wavelengths "
                              f"({tables.wavelengths_nm.size} values) than the profile's "
@@ -171,7 +171,7 @@ class LutSolver:
                 transmittance.reshape(shape + (p.n_wavelengths,)))
 
     def surface_radiance(self, position: ArrayLike, points: ArrayLike, normals: ArrayLike,
-                         albedo: ArrayLike, sun_direction: ArrayLike,
+                         albedo: ArrayLike, sun_direction: ArrayLike, *,
                          lit: ArrayLike | None = None) -> np.ndarray:
         """Radiance [W m^-2 sr^-1 nm^-1] (n, n_wl) that reaches the observer at `position` (3,)
         from Lambertian surfaces at `points` (n, 3) facing unit `normals` (n, 3), with spectral

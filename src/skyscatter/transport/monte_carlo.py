@@ -89,7 +89,7 @@ class MonteCarloSolver:
 
     name = "montecarlo"
 
-    def __init__(self, profile: OpticalProfile, n_samples: int = 1024, seed: int = 0,
+    def __init__(self, profile: OpticalProfile, n_samples: int = 1024, seed: int = 0, *,
                  max_orders: int = 1000, rr_start: int = 8, n_angle: int = 4097,
                  n_sun_samples: int = 128, n_view_intervals: int = 256,
                  batch: int = 256) -> None:

@@ -44,7 +44,7 @@ def optical_depth(origin: np.ndarray, direction: np.ndarray, distance_m: float,
 
 
 def single_scattering_radiance(origin: np.ndarray, direction: np.ndarray,
-                               sun_direction: np.ndarray, profile: OpticalProfile,
+                               sun_direction: np.ndarray, profile: OpticalProfile, *,
                                n_steps: int = 2000, n_sun_steps: int = 2000) -> np.ndarray:
     """Single-scattered + once-reflected radiance (n_wl,) for one ray and a point sun."""
     origin = np.asarray(origin, dtype=np.float64)

@@ -125,7 +125,7 @@ class SurfaceRadianceSolver(Protocol):
     maps, terrain: `render.surfaces`)."""
 
     def surface_radiance(self, position: ArrayLike, points: ArrayLike, normals: ArrayLike,
-                         albedo: ArrayLike, sun_direction: ArrayLike,
+                         albedo: ArrayLike, sun_direction: ArrayLike, *,
                          lit: ArrayLike | None = None) -> np.ndarray:
         """Radiance [W m^-2 sr^-1 nm^-1] (n, n_wl) reaching the observer at `position` (3,)
         from surfaces at `points` (n, 3) facing unit `normals` (n, 3) with `albedo` ((n, n_wl)

@@ -84,7 +84,7 @@ def tables_from_arrays(arrays: dict[str, np.ndarray],
 
 
 def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
-                  orders: int = DEFAULT_SCATTERING_ORDERS,
+                  orders: int = DEFAULT_SCATTERING_ORDERS, *,
                   min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                   cache: TableCache | None = None, force: bool = False,
                   progress: Callable[[int, int, str], None] | None = None,
@@ -100,8 +100,8 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
     resolution = resolution or TableResolution()
     say = log or (lambda message: None)
     if cache is None:
-        return precompute_tables(profile, resolution, orders, min_cos_sun_zenith,
-                                 progress=progress)
+        return precompute_tables(profile, resolution, orders,
+                                 min_cos_sun_zenith=min_cos_sun_zenith, progress=progress)
     metadata = table_metadata(profile, resolution, orders, min_cos_sun_zenith)
     key = _key(metadata)
     path = cache.path(key)
@@ -123,8 +123,8 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
              else f"not stored: {unwritable}")
     say(f"tables: precomputing {orders} orders for {profile.n_wavelengths} wavelengths "
         f"({reason}; {where})")
-    tables = precompute_tables(profile, resolution, orders, min_cos_sun_zenith,
-                               progress=progress)
+    tables = precompute_tables(profile, resolution, orders,
+                               min_cos_sun_zenith=min_cos_sun_zenith, progress=progress)
     if unwritable is None:
         try:
             cache.store(key, tables_to_arrays(tables), metadata)

@@ -223,7 +223,7 @@ def _phase_matrices(phase: np.ndarray, resolution: TableResolution) -> np.ndarra
 
 
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
-                      orders: int = DEFAULT_SCATTERING_ORDERS,
+                      orders: int = DEFAULT_SCATTERING_ORDERS, *,
                       min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
                       wavelength_batch: int = 16,
                       progress: Callable[[int, int, str], None] | None = None,
