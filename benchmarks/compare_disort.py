@@ -114,7 +114,7 @@ def plot_principal_plane(profile, solver: LutSolver, layers, path: Path,
         ours = solver.sky_radiance(position, views, sun)
         view_zenith, reference = disort_sky_radiance(
             profile, theta_s, np.array([0.0, np.pi]), np.radians(MAX_VIEW_ZENITH_DEG),
-            n_streams, layers)
+            n_streams=n_streams, layers=layers)
         node_signed = np.concatenate([-np.degrees(view_zenith)[::-1], np.degrees(view_zenith)])
         node_reference = np.concatenate([reference[::-1, 1], reference[:, 0]])
         node_views = local_frame_directions(np.radians(np.abs(node_signed)),
@@ -185,7 +185,7 @@ def main() -> None:
                                    n_moments=max(128, 2 * args.streams))
     comparison = compare_with_disort(solver, profile, np.radians(SUN_ZENITH_DEG),
                                      np.radians(AZIMUTH_DEG), np.radians(MAX_VIEW_ZENITH_DEG),
-                                     args.streams, layers)
+                                     n_streams=args.streams, layers=layers)
     print(f"DISORT: {args.streams} streams, {layers.optical_depth.shape[0]} layers, "
           f"{time.perf_counter() - start:.0f} s; view zenith nodes [deg]: "
           + ", ".join(f"{z:.1f}" for z in np.degrees(comparison.view_zenith_rad)))

@@ -168,7 +168,7 @@ def plane_parallel_layers(profile: OpticalProfile, n_layers: int = 60,
 
 def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
                         relative_azimuth_rad: ArrayLike, max_view_zenith_rad: float = 0.5 * np.pi,
-                        n_streams: int = 32, layers: PlaneParallelLayers | None = None
+                        *, n_streams: int = 32, layers: PlaneParallelLayers | None = None
                         ) -> tuple[np.ndarray, np.ndarray]:
     """Diffuse sky radiance at the ground of the plane-parallel twin of `profile`, by
     PythonicDISORT, along DISORT's own downward quadrature directions.
@@ -328,7 +328,7 @@ class DisortComparison:
 
 def compare_with_disort(solver: Solver, profile: OpticalProfile,
                         sun_zenith_rad: ArrayLike, relative_azimuth_rad: ArrayLike,
-                        max_view_zenith_rad: float = np.radians(70.0), n_streams: int = 32,
+                        max_view_zenith_rad: float = np.radians(70.0), *, n_streams: int = 32,
                         layers: PlaneParallelLayers | None = None) -> DisortComparison:
     """Sky radiance seen from the ground by `solver` and by `disort_sky_radiance` for the same
     profile, on DISORT's view zenith nodes up to `max_view_zenith_rad` x the relative azimuths
@@ -342,7 +342,8 @@ def compare_with_disort(solver: Solver, profile: OpticalProfile,
     ours, reference = [], []
     for theta_s in sun_zenith:
         view_zenith, radiance = disort_sky_radiance(profile, float(theta_s), azimuth,
-                                                    max_view_zenith_rad, n_streams, layers)
+                                                    max_view_zenith_rad, n_streams=n_streams,
+                                                    layers=layers)
         zenith, phi = np.meshgrid(view_zenith, azimuth, indexing="ij")
         sun = local_frame_directions(theta_s, 0.0)
         ours.append(solver.sky_radiance(position, local_frame_directions(zenith, phi), sun))

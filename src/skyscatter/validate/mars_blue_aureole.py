@@ -111,7 +111,7 @@ class GlowProfile:
                                                                        x))
 
 
-def glow_profiles(solver, model: str, sun_elevation_deg: float = SUN_ELEVATION_DEG,
+def glow_profiles(solver, model: str, *, sun_elevation_deg: float = SUN_ELEVATION_DEG,
                   angles_deg=ANGLES_DEG, vertical_max_deg: float = VERTICAL_MAX_DEG,
                   tables=None) -> tuple[GlowProfile, GlowProfile]:
     """Sky chromaticity from the ground with the sun `sun_elevation_deg` [deg] high, along its
