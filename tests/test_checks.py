@@ -7,7 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from skyscatter.checks import checked_array, checked_choice, checked_integer, checked_number
+from skyscatter.checks import (
+    checked_array,
+    checked_choice,
+    checked_finite_array,
+    checked_instance,
+    checked_integer,
+    checked_number,
+)
 from skyscatter.errors import InputError
 
 
@@ -63,3 +70,28 @@ def test_checked_choice_returns_the_name_as_given_and_folds_case_only_when_asked
     with pytest.raises(InputError):
         checked_choice("colour space", "colour_space", "sRGB", ("srgb",))
 
+
+def test_checked_finite_array_names_the_first_bad_element_its_index_and_the_unit():
+    values = np.array([[5000.0, 6000.0], [-1.0, math.nan]])
+    with pytest.raises(InputError) as error:
+        checked_finite_array("temperature_k", values, "K", positive=True)
+    assert str(error.value) == ("temperature_k must be positive and finite; got -1.0 at index "
+                                "(1, 0) [K]")
+    assert error.value.value == -1.0 and error.value.allowed == "0 < temperature_k < inf [K]"
+    with pytest.raises(InputError, match=r"^v_magnitude must be finite; got inf \[mag\]$"):
+        checked_finite_array("v_magnitude", math.inf, "mag")
+    with pytest.raises(InputError, match="v_magnitude must be numbers in mag"):
+        checked_finite_array("v_magnitude", "bright", "mag")
+    # zero and negatives are finite: refused only with positive=True
+    np.testing.assert_array_equal(checked_finite_array("b_minus_v", [0.0, -0.3], "mag"),
+                                  [0.0, -0.3])
+    assert checked_finite_array("x", [1, 2], "m", positive=True).dtype == np.float64
+
+
+def test_checked_instance_returns_the_value_or_names_what_is_allowed_and_where_to_get_it():
+    assert checked_instance("n", 3, int, "an int") == 3
+    with pytest.raises(InputError) as error:
+        checked_instance("observer", "Berlin", tuple, "an Observer", " from make_observer(...)")
+    assert str(error.value) == ("observer = 'Berlin' is not allowed: an Observer from "
+                                "make_observer(...)")
+    assert error.value.key == "observer" and error.value.allowed == "an Observer"

@@ -48,6 +48,7 @@ from skyscatter.checks import (
     ZENITH_DEG,
     Bounds,
     checked_array,
+    checked_instance,
     checked_integer,
     checked_number,
 )
@@ -234,10 +235,8 @@ def check_render_cost(camera: Camera, wavelengths_nm: Sequence[float] | None = N
 
 
 def _check_atmosphere(atmosphere: Atmosphere) -> None:
-    if not isinstance(atmosphere, Atmosphere):
-        raise InputError(f"atmosphere = {atmosphere!r} is not allowed: an Atmosphere, e.g. "
-                         "load_atmosphere('earth')", key="atmosphere", value=atmosphere,
-                         allowed="an Atmosphere")
+    checked_instance("atmosphere", atmosphere, Atmosphere, "an Atmosphere",
+                     ", e.g. load_atmosphere('earth')")
 
 
 def _check_camera(camera: Camera) -> None:
@@ -363,10 +362,8 @@ def _render_at(engine, atmosphere: Atmosphere, camera: Camera, observer: Observe
 
 
 def _check_observer(observer: Observer) -> None:
-    if not isinstance(observer, Observer):
-        raise InputError(f"observer = {observer!r} is not allowed: an Observer from "
-                         "make_observer(time, latitude_deg, longitude_deg)", key="observer",
-                         value=observer, allowed="an Observer")
+    checked_instance("observer", observer, Observer, "an Observer",
+                     " from make_observer(time, latitude_deg, longitude_deg)")
 
 
 @dataclass(frozen=True)
@@ -455,9 +452,7 @@ def _timelapse_image_options(image: ImageOptions | None, compensation_ev: float,
     if image is None:
         return ImageOptions(compensation_ev=compensation_ev, operator=operator,
                             colour_space=colour_space)
-    if not isinstance(image, ImageOptions):
-        raise InputError(f"image = {image!r} is not allowed: an ImageOptions", key="image",
-                         value=image, allowed="an ImageOptions")
+    checked_instance("image", image, ImageOptions, "an ImageOptions")
     if image.ev100 is not None:
         raise InputError(f"image.ev100 = {image.ev100!r} is not allowed in a time-lapse, which "
                          "meters each frame: leave it None (use compensation_ev to shift the "
@@ -552,16 +547,13 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
     holds these choices in one object and, when given, is used instead of `ev100` ...
     `adapt_to_night`. InputError for an `ev100` or `compensation_ev` outside [-40, 40]
     (`checks.EV`) or an unknown option."""
-    if not isinstance(image, SkyImage):
-        raise InputError(f"image = {image!r} is not allowed: a SkyImage from render or "
-                         "render_at", key="image", value=image, allowed="a SkyImage")
+    checked_instance("image", image, SkyImage, "a SkyImage", " from render or render_at")
     if options is None:
         options = ImageOptions(ev100=ev100, compensation_ev=compensation_ev, operator=operator,
                                colour_space=colour_space, balance_to_light=balance_to_light,
                                exr_content=exr_content, adapt_to_night=adapt_to_night)
-    elif not isinstance(options, ImageOptions):
-        raise InputError(f"options = {options!r} is not allowed: an ImageOptions",
-                         key="options", value=options, allowed="an ImageOptions")
+    else:
+        checked_instance("options", options, ImageOptions, "an ImageOptions")
     _check_image_paths(png_path, exr_path)
     colour_space, exr_content = options.colour_space, options.exr_content
     xyz = image.xyz(options.balance_to_light)

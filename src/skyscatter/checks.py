@@ -33,6 +33,8 @@ __all__ = [
     "Bounds",
     "checked_array",
     "checked_choice",
+    "checked_finite_array",
+    "checked_instance",
     "checked_integer",
     "checked_number",
     "shown",
@@ -132,6 +134,39 @@ def checked_array(name: str, values: Any, low: float | None = None, high: float 
         checked_number(name, float(element), low, high, low_open=low_open,
                        high_open=high_open)
     return array
+
+
+
+def checked_finite_array(name: str, values: Any, unit: str, *,
+                         positive: bool = False) -> np.ndarray:
+    """`values` as a float64 array of any shape when every element is finite (and > 0 with
+    `positive`), else InputError naming `name`, the first offending element, its index and
+    `unit`. Vectorised, for large inputs (star catalogues, wavelength grids), where
+    `checked_array` checks element by element."""
+    allowed = f"0 < {name} < inf [{unit}]" if positive else f"finite numbers [{unit}]"
+    try:
+        array = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be numbers in {unit}; got {values!r}", key=name,
+                         value=values, allowed=allowed) from exc
+    good = np.isfinite(array) & (array > 0.0) if positive else np.isfinite(array)
+    if not np.all(good):
+        index = tuple(int(i) for i in np.argwhere(~good)[0])
+        value = float(array[index])
+        where = f" at index {index[0] if len(index) == 1 else index}" if array.ndim else ""
+        what = "positive and finite" if positive else "finite"
+        raise InputError(f"{name} must be {what}; got {value!r}{where} [{unit}]", key=name,
+                         value=value, allowed=allowed)
+    return array
+
+
+def checked_instance(name: str, value: Any, kind: type, allowed: str, hint: str = "") -> Any:
+    """`value` when it is an instance of `kind`, else InputError
+    "{name} = {value!r} is not allowed: {allowed}{hint}" (hint: where to get one)."""
+    if not isinstance(value, kind):
+        raise InputError(f"{name} = {value!r} is not allowed: {allowed}{hint}", key=name,
+                         value=value, allowed=allowed)
+    return value
 
 
 @dataclass(frozen=True)

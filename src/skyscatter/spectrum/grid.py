@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skyscatter.checks import checked_finite_array
 from skyscatter.errors import InputError
 
 __all__ = [
@@ -54,22 +55,10 @@ MONOCHROMATIC_RANGE_NM = (280.5, 1690.0)  # nm; solar spectrum + gas refractive 
 def checked_wavelengths(wavelengths_nm: ArrayLike, name: str = "wavelengths_nm") -> np.ndarray:
     """`wavelengths_nm` as a float64 array of any shape, each value checked to be > 0 and finite.
 
-    Raises `InputError` naming the argument, the first bad value and what is allowed.
+    Raises `InputError` naming the argument, the first bad value and what is allowed
+    (`checks.checked_finite_array`).
     """
-    try:
-        wl = np.asarray(wavelengths_nm, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be numbers in nm; got {wavelengths_nm!r}", key=name,
-                         value=wavelengths_nm, allowed="positive finite numbers [nm]") from exc
-    bad = ~(np.isfinite(wl) & (wl > 0.0))
-    if np.any(bad):
-        index = tuple(int(i) for i in np.argwhere(bad)[0])
-        value = float(wl[index])
-        where = f" at index {index[0] if len(index) == 1 else index}" if wl.ndim else ""
-        raise InputError(
-            f"{name} must be positive and finite (in nm); got {value!r}{where}",
-            key=name, value=value, allowed="0 < wavelength < inf [nm]")
-    return wl
+    return checked_finite_array(name, wavelengths_nm, "nm", positive=True)
 
 
 def checked_data_wavelengths(wavelengths_nm: ArrayLike, monochromatic: bool = False,

@@ -39,6 +39,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skyscatter.checks import checked_finite_array
 from skyscatter.errors import InputError
 from skyscatter.spectrum.grid import cell_average, cell_edges, checked_grid
 from skyscatter.spectrum.star import planck_spectral_radiance
@@ -159,7 +160,7 @@ def colour_temperature_from_b_minus_v(b_minus_v: ArrayLike) -> np.ndarray:
     ndarray, shape S
         Colour temperature. [K]
     """
-    bv = np.clip(_checked_finite(b_minus_v, "b_minus_v", "mag"), -0.4, 3.0)
+    bv = np.clip(checked_finite_array("b_minus_v", b_minus_v, "mag"), -0.4, 3.0)
     return 4600.0 * (1.0 / (0.92 * bv + 1.7) + 1.0 / (0.92 * bv + 0.62))
 
 
@@ -215,8 +216,8 @@ def stellar_irradiance(v_magnitude: ArrayLike, temperature_k: ArrayLike,
         Spectral irradiance normal to the beam, top of the atmosphere. [W m⁻² nm⁻¹]
     """
     wl = checked_grid(wavelengths_nm)
-    v = _checked_finite(v_magnitude, "v_magnitude", "mag")
-    t = _checked_finite(temperature_k, "temperature_k", "K")
+    v = checked_finite_array("v_magnitude", v_magnitude, "mag")
+    t = checked_finite_array("temperature_k", temperature_k, "K")
     if np.any(t <= 0.0):
         raise InputError(f"temperature_k must be > 0; got {float(t[t <= 0.0].flat[0])!r} [K]",
                          key="temperature_k", value=float(t[t <= 0.0].flat[0]),
@@ -227,16 +228,3 @@ def stellar_irradiance(v_magnitude: ArrayLike, temperature_k: ArrayLike,
              / _planck_v_band_means(unique_t)[:, None])
     scale = V_ZERO_POINT_FLUX * 10.0 ** (-v / _POGSON)
     return shape[inverse.reshape(t.shape)] * scale[..., None]
-
-
-def _checked_finite(value: ArrayLike, name: str, unit: str) -> np.ndarray:
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be numbers in {unit}; got {value!r}", key=name,
-                         value=value, allowed=f"finite numbers [{unit}]") from exc
-    if not np.all(np.isfinite(array)):
-        first = float(array[~np.isfinite(array)].flat[0])
-        raise InputError(f"{name} must be finite; got {first!r} [{unit}]", key=name,
-                         value=first, allowed=f"finite numbers [{unit}]")
-    return array

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skyscatter.checks import checked_finite_array
 from skyscatter.errors import InputError
 from skyscatter.spectrum.grid import cell_edges, checked_grid, checked_wavelengths
 from skyscatter.spectrum.solar import solar_irradiance_1au
@@ -79,7 +80,7 @@ def planck_spectral_radiance(wavelengths_nm: ArrayLike, temperature_k: ArrayLike
         Spectral radiance; every temperature with every wavelength. [W m⁻² sr⁻¹ nm⁻¹]
     """
     wl = checked_wavelengths(wavelengths_nm) * _NM
-    t = _checked_positive(temperature_k, "temperature_k", "K")
+    t = checked_finite_array("temperature_k", temperature_k, "K", positive=True)
     t = t.reshape(t.shape + (1,) * wl.ndim)
     with np.errstate(over="ignore"):
         x = (PLANCK * SPEED_OF_LIGHT) / (wl * BOLTZMANN * t)
@@ -328,20 +329,6 @@ def _positive_number(value: object, key: str, unit: str, prefix: str = "") -> fl
             return number
     raise InputError(f"{prefix}{key} = {value!r} must be a finite number > 0 [{unit}]",
                      key=key, value=value, allowed=f"> 0 [{unit}]")
-
-
-def _checked_positive(value: ArrayLike, name: str, unit: str) -> np.ndarray:
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be numbers in {unit}; got {value!r}", key=name,
-                         value=value, allowed=f"> 0 [{unit}]") from exc
-    bad = ~(np.isfinite(array) & (array > 0.0))
-    if np.any(bad):
-        first = float(array[tuple(np.argwhere(bad)[0])])
-        raise InputError(f"{name} must be positive and finite; got {first!r} [{unit}]",
-                         key=name, value=first, allowed=f"0 < {name} < inf [{unit}]")
-    return array
 
 
 def _checked_cos_limb(cos_limb: ArrayLike) -> np.ndarray:
