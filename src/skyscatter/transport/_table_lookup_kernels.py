@@ -52,13 +52,18 @@ RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loops of t
 
 class LookupTables(NamedTuple):
     """What the lookups read besides the rays, as one record (numba passes it as a typed
-    tuple): the tables of an `AtmosphereTables` and the profile arrays of the twilight march."""
+    tuple): the tables of an `AtmosphereTables` and the profile arrays of the twilight march.
+    Flat (no tuple fields), so that a parallel loop can pass it to the per-ray helpers: numba's
+    parfors take no nested tuple into a `prange` body."""
 
     bottom_radius: float  # R_b [m]
     top_radius: float  # R_t [m]
     mu_s_min: float  # smallest cos(sun zenith) tabulated [-]
     scattering: np.ndarray  # the interleaved scattering tables, 1-D (`flat_tables`)
-    shape: tuple[int, int, int, int]  # (n_r, n_mu, n_mu_s, n_nu) of the scattering tables
+    n_r: int  # the sizes (n_r, n_mu, n_mu_s, n_nu) of the scattering tables
+    n_mu: int
+    n_mu_s: int
+    n_nu: int
     phase_table: np.ndarray  # (n_s, n_angle, n_wl) phase functions [sr^-1]
     transmittance: np.ndarray  # (n_r_t, n_mu_t, n_wl) to the top [-]
     irradiance: np.ndarray  # (n_r_e, n_mu_s_e, n_wl) indirect irradiance [W m^-2 nm^-1]
@@ -478,7 +483,7 @@ def view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius, t
 def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo, view_table, out):
     """Radiance from the tables into out (n_ray, n_wl) [W m^-2 sr^-1 nm^-1]:
     sum_s p_s(nu) S_s + M (`scattering` = the interleaved (S_1..S_n_s, M) from `flat_tables`;
-    shape = (n_r, n_mu, n_mu_s, n_nu)), plus for rays that hit the ground the Lambertian ground
+    sizes n_r, n_mu, n_mu_s, n_nu), plus for rays that hit the ground the Lambertian ground
     albedo / pi (E_sun T_sun max(mu_s, 0) V + E_indirect) seen through T(x, g). origins is
     (1, 3) or (n_ray, 3); directions (n_ray, 3), normalised here. Observers in space start at
     the top boundary; rays that miss the atmosphere get 0. Bruneton 2017, `GetSkyRadiance`
@@ -493,13 +498,13 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
     marched along each ray.
     `tables`: the `LookupTables` record of the tables and the profile."""
     bottom_radius, top_radius, mu_s_min = tables.bottom_radius, tables.top_radius, tables.mu_s_min
-    scattering, shape, phase_table = tables.scattering, tables.shape, tables.phase_table
+    scattering, phase_table = tables.scattering, tables.phase_table
     transmittance, irradiance = tables.transmittance, tables.irradiance
     sun_irradiance, sun_angular_radius = tables.sun_irradiance, tables.sun_angular_radius
     h_step, density, scatterers = tables.h_step, tables.density, tables.scatterers
     single_factor = tables.single_factor
     n_ray = directions.shape[0]
-    n_r, n_mu, n_mu_s, n_nu = shape
+    n_r, n_mu, n_mu_s, n_nu = tables.n_r, tables.n_mu, tables.n_mu_s, tables.n_nu
     n_wl = out.shape[1]
     n_s = phase_table.shape[0]
     n_t = n_s + 1
@@ -597,8 +602,7 @@ def aerial_scratch(n_t, n_wl, n_c, n_s):
 
 
 @njit(cache=True)
-def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radius, mu_s_min,
-                  scattering, shape, phase_table, transmittance, weights, pair_weights,
+def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_weights,
                   pair_values, at_point, scratch, slices, inscatter_out, transmittance_out):
     """Light scattered towards the observer o between o and the point p, into inscatter_out
     (n_wl,) [W m^-2 sr^-1 nm^-1], and the transmittance of that segment into
@@ -614,8 +618,12 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radi
     in twilight); the caller adds that share with `_aerial_lit_single`, as `sky_radiance_rays`
     does for whole rays. With marched > 0 both lookups of the orders >= 2 get
     `geometric_mu_s_correction`, so the difference is taken between geometrically interpolated
-    values; by day (marched = 0) the result is the table difference alone."""
-    n_r, n_mu, n_mu_s, n_nu = shape
+    values; by day (marched = 0) the result is the table difference alone. `tables`: the
+    `LookupTables` record."""
+    bottom_radius, top_radius, mu_s_min = tables.bottom_radius, tables.top_radius, tables.mu_s_min
+    scattering, phase_table, transmittance = (tables.scattering, tables.phase_table,
+                                              tables.transmittance)
+    n_r, n_mu, n_mu_s, n_nu = tables.n_r, tables.n_mu, tables.n_mu_s, tables.n_nu
     n_wl = inscatter_out.size
     n_s = phase_table.shape[0]
     n_t = n_s + 1
@@ -675,19 +683,20 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radi
 
 
 @njit(cache=True)
-def _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, bottom_radius, top_radius,
-                       phase_table, transmittance, sun_angular_radius, h_step, density,
-                       scatterers, single_factor, weights, samples, observer, here, sun, dens,
-                       exact, inscatter_out):
+def _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights, samples,
+                       observer, here, sun, dens, exact, inscatter_out):
     """inscatter_out[w] += marched sum_s p_s(nu) E_sun beta_s `lit_single_scattering` over the
     segment [0, d] of the ray (r, mu) (its umbra interval clipped to it), the twilight share
-    of single scattering that `_aerial_point` left out; profile densities `density` on levels
-    h_step apart, constituents `scatterers`, single_factor = E_sun beta_s (n_s, n_wl). The
-    other arrays are scratch (`aerial_scratch`)."""
+    of single scattering that `_aerial_point` left out; from the `LookupTables` record
+    `tables`: profile densities `density` on levels h_step apart, constituents `scatterers`,
+    single_factor = E_sun beta_s (n_s, n_wl). The other arrays are scratch
+    (`aerial_scratch`)."""
     n_wl = inscatter_out.size
-    lit_single_scattering(r, mu, mu_s, nu, d, hits_ground, bottom_radius, top_radius,
-                          sun_angular_radius, EXACT_SINGLE_SAMPLES, h_step, density, scatterers,
-                          transmittance, samples, observer, here, sun, dens, exact)
+    lit_single_scattering(r, mu, mu_s, nu, d, hits_ground, tables.bottom_radius,
+                          tables.top_radius, tables.sun_angular_radius, EXACT_SINGLE_SAMPLES,
+                          tables.h_step, tables.density, tables.scatterers, tables.transmittance,
+                          samples, observer, here, sun, dens, exact)
+    phase_table, single_factor = tables.phase_table, tables.single_factor
     phase_values(phase_table, nu, weights)
     for s in range(phase_table.shape[0]):
         for w in range(n_wl):
@@ -701,31 +710,24 @@ def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_
     """`_aerial_point` (and in twilight `_aerial_lit_single`) from each origin ((1, 3) or
     (n, 3)) to each point (n, 3), into inscatter_out and transmittance_out (n, n_wl).
     `tables`: the `LookupTables` record of the tables and the profile."""
-    bottom_radius, top_radius, mu_s_min = tables.bottom_radius, tables.top_radius, tables.mu_s_min
-    scattering, shape, phase_table = tables.scattering, tables.shape, tables.phase_table
-    transmittance, sun_angular_radius = tables.transmittance, tables.sun_angular_radius
-    h_step, density, scatterers = tables.h_step, tables.density, tables.scatterers
-    single_factor = tables.single_factor
     n_points = points.shape[0]
     n_wl = inscatter_out.shape[1]
-    n_s = phase_table.shape[0]
+    n_s = tables.phase_table.shape[0]
     single_origin = origins.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
         (weights, pair_weights, pair_values, at_point, scratch, slices, samples, observer, here,
-         t_sun, dens, exact) = aerial_scratch(n_s + 1, n_wl, density.shape[0], n_s)
+         t_sun, dens, exact) = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
             o = 0 if single_origin else i
             r, mu, mu_s, nu, d, hits_ground, marched = _aerial_point(
                 origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0], points[i, 1],
-                points[i, 2], sun_direction, bottom_radius, top_radius, mu_s_min, scattering,
-                shape, phase_table, transmittance, weights, pair_weights, pair_values,
+                points[i, 2], sun_direction, tables, weights, pair_weights, pair_values,
                 at_point, scratch, slices, inscatter_out[i], transmittance_out[i])
             if marched > 0.0:
-                _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, bottom_radius,
-                                   top_radius, phase_table, transmittance, sun_angular_radius,
-                                   h_step, density, scatterers, single_factor, weights, samples,
-                                   observer, here, t_sun, dens, exact, inscatter_out[i])
+                _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights,
+                                   samples, observer, here, t_sun, dens, exact,
+                                   inscatter_out[i])
 
 
 @njit(parallel=True, cache=True)
@@ -736,37 +738,28 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
     L_in + T albedo / pi (E_sun [lit] + E_sky), `_aerial_point` (with `_aerial_lit_single`)
     and `_surface_irradiance` in one pass.
     `tables`: the `LookupTables` record of the tables and the profile."""
-    bottom_radius, top_radius, mu_s_min = tables.bottom_radius, tables.top_radius, tables.mu_s_min
-    scattering, shape, phase_table = tables.scattering, tables.shape, tables.phase_table
-    transmittance, irradiance = tables.transmittance, tables.irradiance
-    sun_irradiance, sun_angular_radius = tables.sun_irradiance, tables.sun_angular_radius
-    h_step, density, scatterers = tables.h_step, tables.density, tables.scatterers
-    single_factor = tables.single_factor
     n_points = points.shape[0]
     n_wl = out.shape[1]
-    n_s = phase_table.shape[0]
+    n_s = tables.phase_table.shape[0]
     one_albedo = albedo.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
         (weights, pair_weights, pair_values, at_point, scratch, slices, samples, observer, here,
-         t_sun, dens, exact) = aerial_scratch(n_s + 1, n_wl, density.shape[0], n_s)
+         t_sun, dens, exact) = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
         t_view = np.empty(n_wl)
         direct = np.empty(n_wl)
         diffuse = np.empty(n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
             r, mu, mu_s, nu, d, hits_ground, marched = _aerial_point(
                 origin[0], origin[1], origin[2], points[i, 0], points[i, 1], points[i, 2],
-                sun_direction, bottom_radius, top_radius, mu_s_min, scattering, shape,
-                phase_table, transmittance, weights, pair_weights, pair_values, at_point,
-                scratch, slices, out[i], t_view)
+                sun_direction, tables, weights, pair_weights, pair_values, at_point, scratch,
+                slices, out[i], t_view)
             if marched > 0.0:
-                _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, bottom_radius,
-                                   top_radius, phase_table, transmittance, sun_angular_radius,
-                                   h_step, density, scatterers, single_factor, weights, samples,
-                                   observer, here, t_sun, dens, exact, out[i])
-            _surface_irradiance(points[i], normals[i], sun_direction, bottom_radius,
-                                top_radius, transmittance, irradiance, sun_irradiance,
-                                sun_angular_radius, direct, diffuse)
+                _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights,
+                                   samples, observer, here, t_sun, dens, exact, out[i])
+            _surface_irradiance(points[i], normals[i], sun_direction, tables.bottom_radius,
+                                tables.top_radius, tables.transmittance, tables.irradiance,
+                                tables.sun_irradiance, tables.sun_angular_radius, direct, diffuse)
             a = 0 if one_albedo else i
             sun = 1.0 if lit[i] else 0.0
             for w in range(n_wl):

@@ -78,7 +78,9 @@ class LutSolver:
         self._lookup = _table_lookup_kernels.LookupTables(
             bottom_radius=tables.bottom_radius_m, top_radius=tables.top_radius_m,
             mu_s_min=tables.min_cos_sun_zenith, scattering=flat_tables(tables.scattering),
-            shape=tuple(int(n) for n in tables.scattering.shape[:4]), phase_table=tables.phase,
+            n_r=int(tables.scattering.shape[0]), n_mu=int(tables.scattering.shape[1]),
+            n_mu_s=int(tables.scattering.shape[2]), n_nu=int(tables.scattering.shape[3]),
+            phase_table=tables.phase,
             transmittance=tables.transmittance, irradiance=tables.irradiance,
             sun_irradiance=sun_irradiance,
             sun_angular_radius=float(profile.sun_angular_radius_rad),
