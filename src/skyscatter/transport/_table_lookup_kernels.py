@@ -704,11 +704,28 @@ def _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights
                                  * exact[s, w])
 
 
+@njit(cache=True)
+def _aerial_segment(ox, oy, oz, px, py, pz, sun_direction, tables, work, inscatter_out,
+                    transmittance_out):
+    """`_aerial_point` from o to p and, in twilight, `_aerial_lit_single` over the segment:
+    the light scattered towards o into inscatter_out and the segment's transmittance into
+    transmittance_out (n_wl,). `tables`: the `LookupTables` record; `work`: the scratch arrays
+    of `aerial_scratch`."""
+    (weights, pair_weights, pair_values, at_point, scratch, slices, samples, observer, here,
+     t_sun, dens, exact) = work
+    r, mu, mu_s, nu, d, hits_ground, marched = _aerial_point(
+        ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_weights, pair_values,
+        at_point, scratch, slices, inscatter_out, transmittance_out)
+    if marched > 0.0:
+        _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights, samples,
+                           observer, here, t_sun, dens, exact, inscatter_out)
+
+
 @njit(parallel=True, cache=True)
 def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_out,
                               transmittance_out):
-    """`_aerial_point` (and in twilight `_aerial_lit_single`) from each origin ((1, 3) or
-    (n, 3)) to each point (n, 3), into inscatter_out and transmittance_out (n, n_wl).
+    """`_aerial_segment` from each origin ((1, 3) or (n, 3)) to each point (n, 3), into
+    inscatter_out and transmittance_out (n, n_wl).
     `tables`: the `LookupTables` record of the tables and the profile."""
     n_points = points.shape[0]
     n_wl = inscatter_out.shape[1]
@@ -716,18 +733,12 @@ def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_
     single_origin = origins.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        (weights, pair_weights, pair_values, at_point, scratch, slices, samples, observer, here,
-         t_sun, dens, exact) = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
+        work = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
             o = 0 if single_origin else i
-            r, mu, mu_s, nu, d, hits_ground, marched = _aerial_point(
-                origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0], points[i, 1],
-                points[i, 2], sun_direction, tables, weights, pair_weights, pair_values,
-                at_point, scratch, slices, inscatter_out[i], transmittance_out[i])
-            if marched > 0.0:
-                _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights,
-                                   samples, observer, here, t_sun, dens, exact,
-                                   inscatter_out[i])
+            _aerial_segment(origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0],
+                            points[i, 1], points[i, 2], sun_direction, tables, work,
+                            inscatter_out[i], transmittance_out[i])
 
 
 @njit(parallel=True, cache=True)
@@ -735,8 +746,8 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
     """Radiance (n, n_wl) reaching `origin` (3,) from Lambertian surfaces at `points` (n, 3)
     facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the sun
     where `lit` (n,) (not in a terrain shadow):
-    L_in + T albedo / pi (E_sun [lit] + E_sky), `_aerial_point` (with `_aerial_lit_single`)
-    and `_surface_irradiance` in one pass.
+    L_in + T albedo / pi (E_sun [lit] + E_sky), `_aerial_segment` and `_surface_irradiance`
+    in one pass.
     `tables`: the `LookupTables` record of the tables and the profile."""
     n_points = points.shape[0]
     n_wl = out.shape[1]
@@ -744,19 +755,13 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
     one_albedo = albedo.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        (weights, pair_weights, pair_values, at_point, scratch, slices, samples, observer, here,
-         t_sun, dens, exact) = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
+        work = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
         t_view = np.empty(n_wl)
         direct = np.empty(n_wl)
         diffuse = np.empty(n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
-            r, mu, mu_s, nu, d, hits_ground, marched = _aerial_point(
-                origin[0], origin[1], origin[2], points[i, 0], points[i, 1], points[i, 2],
-                sun_direction, tables, weights, pair_weights, pair_values, at_point, scratch,
-                slices, out[i], t_view)
-            if marched > 0.0:
-                _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights,
-                                   samples, observer, here, t_sun, dens, exact, out[i])
+            _aerial_segment(origin[0], origin[1], origin[2], points[i, 0], points[i, 1],
+                            points[i, 2], sun_direction, tables, work, out[i], t_view)
             _surface_irradiance(points[i], normals[i], sun_direction, tables.bottom_radius,
                                 tables.top_radius, tables.transmittance, tables.irradiance,
                                 tables.sun_irradiance, tables.sun_angular_radius, direct, diffuse)
