@@ -278,6 +278,66 @@ def direct_ground_irradiance(n_points, grid, medium, sun_irradiance, sun_angular
 
 
 @njit(parallel=True, cache=True)
+def direct_irradiance_nodes(n_r_e, n_mu_s_e, grid, medium, sun_irradiance, sun_angular_radius):
+    """Direct sun on horizontal surfaces, E_sun T_sun max(mu_s, 0) V, on the irradiance nodes
+    (as `indirect_irradiance`), (n_r_e, n_mu_s_e, n_wl) [W m^-2 nm^-1]. `grid`: a `TableGrid`,
+    `medium`: a `RayMedium`."""
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
+    columns, extinction = medium.columns, medium.extinction
+    n_c, n_wl = extinction.shape
+    out = np.zeros((n_r_e, n_mu_s_e, n_wl))
+    for node in prange(n_r_e * n_mu_s_e):
+        i = node // n_mu_s_e
+        j = node % n_mu_s_e
+        r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1), bottom_radius,
+                                           top_radius)
+        visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
+        if visible <= 0.0 or mu_s <= 0.0:
+            continue
+        col = np.empty(n_c)
+        columns_to_top(r, mu_s, bottom_radius, top_radius, columns, col)
+        for w in range(n_wl):
+            tau = 0.0
+            for c in range(n_c):
+                tau += extinction[c, w] * col[c]
+            out[i, j, w] = sun_irradiance[w] * math.exp(-tau) * mu_s * visible
+    return out
+
+
+@njit(parallel=True, cache=True)
+def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
+    """sum_s p*_s(nu) (scaled_single_s - kept_s single_s) on every cell of the scattering
+    table, (n_r, n_mu, n_mu_s, n_nu, n_wl) float32: what the first order of the delta-M scaled
+    medium has more than the exact first order's smooth part (`phase_truncation`). Tables
+    (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl) without phase functions, as `single_scattering_table`
+    writes them; kept = 1 - f (n_s, n_wl); p* from `smooth_phase` (n_s, n_angle, n_wl) at each
+    cell's nu. `grid`: a `TableGrid`."""
+    n_r, n_mu, n_mu_s, n_nu, n_s, n_wl = single.shape
+    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
+    out = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
+    for row in prange(n_r * n_mu):
+        i_r = row // n_mu
+        i_mu = row % n_mu
+        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        mu, _ = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius, n_mu)
+        phase = np.empty(n_s * n_wl)
+        for i_s in range(n_mu_s):
+            mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
+                                          mu_s_min, n_mu_s)
+            spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+            for i_nu in range(n_nu):
+                nu = scattering_nu_from_u(i_nu / (n_nu - 1))
+                nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                phase_values(smooth_phase, nu, phase)
+                for s in range(n_s):
+                    for w in range(n_wl):
+                        out[i_r, i_mu, i_s, i_nu, w] += phase[s * n_wl + w] * (
+                            scaled_single[i_r, i_mu, i_s, i_nu, s, w]
+                            - kept[s, w] * single[i_r, i_mu, i_s, i_nu, s, w])
+    return out
+
+
+@njit(parallel=True, cache=True)
 def phase_matrices(phase_table, cos_direct, cos_mirror, solid_angle):
     """Phase matrices of the sphere integral, (n_s, n_wl, n_out, n_in) float32:
     P[o, i] = (p(cos_direct[o, i]) + p(cos_mirror[o, i])) solid_angle[i], each row normalised

@@ -29,9 +29,9 @@ from skyscatter.transport.tables import AtmosphereTables, TableResolution, preco
 
 __all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_arrays"]
 
-TABLE_FORMAT = 1  # bump when the arrays stored change meaning
+TABLE_FORMAT = 2  # bump when the arrays stored change meaning (2: truncated peaks, the tail)
 _ARRAYS = ("wavelengths_nm", "transmittance", "scattering", "irradiance", "phase",
-           "order_mean_radiance", "order_zenith_radiance")
+           "order_mean_radiance", "order_zenith_radiance", "tail_share")
 # Where the precomputation starts: the key covers the code it reaches (`code_fingerprint`).
 _PRECOMPUTATION = ("skyscatter.transport.tables", "precompute_tables")
 
@@ -65,6 +65,7 @@ def tables_to_arrays(tables: AtmosphereTables) -> dict[str, np.ndarray]:
     """The arrays of `tables` plus its scalars, for `TableCache.store`."""
     arrays = {name: getattr(tables, name) for name in _ARRAYS}
     arrays["radii_m"] = np.array([tables.bottom_radius_m, tables.top_radius_m])
+    arrays["orders_computed"] = np.array(tables.orders_computed, dtype=np.int64)
     arrays["scattering_constituents"] = np.array(tables.scattering_constituents, dtype=np.int64)
     arrays["scattering_names"] = np.array(tables.scattering_names, dtype=np.str_)
     return arrays
@@ -80,6 +81,7 @@ def tables_from_arrays(arrays: dict[str, np.ndarray],
         resolution=TableResolution(**metadata["resolution"]), orders=int(metadata["orders"]),
         scattering_names=tuple(str(n) for n in arrays["scattering_names"]),
         scattering_constituents=tuple(int(c) for c in arrays["scattering_constituents"]),
+        orders_computed=int(arrays["orders_computed"]),
         **{name: arrays[name] for name in _ARRAYS})
 
 

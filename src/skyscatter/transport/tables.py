@@ -21,6 +21,16 @@ The orders are iterated as in Bruneton & Neyret (2008), Algorithm 4.1, and Brune
                 by Delta E_{n-2} (Delta E_0 = direct sunlight) seen through the atmosphere;
   Delta E_{n-1}(x) = int_{mu > 0} L_{n-1}(x, w) mu dw;
   Delta S_n(x, v) = int_0^d T(x, p) J_n(p, v) dt;   M += Delta S_n;   E += Delta E_{n-1}.
+Forward-peaked particles (aerosols, dust, cloud droplets): the orders >= 2 are computed in the
+delta-M scaled medium of `phase_truncation` (each particle's forward peak clipped inside
+`TableResolution.truncation_angle_deg` and counted as unscattered light), whose smooth phase
+functions the sphere quadrature resolves; the first order stays exact (full phase functions,
+true extinction). What the scaled medium's first order has more than the exact one's smooth part
+(light scattered in the peak and then once more) is added to M, and the light the peaks keep
+near the sun's direction to E as the scaled medium's direct sun less the true one (the TMS
+correction of Nakajima & Tanaka 1988, in table form). Optically thick media need many orders:
+once the ratio of successive orders settles, the orders beyond are a geometric series, added
+at once (`TAIL_TOLERANCE`; `AtmosphereTables.tail_share` says how much of M it is).
 Paths whose last event is a ground reflection are not in the tables; the renderer adds the ground
 with albedo / pi (direct sun + E) (Bruneton 2017). The ground albedo of the profile enters the
 orders >= 2 through J.
@@ -53,6 +63,7 @@ from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfil
 from skyscatter.errors import InputError
 from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
+from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN,
@@ -69,6 +80,19 @@ __all__ = [
 
 # Direct sun on the ground for the ground term of the second order: mu_s samples over [-1, 1].
 DIRECT_GROUND_SAMPLES = 1025
+# Forward peaks of particles clipped inside this angle for the orders >= 2 (`phase_truncation`):
+# measured against the Monte Carlo reference, benchmarks/bench_forward_peak.py.
+TRUNCATION_ANGLE_DEG = 10.0
+MAX_TRUNCATION_ANGLE_DEG = 90.0
+# The orders beyond the last one computed follow a geometric series once the ratio of successive
+# orders has settled (the leading eigenvalue of the scattering operator takes over, as in the
+# successive-orders method: Lenoble 1985, "Radiative Transfer in Scattering and Absorbing
+# Atmospheres", ch. 3): from order TAIL_MIN_ORDER on, when the ratio changed by at most
+# RATIO_SETTLED from one order to the next, the iteration stops as soon as the tail is below
+# TAIL_TOLERANCE of the orders >= 2, and at the last order allowed the tail is added.
+TAIL_MIN_ORDER = 4
+RATIO_SETTLED = 0.02
+TAIL_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -95,6 +119,9 @@ class TableResolution:
                            hemisphere quadrature of the indirect irradiance: polar midpoints in
                            [0, pi/2], azimuth midpoints in [0, pi] mirrored (Bruneton: 16 x 64)
     phase_angles           samples of each phase function over [0, pi] for the kernels
+    truncation_angle_deg   the orders >= 2 see particle phase functions with their forward
+                           peak clipped inside this angle, delta-M scaled
+                           (`phase_truncation`); 0: no truncation
     """
 
     transmittance_r: int = 64
@@ -115,9 +142,18 @@ class TableResolution:
     irradiance_theta: int = 16
     irradiance_phi: int = 32
     phase_angles: int = 4097
+    truncation_angle_deg: float = TRUNCATION_ANGLE_DEG
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.truncation_angle_deg <= MAX_TRUNCATION_ANGLE_DEG:
+            raise InputError(f"TableResolution.truncation_angle_deg = "
+                             f"{self.truncation_angle_deg!r} must lie in [0, "
+                             f"{MAX_TRUNCATION_ANGLE_DEG:g}] deg", key="truncation_angle_deg",
+                             value=self.truncation_angle_deg,
+                             allowed=f"[0, {MAX_TRUNCATION_ANGLE_DEG:g}]")
         for field in fields(self):
+            if field.name == "truncation_angle_deg":
+                continue
             value = getattr(self, field.name)
             if not isinstance(value, int | np.integer) or value < 2:
                 raise InputError(f"TableResolution.{field.name} = {value!r} must be an integer "
@@ -158,6 +194,11 @@ class AtmosphereTables:
     order_mean_radiance, order_zenith_radiance  (orders, n_wl): radiance of each order alone,
                    the mean over all table cells and the zenith seen from the ground with the
                    sun at the zenith [W m^-2 sr^-1 nm^-1]; they show how the orders converge
+                   (rows beyond `orders_computed` are 0)
+    orders_computed   the orders iterated (<= orders: the iteration stops once the orders
+                   beyond are a geometric series below `TAIL_TOLERANCE`)
+    tail_share     (n_wl,): the share of the orders >= 2 that is that extrapolated series
+                   (0 where none was added): how far from convergence the iteration stopped
     """
 
     wavelengths_nm: np.ndarray
@@ -174,6 +215,8 @@ class AtmosphereTables:
     phase: np.ndarray
     order_mean_radiance: np.ndarray
     order_zenith_radiance: np.ndarray
+    orders_computed: int
+    tail_share: np.ndarray
 
     @property
     def single_scattering(self) -> np.ndarray:
@@ -298,6 +341,13 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     transmittance = np.exp(-np.einsum("cw,crm->rmw", profile.extinction_per_density, columns))
     report("transmittance")
     phase = sample_phase_functions(profile, scatterers, res.phase_angles)
+    smooth_phase, peak = truncate_forward_peak(phase, res.truncation_angle_deg)
+    truncated = bool(np.any(peak > 0.0))
+    # the orders >= 2 see the delta-M scaled medium (`phase_truncation`); without a clipped
+    # peak it is the medium itself
+    scaled = _scaled_optics(profile, scatterer_index, peak)
+    scaled_transmittance = (np.exp(-np.einsum("cw,crm->rmw", scaled.extinction, columns))
+                            if truncated else transmittance)
     theta_in, phi_in, *_ = _sphere_grids(res)
     node_altitude = np.array([scattering_r_from_u((k + 0.5) / res.scattering_r, bottom, top,
                                                   res.scattering_r)
@@ -308,31 +358,55 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                              for c in scatterers]).reshape(n_s, res.scattering_r)
     # scattering per density of every constituent (absorbers: 0), for beta_s along rays
     scattering_all = np.where(np.isin(np.arange(len(profile.names)), scatterers)[:, None],
-                              profile.scattering_per_density, 0.0)
+                              scaled.scattering, 0.0)
     scattering = np.zeros((res.scattering_r, res.scattering_mu, res.scattering_mu_s,
                            res.scattering_nu, n_s + 1, n_wl), dtype=np.float32)
     irradiance = np.zeros((res.irradiance_r, res.irradiance_mu_s, n_wl))
     order_mean = np.zeros((orders, n_wl))
     order_zenith = np.zeros((orders, n_wl))
+    tail_share = np.zeros(n_wl)
+    orders_computed = 1
     grid = _table_build_kernels.TableGrid(
         n_r=res.scattering_r, n_mu=res.scattering_mu, n_mu_s=res.scattering_mu_s,
         n_nu=res.scattering_nu, bottom_radius=bottom, top_radius=top, mu_s_min=mu_s_min)
 
+    sun_radius = float(profile.sun_angular_radius_rad)
     for batch in batches:
         medium = _table_build_kernels.RayMedium(
             h_step=h_step, density=density, columns=columns,
             extinction=np.ascontiguousarray(profile.extinction_per_density[:, batch]))
+        scaled_medium = medium._replace(
+            extinction=np.ascontiguousarray(scaled.extinction[:, batch]))
         sun = np.ascontiguousarray(profile.toa_irradiance[batch], dtype=np.float64)
         albedo = np.ascontiguousarray(profile.ground_albedo[batch], dtype=np.float64)
         phase_b = np.ascontiguousarray(phase[:, :, batch])
-        factor = np.ascontiguousarray(
-            sun[None, :] * profile.scattering_per_density[scatterer_index][:, batch])
+        smooth_b = np.ascontiguousarray(smooth_phase[:, :, batch])
+        beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
         label = f"wavelengths {batch.start + 1}-{batch.stop} of {n_wl}"
 
         single = _table_build_kernels.single_scattering_table(
             grid, medium, res.ray_samples, np.ascontiguousarray(transmittance[..., batch]),
-            scatterer_index, factor, float(profile.sun_angular_radius_rad))
+            scatterer_index, np.ascontiguousarray(sun[None, :] * beta_s), sun_radius)
         scattering[..., :n_s, batch] = single
+        if truncated and orders > 1:
+            # first order of the scaled medium, which lights the second; the tables keep the
+            # exact first order and gain what the scaled one has more (TMS, module docstring)
+            peak_b = np.ascontiguousarray(peak[:, batch])
+            scaled_single = _table_build_kernels.single_scattering_table(
+                grid, scaled_medium, res.ray_samples,
+                np.ascontiguousarray(scaled_transmittance[..., batch]), scatterer_index,
+                np.ascontiguousarray(sun[None, :] * (1.0 - peak_b) * beta_s), sun_radius)
+            scattering[..., n_s, batch] = _table_build_kernels.phase_weighted_difference(
+                scaled_single, single, 1.0 - peak_b, smooth_b, grid)
+            # the light the peak scatters stays near the sun: on the ground it is the direct
+            # sun of the scaled medium less the true one
+            irradiance[..., batch] = (
+                _table_build_kernels.direct_irradiance_nodes(
+                    res.irradiance_r, res.irradiance_mu_s, grid, scaled_medium, sun, sun_radius)
+                - _table_build_kernels.direct_irradiance_nodes(
+                    res.irradiance_r, res.irradiance_mu_s, grid, medium, sun, sun_radius))
+        else:
+            scaled_single = single
         order_mean[0, batch], order_zenith[0, batch] = _table_build_kernels.order_statistics(
             single, True, phase_b, grid)
         report(f"single scattering, {label}")
@@ -341,18 +415,18 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                      _read_only(irradiance))
         if orders == 1 or n_s == 0:  # nothing scatters: no higher orders
             continue
-        matrices = _phase_matrices(phase_b, res)
-        beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
-        previous, use_phase = single, True
+        matrices = _phase_matrices(smooth_b, res)
+        scaled_beta_s = scaled.scattering[scatterer_index][:, batch]
+        previous, use_phase = scaled_single, True
         ground = _table_build_kernels.direct_ground_irradiance(
-            DIRECT_GROUND_SAMPLES, grid, medium, sun, float(profile.sun_angular_radius_rad))
+            DIRECT_GROUND_SAMPLES, grid, scaled_medium, sun, sun_radius)
         for order in range(2, orders + 1):
             lit = _table_build_kernels.LitOrder(tables=flat_tables(previous),
                                                 n_t=previous.shape[4], use_phase=use_phase,
-                                                phase_table=phase_b)
+                                                phase_table=smooth_b)
             incoming = _table_build_kernels.incoming_radiance(
-                grid, medium, theta_in, phi_in, lit, ground, albedo).astype(np.float32)
-            source = _source_function(matrices, incoming, beta_s, node_density, res)
+                grid, scaled_medium, theta_in, phi_in, lit, ground, albedo).astype(np.float32)
+            source = _source_function(matrices, incoming, scaled_beta_s, node_density, res)
             del incoming
             delta_irradiance = _table_build_kernels.indirect_irradiance(
                 res.irradiance_r, res.irradiance_mu_s, res.irradiance_theta,
@@ -360,18 +434,31 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             irradiance[..., batch] += delta_irradiance
             ground = np.ascontiguousarray(delta_irradiance[0])
             delta = _table_build_kernels.multiple_scattering_table(
-                grid, medium, res.multiple_ray_samples,
+                grid, scaled_medium, res.multiple_ray_samples,
                 np.ascontiguousarray(scattering_all[:, batch]), source, res.density_phi)
             del source, lit
             scattering[..., n_s, batch] += delta
             previous, use_phase = delta[..., None, :], False
             order_mean[order - 1, batch], order_zenith[order - 1, batch] = (
                 _table_build_kernels.order_statistics(previous, False, phase_b, grid))
+            tail = _geometric_tail(order_mean[:order, batch], last=order == orders)
+            if tail is not None:
+                # orders > n as the geometric series of order n (module docstring)
+                factor = (tail / (1.0 - tail)).astype(np.float32)
+                scattering[..., n_s, batch] += delta * factor
+                irradiance[..., batch] += delta_irradiance * factor
+                tail_share[batch] = (order_mean[order - 1, batch] * factor
+                                     / order_mean[1:order, batch].sum(axis=0))
+                orders_computed = max(orders_computed, order)
+                step += orders - order
+                report(f"order {order} and the tail of the orders beyond, {label}")
+                break
+            orders_computed = max(orders_computed, order)
             report(f"order {order}, {label}")
             if on_order is not None:
                 on_order(order, batch, _read_only(scattering[..., n_s, :]),
                          _read_only(irradiance))
-        del previous, single
+        del previous, single, scaled_single
 
     return AtmosphereTables(
         wavelengths_nm=wavelengths.copy(), bottom_radius_m=bottom, top_radius_m=top,
@@ -379,7 +466,46 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         scattering_names=tuple(profile.names[c] for c in scatterers),
         scattering_constituents=scatterers, transmittance=transmittance,
         scattering=scattering, irradiance=irradiance, phase=phase,
-        order_mean_radiance=order_mean, order_zenith_radiance=order_zenith)
+        order_mean_radiance=order_mean, order_zenith_radiance=order_zenith,
+        orders_computed=orders_computed, tail_share=tail_share)
+
+
+def _geometric_tail(order_mean: np.ndarray, last: bool) -> np.ndarray | None:
+    """The ratio r (n_b,) of successive orders once it has settled, when the orders beyond the
+    last computed one (`order_mean` (n, n_b), orders 1 .. n) are to be added as a geometric
+    series: at the last order allowed, or earlier when that tail is below `TAIL_TOLERANCE` of
+    the orders >= 2 in every wavelength; None to go on (or where the ratio has not settled)."""
+    n = order_mean.shape[0]
+    if n < TAIL_MIN_ORDER:
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = order_mean[-1] / order_mean[-2]
+        before = order_mean[-2] / order_mean[-3]
+    settled = (np.all(np.isfinite(ratio)) and np.all(ratio < 1.0) and np.all(ratio >= 0.0)
+               and np.all(np.abs(ratio - before) <= RATIO_SETTLED * ratio))
+    if not settled:
+        return None
+    share = order_mean[-1] * ratio / (1.0 - ratio) / order_mean[1:].sum(axis=0)
+    return ratio if last or np.all(share <= TAIL_TOLERANCE) else None
+
+
+@dataclass(frozen=True)
+class _ScaledOptics:
+    """Extinction and scattering per density (n_c, n_wl) of the delta-M scaled medium."""
+
+    extinction: np.ndarray
+    scattering: np.ndarray
+
+
+def _scaled_optics(profile: OpticalProfile, scatterers: np.ndarray, peak: np.ndarray
+                   ) -> _ScaledOptics:
+    """beta_e* = beta_e - f beta_s and beta_s* = (1 - f) beta_s per density for the
+    scattering constituents `scatterers` with peak fractions `peak` (n_s, n_wl)
+    (`phase_truncation`); the other constituents unchanged."""
+    removed = np.zeros_like(profile.scattering_per_density)
+    removed[scatterers] = peak * profile.scattering_per_density[scatterers]
+    return _ScaledOptics(np.ascontiguousarray(profile.extinction_per_density - removed),
+                         np.ascontiguousarray(profile.scattering_per_density - removed))
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
