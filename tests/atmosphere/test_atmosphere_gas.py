@@ -172,7 +172,8 @@ def test_exo_dense_n2_gravity_comes_from_the_planet_mass():
     assert exo["rayleigh_optical_depth"][440.0] == pytest.approx(1.26, abs=0.01)
 
 
-@pytest.mark.parametrize("name", ["earth-physical", "mars-physical", "exo-dense-n2"])
+@pytest.mark.parametrize("name", ["earth-physical", "mars-physical", "exo-dense-n2",
+                                  "mars-dust-storm"])
 def test_physical_presets_cite_the_numbers_they_derive(name):
     # Each preset's sources quote H, N0 and tau_R; they must match what the loader derives.
     import tomllib

@@ -330,11 +330,12 @@ blend = { type = "double-henyey-greenstein", g1 = 0.6, g2 = -0.2, alpha = 0.9 }
 """
 PRESETS = {name: (PRESETS_DIR / f"{name}.toml").read_text(encoding="utf-8") for name in (
     "earth", "earth-bruneton", "earth-physical", "mars-costa", "mars-physical",
-    "super-earth-10bar", "exo-dense-n2", "mars-collienne")}
+    "super-earth-10bar", "exo-dense-n2", "mars-collienne", "earth-overcast", "earth-fog",
+    "mars-dust-storm")}
 PRESETS["mie"] = MIE
-# mars-physical's dust with 16 radii instead of 5000: Mie in milliseconds, not seconds
-PRESETS["mars-physical"] = PRESETS["mars-physical"].replace('type = "mie"\n',
-                                                            'type = "mie"\nradii = 16\n')
+# The Mie presets with 16 radii instead of 5000: Mie in milliseconds, not seconds
+for _name in ("mars-physical", "earth-overcast", "earth-fog", "mars-dust-storm"):
+    PRESETS[_name] = PRESETS[_name].replace('type = "mie"\n', 'type = "mie"\nradii = 16\n')
 NUMBER = re.compile(r"(?<=[=\[,{]) *(-?[0-9][0-9_.eE+-]*)")
 KEY_BEFORE = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)\s*=\s*[\[{ ]*$")
 

@@ -30,6 +30,7 @@ from skyscatter.atmosphere.gas import (
 )
 from skyscatter.atmosphere.model import (
     DEFAULT_SCATTERING_ORDERS,
+    MAX_PROFILE_LEVELS,
     MAX_SCATTERING_ORDERS,
     Atmosphere,
     Constituent,
@@ -42,6 +43,7 @@ from skyscatter.atmosphere.profiles import (
     ProfileLayer,
     ScaledProfile,
     TabulatedProfile,
+    UniformLayerProfile,
     vertical_column,
 )
 from skyscatter.checks import shown
@@ -307,19 +309,22 @@ def _parse_constituent(table: ConfigTable, top_m: float) -> Constituent:
     optics_table = table.table("optics")
     kind = optics_table.text("type", choices=("rayleigh", "absorber", "angstrom", "coefficients",
                                               "mie"))
-    target_column = None
+    # A layer's column is known exactly (and kept on any altitude levels); others are sampled.
+    column = (profile.column if isinstance(profile, UniformLayerProfile)
+              else vertical_column(profile, top_m))
+    target_column = column if isinstance(profile, UniformLayerProfile) and column > 0 else None
     zero = f"a density profile that is not zero everywhere ({table.prefix}.density is)"
     if kind == "absorber" and table.has("column_dobson"):
-        if vertical_column(profile, top_m) <= 0.0:
+        if column <= 0.0:
             raise table.error("column_dobson", table.data["column_dobson"], zero)
         target_column = table.number("column_dobson", ranges.COLUMN_DOBSON) * DOBSON_UNIT_M2
-    if kind in ("angstrom", "mie") and optics_table.has("optical_depth") and vertical_column(
-            profile, top_m) <= 0.0:
+    if kind in ("angstrom", "mie") and optics_table.has("optical_depth") and column <= 0.0:
         raise optics_table.error("optical_depth", optics_table.data["optical_depth"], zero)
     if kind == "angstrom" and optics_table.has("optical_depth"):
         target_column = 1.0  # unit column: extinction per density = optical depth
     if kind == "mie":
-        optics, target_column = _parse_particles(optics_table)
+        optics, mie_column = _parse_particles(optics_table)
+        target_column = target_column if mie_column is None else mie_column
     else:
         optics = _parse_optics(kind, optics_table)
     table.finish()
@@ -337,8 +342,10 @@ def _parse_particles(table: ConfigTable) -> tuple[object, float | None]:
 
 
 def _parse_profile(table: ConfigTable, top_m: float) -> object:
-    kind = table.text("type", choices=("exponential", "layers", "table"))
-    if kind == "exponential":
+    kind = table.text("type", choices=("exponential", "layers", "table", "layer"))
+    if kind == "layer":
+        profile = _parse_uniform_layer(table, top_m)
+    elif kind == "exponential":
         profile = ExponentialProfile(table.number("scale_height_m", ranges.SCALE_HEIGHT_M),
                                      table.number("surface_density", ranges.DENSITY, 1.0))
     elif kind == "layers":
@@ -355,6 +362,33 @@ def _parse_profile(table: ConfigTable, top_m: float) -> object:
         profile = TabulatedProfile(tuple(altitudes), tuple(values), interpolation)
     table.finish()
     return profile
+
+
+def _parse_uniform_layer(table: ConfigTable, top_m: float) -> UniformLayerProfile:
+    """`type = "layer"`: uniform between base and top, inside the atmosphere, with edges no
+    wider than the layer (and, above the ground, no lower edge below it)."""
+    base = table.number("base_altitude_m", ranges.LAYER_ALTITUDE_M)
+    top = table.number("top_altitude_m", ranges.LAYER_ALTITUDE_M)
+    if top <= base:
+        raise table.error("top_altitude_m", top, f"above base_altitude_m = {base:g} m")
+    if top > top_m:
+        raise table.error("top_altitude_m", top, f"<= the top of the atmosphere, "
+                          f"atmosphere.top_altitude_m = {top_m:g} m")
+    thinnest = 2.0 * top_m / (MAX_PROFILE_LEVELS - 1)  # two spacings of the finest levels
+    if top - base < thinnest:
+        raise table.error("top_altitude_m", top, f">= base_altitude_m + {thinnest:.3g} m: the "
+                          f"solvers sample at most {MAX_PROFILE_LEVELS} levels over "
+                          f"{top_m:g} m, and a thinner layer falls between them")
+    edge = table.number("edge_m", ranges.LAYER_EDGE_M, 0.0)
+    if edge > top - base:
+        raise table.error("edge_m", edge, f"<= the layer's thickness, top_altitude_m - "
+                          f"base_altitude_m = {top - base:g} m")
+    if base > 0.0 and edge / 2.0 > base or top + edge / 2.0 > top_m:
+        raise table.error("edge_m", edge, "an edge that stays inside the atmosphere: edge_m / 2 "
+                          f"<= base_altitude_m = {base:g} m (or a base on the ground) and "
+                          f"top_altitude_m + edge_m / 2 <= {top_m:g} m")
+    return UniformLayerProfile(base, top, table.number("peak_density", ranges.DENSITY, 1.0),
+                               edge)
 
 
 def _parse_layer(layer: ConfigTable, top_m: float) -> ProfileLayer:

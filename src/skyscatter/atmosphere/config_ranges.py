@@ -35,6 +35,8 @@ __all__ = [
     "GEOMETRIC_STD",
     "GRAVITY_M_S2",
     "JUNGE_EXPONENT",
+    "LAYER_ALTITUDE_M",
+    "LAYER_EDGE_M",
     "LAYER_RATE_PER_M",
     "LAYER_TERM",
     "LOG_NORMAL_VARIANCE",
@@ -135,6 +137,11 @@ DENSITY = Bounds(0.0, 1e30)
 # Profile altitudes (tables, layer tops): 1e5 m below the ground (no surface is that deep) to
 # 1e9 m (ten times the highest top).
 ALTITUDE_M = Bounds(-1e5, 1e9)
+# Base and top of a uniform layer (`type = "layer"`): on or above the ground, up to 1e9 m like
+# other profile altitudes; the top must also lie inside the atmosphere (checked by the loader).
+LAYER_ALTITUDE_M = Bounds(0.0, 1e9)
+# Width of a layer's smooth edges: 0 (sharp) up to the layer's thickness (checked by the loader).
+LAYER_EDGE_M = Bounds(0.0, 1e9)
 # Bruneton's layer d = clamp(exp_term e^(exp_scale_per_m h) + linear_per_m h + constant, 0, 1):
 # the terms matter near [0, 1] only. Rates up to 1 m^-1 (a 1 m feature); terms up to 1e6.
 LAYER_RATE_PER_M = Bounds(-1.0, 1.0)

@@ -10,6 +10,7 @@ densities along rays and apply all wavelengths at once.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -22,7 +23,9 @@ from skyscatter.spectrum.star import Star
 from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = [
+    "DEFAULT_PROFILE_LEVELS",
     "DEFAULT_SCATTERING_ORDERS",
+    "MAX_PROFILE_LEVELS",
     "MAX_SCATTERING_ORDERS",
     "Atmosphere",
     "Constituent",
@@ -44,10 +47,18 @@ DEFAULT_SCATTERING_ORDERS = 4
 # tau^2 orders, so the thickest atmosphere a config may describe (tau up to 1000, Venus-like
 # decks ~30) can use hundreds. Past 1000 a typo is likelier than a need.
 MAX_SCATTERING_ORDERS = 1000
+# Uniform altitude levels of `Atmosphere.optical_profile` when the caller does not say: 2001
+# (50 m for Earth's 100 km), or more where a constituent's profile asks for a finer spacing
+# (`altitude_step_m`: a 300 m fog layer asks for 7.5 m, 13 335 levels), up to the maximum
+# (0.5 m for 100 km; 1.6 MB of densities per constituent).
+DEFAULT_PROFILE_LEVELS = 2001
+MAX_PROFILE_LEVELS = 200_001
 
 
 class DensityProfile(Protocol):
-    """Density of one constituent as a function of altitude above the ground."""
+    """Density of one constituent as a function of altitude above the ground. A profile with
+    features thinner than the default levels resolve may also have `altitude_step_m`, the
+    largest level spacing [m] that samples it well (`Atmosphere.profile_levels`)."""
 
     def density(self, altitude_m: ArrayLike) -> np.ndarray:
         """Density at `altitude_m` [m]; same shape as the input. [m^-3 or relative]"""
@@ -123,21 +134,40 @@ class Atmosphere:
     def top_radius_m(self) -> float:
         return self.planet.radius_m + self.top_altitude_m
 
-    def optical_profile(self, wavelengths_nm: ArrayLike, n_levels: int = 2001,
+    @property
+    def profile_levels(self) -> int:
+        """Uniform altitude levels that resolve every constituent: `DEFAULT_PROFILE_LEVELS`, or
+        enough for the finest `altitude_step_m` a profile asks for, at most
+        `MAX_PROFILE_LEVELS`."""
+        steps = [getattr(c.profile, "altitude_step_m", math.inf) for c in self.constituents]
+        needed = math.ceil(self.top_altitude_m / min(steps)) + 1 if min(steps) < math.inf else 0
+        return min(max(DEFAULT_PROFILE_LEVELS, needed), MAX_PROFILE_LEVELS)
+
+    def optical_profile(self, wavelengths_nm: ArrayLike, n_levels: int | None = None,
                         monochromatic: bool = False) -> OpticalProfile:
         """Sample every constituent on a uniform altitude grid and a wavelength grid.
+
+        `n_levels` uniform levels from the ground to the top; None: `profile_levels`.
 
         Tabulated spectra (sun, absorption cross-sections) are averaged over each grid cell
         (edges halfway between neighbouring wavelengths), the right thing for a spectral grid
         that is integrated into colour. `monochromatic=True` treats each wavelength on its own
         (a 1 nm cell), for users who ask for values at a few chosen wavelengths."""
         wl = np.atleast_1d(np.asarray(wavelengths_nm, dtype=np.float64))
+        n_levels = self.profile_levels if n_levels is None else n_levels
         altitudes = np.linspace(0.0, self.top_altitude_m, n_levels)
         density = np.array([c.profile.density(altitudes) for c in self.constituents],
                            dtype=np.float64).reshape(len(self.constituents), n_levels)
         for row, constituent in zip(density, self.constituents, strict=True):
             if constituent.vertical_column is not None:
-                row *= constituent.vertical_column / np.trapezoid(row, altitudes)
+                sampled = np.trapezoid(row, altitudes)
+                if sampled <= 0.0 < constituent.vertical_column:
+                    raise InputError(
+                        f"n_levels = {n_levels} misses constituent {constituent.name!r}: its "
+                        f"density is zero on every level; use n_levels >= "
+                        f"{self.profile_levels} (or None)", key="n_levels", value=n_levels,
+                        allowed=f">= {self.profile_levels}")
+                row *= constituent.vertical_column / sampled
 
         def spectrum(function) -> np.ndarray:
             if monochromatic:

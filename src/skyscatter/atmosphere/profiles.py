@@ -1,9 +1,13 @@
 """Density profiles: how much of a constituent there is at each altitude.
 
-Three shapes cover the configs: an exponential with a scale height, Bruneton's piecewise layers
-(exponential + linear terms, clamped to [0, 1]; Bruneton 2017, `DensityProfileLayer`), and a
-table of altitude -> density. Profiles are multiplied by a factor to reach a given column
+Four shapes cover the configs: an exponential with a scale height, Bruneton's piecewise layers
+(exponential + linear terms, clamped to [0, 1]; Bruneton 2017, `DensityProfileLayer`), a
+table of altitude -> density, and a uniform layer between a base and a top (a cloud, fog or
+dust-storm deck). Profiles are multiplied by a factor to reach a given column
 (Dobson units, optical depth).
+
+A profile may say how finely it must be sampled (`altitude_step_m`, the largest level spacing
+that resolves it); `Atmosphere.optical_profile` takes the finest any constituent asks for.
 """
 
 from __future__ import annotations
@@ -13,12 +17,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skyscatter.errors import InputError
+
 __all__ = [
     "ExponentialProfile",
     "LayeredProfile",
     "ProfileLayer",
     "ScaledProfile",
     "TabulatedProfile",
+    "UniformLayerProfile",
     "vertical_column",
 ]
 
@@ -90,6 +97,73 @@ class TabulatedProfile:
         else:
             value = np.interp(h, z, d)
         return np.where(h > z[-1], 0.0, value)
+
+
+@dataclass(frozen=True)
+class UniformLayerProfile:
+    r"""A horizontally uniform layer: `peak_density` between `base_altitude_m` and
+    `top_altitude_m`, zero outside.
+
+    With `edge_m` = w > 0 each boundary above the ground becomes a raised-cosine ramp of width w
+    centred on it, s(u) = (1 + sin(pi u)) / 2 for u = (h - boundary) / w in [-1/2, 1/2] (rising
+    at the base, falling at the top); a base on the ground (0 m) stays sharp. The ramp is
+    point-symmetric about the boundary, so the column is peak_density x (top - base) for every
+    w, the same as the sharp layer's (`column`). A sharp boundary above the ground has half the
+    density (the mean of both sides), so that trapezoid levels on it keep the column exact.
+    Requires 0 <= base < top, w <= top - base (the ramps do not overlap) and, for a base above
+    the ground, w / 2 <= base.
+    """
+
+    base_altitude_m: float
+    top_altitude_m: float
+    peak_density: float = 1.0
+    edge_m: float = 0.0
+
+    # Levels across the layer's thickness and across each smooth edge that `altitude_step_m`
+    # asks for. Thickness: with 40 levels a sharp edge smeared over one level spacing moves
+    # 1/80 of the layer's column by up to half a spacing (the column itself is kept exact by
+    # `Constituent.vertical_column`); edge: 8 levels put a ramp's sine within 2 % of its
+    # piecewise-linear interpolant.
+    LEVELS_PER_THICKNESS = 40
+    LEVELS_PER_EDGE = 8
+
+    def __post_init__(self) -> None:
+        base, top, edge = self.base_altitude_m, self.top_altitude_m, self.edge_m
+        if not (0.0 <= base < top) or not (0.0 <= edge <= top - base) or (
+                base > 0.0 and edge / 2.0 > base):
+            raise InputError(
+                f"UniformLayerProfile(base_altitude_m={base!r}, top_altitude_m={top!r}, "
+                f"edge_m={edge!r}): needs 0 <= base < top, 0 <= edge <= top - base and "
+                "edge / 2 <= base for a base above the ground", key="base_altitude_m",
+                value=base, allowed="0 <= base < top; 0 <= edge <= top - base")
+
+    def density(self, altitude_m: ArrayLike) -> np.ndarray:
+        h = np.asarray(altitude_m, dtype=np.float64)
+        base, top, w = self.base_altitude_m, self.top_altitude_m, self.edge_m
+        if base == 0.0:
+            rise = np.heaviside(h, 1.0)  # the ground belongs to a layer based on it
+        else:
+            rise = _ramp((h - base) / w) if w > 0.0 else np.heaviside(h - base, 0.5)
+        fall = _ramp((top - h) / w) if w > 0.0 else np.heaviside(top - h, 0.5)
+        return self.peak_density * rise * fall
+
+    @property
+    def column(self) -> float:
+        """Vertical column, exact: peak_density x (top - base). [density x m]"""
+        return self.peak_density * (self.top_altitude_m - self.base_altitude_m)
+
+    @property
+    def altitude_step_m(self) -> float:
+        """Largest uniform level spacing that resolves the layer (class constants). [m]"""
+        step = (self.top_altitude_m - self.base_altitude_m) / self.LEVELS_PER_THICKNESS
+        if self.edge_m > 0.0:
+            step = min(step, self.edge_m / self.LEVELS_PER_EDGE)
+        return step
+
+
+def _ramp(u: np.ndarray) -> np.ndarray:
+    """(1 + sin(pi u)) / 2 on [-1/2, 1/2], 0 below, 1 above: `UniformLayerProfile`'s edge."""
+    return 0.5 * (1.0 + np.sin(np.pi * np.clip(u, -0.5, 0.5)))
 
 
 @dataclass(frozen=True)
