@@ -120,10 +120,9 @@ class UniformLayerProfile:
     edge_m: float = 0.0
 
     # Levels across the layer's thickness and across each smooth edge that `altitude_step_m`
-    # asks for. Thickness: with 40 levels a sharp edge smeared over one level spacing moves
-    # 1/80 of the layer's column by up to half a spacing (the column itself is kept exact by
-    # `Constituent.vertical_column`); edge: 8 levels put a ramp's sine within 2 % of its
-    # piecewise-linear interpolant.
+    # asks for. Thickness: 40 levels smear a sharp boundary over 1/40 of the thickness (the
+    # column stays exact: `Constituent.vertical_column`); edge: with 8 levels the linear
+    # interpolant of the ramp's sine is within 1 % of the peak density (pi^2 / (16 x 8^2)).
     LEVELS_PER_THICKNESS = 40
     LEVELS_PER_EDGE = 8
 
