@@ -13,6 +13,12 @@ Conventions (the estimator is described in `transport/monte_carlo.py`):
   linearly in theta (as `transport/tables.py` does); directions are drawn from a proposal that
   is uniform in cos(theta) on each interval with mass 2 pi (p_i + p_i+1) / 2 (cos theta_i -
   cos theta_i+1), and weighted by p / proposal, so the estimate is unbiased for the tabulated p.
+- New directions after a scattering or a ground reflection come from a mixture (detector
+  directional importance sampling, Buras & Mayer 2011, doi:10.1016/j.jqsrt.2010.10.005): with
+  probability 1 - eps the path's own proposal, with probability eps the sun-centred proposal,
+  sum_c sun_share[c, w] (proposal of p_c about the sun direction s). The weight factor is
+  p / q with q the density of the whole mixture at the new direction, evaluated for both parts
+  (`proposal_density`), so the estimate is unbiased for any eps < 1.
 - Random numbers: numba's per-thread Mersenne Twister, re-seeded at the start of every work unit
   (one ray, one wavelength, one batch of paths) with a seed derived from (seed, unit). Within a
   unit the draws are sequential, so results do not depend on the number of threads or on which
@@ -70,13 +76,27 @@ def phase_cdf(phase):
 
 
 @njit(cache=True)
-def phase_value(table, nu):
-    """Tabulated phase function (n_angle,) [sr^-1] at nu = cos(theta), linear in theta."""
-    n_angle = table.shape[0]
+def angle_interval(n_angle, nu):
+    """(k, f): nu = cos(theta) lies in the table interval [theta_k, theta_k+1], at the fraction
+    f of it (theta_i = pi i / (n_angle - 1))."""
     x = math.acos(min(1.0, max(-1.0, nu))) * (n_angle - 1) / math.pi
     k = min(int(x), n_angle - 2)
-    f = x - k
+    return k, x - k
+
+
+@njit(cache=True)
+def phase_value(table, nu):
+    """Tabulated phase function (n_angle,) [sr^-1] at nu = cos(theta), linear in theta."""
+    k, f = angle_interval(table.shape[0], nu)
     return table[k] * (1.0 - f) + table[k + 1] * f
+
+
+@njit(cache=True)
+def proposal_density(cdf, cos_grid, nu):
+    """Density [sr^-1] at nu = cos(theta) of the directions that `sample_phase` draws from the
+    cumulative masses `cdf` (n_angle,): the mass of nu's interval over its solid angle."""
+    k, _ = angle_interval(cdf.shape[0], nu)
+    return (cdf[k + 1] - cdf[k]) / (TWO_PI * (cos_grid[k] - cos_grid[k + 1]))
 
 
 @njit(cache=True)
@@ -177,21 +197,92 @@ def roulette(weight):
 
 
 @njit(cache=True)
-def scatter_direction(dx, dy, dz, w, bs, dens, scattering, scatterers, phase, cdf, cos_grid):
-    """(new direction, weight factor p / proposal) after a scattering in the air: a constituent
-    in proportion to its scattering coefficient (sum `bs` [m^-1]), then its phase function."""
+def pick_row(shares, u):
+    """Index of the row that holds the uniform number u in [0, sum(shares)) [-]."""
+    n = shares.shape[0]
+    for s in range(n):
+        u -= shares[s]
+        if u < 0.0:
+            return s
+    return n - 1
+
+
+@njit(cache=True)
+def sun_proposal_density(w, nu_sun, sun_share, cdf, cos_grid):
+    """Density [sr^-1] of the sun-centred proposal (module doc) at nu_sun = cos(angle to the
+    sun): sum_c sun_share[c, w] (proposal of p_c around the sun)."""
+    total = 0.0
+    for s in range(sun_share.shape[0]):
+        if sun_share[s, w] > 0.0:
+            total += sun_share[s, w] * proposal_density(cdf[s, w], cos_grid, nu_sun)
+    return total
+
+
+@njit(cache=True)
+def sun_centred_direction(w, sun, sun_share, cdf, cos_grid):
+    """A direction drawn from the sun-centred proposal: a constituent with probability
+    sun_share[c, w], then its phase-function proposal about the sun direction."""
+    chosen = pick_row(sun_share[:, w], np.random.random())
+    mu, _ = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
+    return rotate(sun[0], sun[1], sun[2], mu, TWO_PI * np.random.random())
+
+
+@njit(cache=True)
+def scatter_direction(dx, dy, dz, w, bs, dens, scattering, scatterers, phase, cdf, cos_grid,
+                      sun, sun_share, sun_probability):
+    """(new direction d', weight factor p / q) after a scattering in the air, coming along d.
+    Detector directional importance sampling (Buras & Mayer 2011, §3.2; module doc): with
+    probability 1 - eps (eps = `sun_probability`) a constituent in proportion to its
+    scattering coefficient (sum `bs` [m^-1]) and its phase-function proposal about d, with
+    probability eps the sun-centred proposal; p = sum_c beta_s,c p_c(d.d') / beta_s and q the
+    density of the whole mixture at d', so the estimate stays unbiased."""
     n_s = scatterers.shape[0]
-    pick = np.random.random() * bs
-    chosen = n_s - 1
+    if np.random.random() < sun_probability:
+        nx, ny, nz = sun_centred_direction(w, sun, sun_share, cdf, cos_grid)
+    else:
+        pick = np.random.random() * bs
+        chosen = n_s - 1
+        for s in range(n_s):
+            pick -= scattering[scatterers[s], w] * dens[scatterers[s]]
+            if pick < 0.0:
+                chosen = s
+                break
+        mu, _ = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
+        nx, ny, nz = rotate(dx, dy, dz, mu, TWO_PI * np.random.random())
+    nu = dx * nx + dy * ny + dz * nz
+    p = 0.0
+    q = 0.0
     for s in range(n_s):
-        pick -= scattering[scatterers[s], w] * dens[scatterers[s]]
-        if pick < 0.0:
-            chosen = s
-            break
-    mu_new, pdf = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
-    factor = phase_value(phase[chosen, w], mu_new) / pdf
-    nx, ny, nz = rotate(dx, dy, dz, mu_new, TWO_PI * np.random.random())
-    return nx, ny, nz, factor
+        share = scattering[scatterers[s], w] * dens[scatterers[s]] / bs
+        p += share * phase_value(phase[s, w], nu)
+        q += share * proposal_density(cdf[s, w], cos_grid, nu)
+    q *= 1.0 - sun_probability
+    if sun_probability > 0.0:
+        nu_sun = sun[0] * nx + sun[1] * ny + sun[2] * nz
+        q += sun_probability * sun_proposal_density(w, nu_sun, sun_share, cdf, cos_grid)
+    return nx, ny, nz, (p / q if q > 0.0 else 0.0)
+
+
+@njit(cache=True)
+def reflect_direction(nx, ny, nz, w, sun, sun_share, cdf, cos_grid, sun_probability):
+    """(new direction d', weight factor p / q) after a Lambertian reflection at the ground
+    point with normal n: with probability 1 - eps cosine-distributed about n, with probability
+    eps the sun-centred proposal (as `scatter_direction`); p = max(0, n.d') / pi and q the
+    mixture's density at d' (a direction into the ground gets the factor 0)."""
+    if np.random.random() < sun_probability:
+        x, y, z = sun_centred_direction(w, sun, sun_share, cdf, cos_grid)
+    else:
+        x, y, z = rotate(nx, ny, nz, math.sqrt(np.random.random()),
+                         TWO_PI * np.random.random())
+    cos_normal = nx * x + ny * y + nz * z
+    if cos_normal <= 0.0:
+        return x, y, z, 0.0
+    p = cos_normal / math.pi
+    q = (1.0 - sun_probability) * p
+    if sun_probability > 0.0:
+        q += sun_probability * sun_proposal_density(
+            w, sun[0] * x + sun[1] * y + sun[2] * z, sun_share, cdf, cos_grid)
+    return x, y, z, p / q
 
 
 @njit(cache=True)
@@ -204,10 +295,41 @@ def mixed_phase(w, nu, dens, scattering, scatterers, phase):
 
 
 @njit(cache=True)
+def free_flight(ox, oy, oz, dx, dy, dz, w, bottom_radius, top_radius, h_step, density,
+                extinction, majorant, dens):
+    """(state, point) after a free flight from o along d by delta tracking (module doc):
+    SCATTER and the collision point, GROUND and the ground point, or LEAVE."""
+    n_c = density.shape[0]
+    r = math.sqrt(ox * ox + oy * oy + oz * oz)
+    mu = (ox * dx + oy * dy + oz * dz) / r
+    t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+    if t_end <= t_start and not hits_ground:
+        return LEAVE, ox, oy, oz  # misses the atmosphere
+    t = t_start
+    while majorant[w] > 0.0:
+        t -= math.log(1.0 - np.random.random()) / majorant[w]
+        if t >= t_end:
+            break
+        px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+        density_at(math.sqrt(px * px + py * py + pz * pz) - bottom_radius, h_step, density,
+                   dens)
+        be = 0.0
+        for c in range(n_c):
+            be += extinction[c, w] * dens[c]
+        if np.random.random() * majorant[w] < be:
+            return SCATTER, px, py, pz
+    if not hits_ground:
+        return LEAVE, ox, oy, oz
+    gx, gy, gz = ox + t_end * dx, oy + t_end * dy, oz + t_end * dz
+    scale = bottom_radius / math.sqrt(gx * gx + gy * gy + gz * gz)
+    return GROUND, gx * scale, gy * scale, gz * scale
+
+
+@njit(cache=True)
 def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_start,
                 bottom_radius, top_radius, h_step, density, extinction, scattering, scatterers,
-                phase, cdf, cos_grid, majorant, albedo, sun_angular_radius, n_sun_samples, dens,
-                column):
+                phase, cdf, cos_grid, majorant, albedo, sun_angular_radius, n_sun_samples,
+                sun_share, sun_probability, dens, column):
     """Sum of the next-event estimates towards the sun [sr^-1, per unit sun irradiance] of a
     path that starts at o in `state`:
     SCATTER  a collision in the air at o, coming along d; `weight` is the path weight before
@@ -219,35 +341,11 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
     order = 0
     while True:
         if state == FLIGHT:
-            r = math.sqrt(ox * ox + oy * oy + oz * oz)
-            mu = (ox * dx + oy * dy + oz * dz) / r
-            t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
-            if t_end <= t_start and not hits_ground:
-                return result  # misses the atmosphere
-            t = t_start  # delta tracking (module doc)
-            px, py, pz = ox, oy, oz
-            state = GROUND if hits_ground else LEAVE
-            while majorant[w] > 0.0:
-                t -= math.log(1.0 - np.random.random()) / majorant[w]
-                if t >= t_end:
-                    break
-                px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
-                density_at(math.sqrt(px * px + py * py + pz * pz) - bottom_radius, h_step,
-                           density, dens)
-                be = 0.0
-                for c in range(n_c):
-                    be += extinction[c, w] * dens[c]
-                if np.random.random() * majorant[w] < be:
-                    state = SCATTER
-                    break
+            state, ox, oy, oz = free_flight(ox, oy, oz, dx, dy, dz, w, bottom_radius,
+                                            top_radius, h_step, density, extinction, majorant,
+                                            dens)
             if state == LEAVE:
                 return result
-            if state == SCATTER:
-                ox, oy, oz = px, py, pz
-            else:
-                gx, gy, gz = ox + t_end * dx, oy + t_end * dy, oz + t_end * dz
-                scale = bottom_radius / math.sqrt(gx * gx + gy * gy + gz * gz)
-                ox, oy, oz = gx * scale, gy * scale, gz * scale
             continue
         if state == SCATTER:
             density_at(math.sqrt(ox * ox + oy * oy + oz * oz) - bottom_radius, h_step, density,
@@ -276,11 +374,12 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
                 if weight == 0.0:
                     return result
             dx, dy, dz, factor = scatter_direction(dx, dy, dz, w, bs, dens, scattering,
-                                                   scatterers, phase, cdf, cos_grid)
+                                                   scatterers, phase, cdf, cos_grid, sun,
+                                                   sun_share, sun_probability)
             weight *= factor
             state = FLIGHT
             continue
-        # Lambertian ground: next-event estimate, then a cosine-distributed new direction.
+        # Lambertian ground: next-event estimate, then a new direction (`reflect_direction`).
         nx, ny, nz = ox / bottom_radius, oy / bottom_radius, oz / bottom_radius
         mu_s = nx * sun[0] + ny * sun[1] + nz * sun[2]
         if mu_s > 0.0:
@@ -298,8 +397,11 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
             weight = roulette(weight)
             if weight == 0.0:
                 return result
-        dx, dy, dz = rotate(nx, ny, nz, math.sqrt(np.random.random()),
-                            TWO_PI * np.random.random())
+        dx, dy, dz, factor = reflect_direction(nx, ny, nz, w, sun, sun_share, cdf, cos_grid,
+                                               sun_probability)
+        weight *= factor
+        if weight <= 0.0:
+            return result
         state = FLIGHT
 
 
@@ -432,18 +534,19 @@ def first_collision(n, cdf, tau, t_nodes, u):
 
 
 @njit(parallel=True, cache=True)
-def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_orders, rr_start,
+def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_orders, rr_start,
                bottom_radius, top_radius, h_step, density, extinction, scattering, scatterers,
                phase, cdf, majorant, sun_irradiance, albedo, sun_angular_radius,
-               n_sun_samples, nodes, first):
+               n_sun_samples, sun_share, sun_probability, nodes, first):
     """Sums and sums of squares (n_ray, n_wl, n_batch) of the path estimates [W m^-2 sr^-1
     nm^-1] of `n_paths` paths per ray and wavelength, in batches of `batch` paths; `nodes` and
     `first` are what `view_ray_nodes` and `first_collision_tables` return for these rays. Each path
     has two branches: a first collision in the air drawn from `first_collision_cdf` (weight
     T beta_e / pdf), and, when the view ray meets the ground, the ground seen through the
     transmittance T of the whole ray. The work unit (ray, wavelength, batch) is seeded with
-    (seed, its index counted from ray `ray_offset`), so a call on part of the rays gives the
-    same numbers as one call on all of them."""
+    (seed, `unit_offset` + its index): with unit_offset = the units of the rays before these,
+    a call on part of the rays gives the same numbers as one call on all of them; a unique
+    index (< 2^32) gives a unique seed, as 7919 is odd."""
     n_ray = origins.shape[0]
     n_c, n_wl = extinction.shape
     n_angle = phase.shape[2]
@@ -457,7 +560,7 @@ def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_o
         i = unit // (n_wl * n_batch)
         w = (unit // n_batch) % n_wl
         b = unit % n_batch
-        index = ray_offset * n_wl * n_batch + unit
+        index = unit_offset + unit
         np.random.seed((seed * 1_000_003 + index * 7_919 + 12_345) % 4_294_967_296)
         dens = np.empty(n_c)
         column = np.empty(n_c)
@@ -491,13 +594,14 @@ def trace_rays(origins, directions, ray_offset, sun, n_paths, batch, seed, max_o
                     px, py, pz, dx, dy, dz, transmittance * be * inverse_pdf, SCATTER, w, sun,
                     max_orders, rr_start, bottom_radius, top_radius, h_step, density,
                     extinction, scattering, scatterers, phase, cdf, cos_grid, majorant, albedo,
-                    sun_angular_radius, n_sun_samples, dens, column)
+                    sun_angular_radius, n_sun_samples, sun_share, sun_probability, dens, column)
             if hits[i]:
                 value += random_walk(
                     gx * scale, gy * scale, gz * scale, dx, dy, dz, ground_transmittance,
                     GROUND, w, sun, max_orders, rr_start, bottom_radius, top_radius, h_step,
                     density, extinction, scattering, scatterers, phase, cdf, cos_grid, majorant,
-                    albedo, sun_angular_radius, n_sun_samples, dens, column)
+                    albedo, sun_angular_radius, n_sun_samples, sun_share, sun_probability, dens,
+                    column)
             value *= sun_irradiance[w]
             total += value
             total_sq += value * value
