@@ -73,6 +73,10 @@ class LookupTables(NamedTuple):
     density: np.ndarray  # (n_c, n_z) profile densities on those levels
     scatterers: np.ndarray  # (n_s,) int64: the constituents that scatter
     single_factor: np.ndarray  # (n_s, n_wl) E_sun beta_s per density
+    peak_transmittance: np.ndarray  # (n_r_t, n_mu_t, n_wl) exp(-peak depth) to the top [-]
+    aureole_shape: np.ndarray  # (n_x, n_psi, n_wl) multiple peak scattering [sr^-1]
+    aureole_x_max: float  # largest peak depth of aureole_shape [-]
+    aureole_psi_max: float  # its largest angle from the sun [rad]; 0: no aureole
 
 
 # --------------------------------------------------------------------------------------------
@@ -479,6 +483,30 @@ def view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius, t
 # Lookups for the solver
 # --------------------------------------------------------------------------------------------
 
+@njit(cache=True)
+def peak_aureole(r, mu, mu_s, nu, tables, t_view, scratch, value):
+    """value[w] += the sun's light scattered two or more times in the particles' forward peaks
+    seen along (r, mu) at cos(angle from the sun) nu, for a ray that misses the ground:
+    E_sun V T (exp(x) - 1 - x) G(x, psi) (`transport.aureole`), T and x = the peak depth along
+    the ray to the top from the tables; t_view, scratch (n_wl,) scratch."""
+    bottom_radius, top_radius = tables.bottom_radius, tables.top_radius
+    shape, x_max = tables.aureole_shape, tables.aureole_x_max
+    n_x, n_psi = shape.shape[0], shape.shape[1]
+    visible = sun_visible_fraction(r, mu_s, bottom_radius, tables.sun_angular_radius)
+    if visible <= 0.0:
+        return
+    transmittance_to_top(r, mu, bottom_radius, top_radius, tables.transmittance, t_view)
+    transmittance_to_top(r, mu, bottom_radius, top_radius, tables.peak_transmittance, scratch)
+    psi = math.acos(min(max(nu, -1.0), 1.0))
+    i_p, a_p = linear_axis(psi / tables.aureole_psi_max * (n_psi - 1), n_psi)
+    for w in range(value.size):
+        x = min(-math.log(scratch[w]), x_max) if scratch[w] > 0.0 else x_max
+        i_x, a_x = linear_axis(math.log1p(x) / math.log1p(x_max) * (n_x - 1), n_x)
+        g = ((1.0 - a_x) * ((1.0 - a_p) * shape[i_x, i_p, w] + a_p * shape[i_x, i_p + 1, w])
+             + a_x * ((1.0 - a_p) * shape[i_x + 1, i_p, w] + a_p * shape[i_x + 1, i_p + 1, w]))
+        value[w] += tables.sun_irradiance[w] * visible * t_view[w] * (math.expm1(x) - x) * g
+
+
 @njit(parallel=True, cache=True)
 def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo, view_table, out):
     """Radiance from the tables into out (n_ray, n_wl) [W m^-2 sr^-1 nm^-1]:
@@ -571,6 +599,8 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                     for w in range(n_wl):
                         value[w] += (marched * weights[s * n_wl + w] * single_factor[s, w]
                                      * exact[s, w])
+            if not hits_ground and nu > math.cos(tables.aureole_psi_max):
+                peak_aureole(r, mu, mu_s, nu, tables, t_view, scratch, value)
             if hits_ground:
                 mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
                 transmittance_along(r, mu, d, True, bottom_radius, top_radius, transmittance,

@@ -89,7 +89,10 @@ class LutSolver:
             scatterers=scatterers,
             single_factor=np.ascontiguousarray(  # E_sun beta_s, (n_s, n_wl)
                 sun_irradiance[None, :] * profile.scattering_per_density[scatterers].reshape(
-                    scatterers.size, profile.n_wavelengths), dtype=np.float64))
+                    scatterers.size, profile.n_wavelengths), dtype=np.float64),
+            peak_transmittance=tables.peak_transmittance, aureole_shape=tables.aureole_shape,
+            aureole_x_max=float(tables.aureole_limits[0]),
+            aureole_psi_max=float(tables.aureole_limits[1]))
 
     def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
                      sun_direction: ArrayLike,

@@ -29,9 +29,11 @@ from skyscatter.transport.tables import AtmosphereTables, TableResolution, preco
 
 __all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_arrays"]
 
-TABLE_FORMAT = 2  # bump when the arrays stored change meaning (2: truncated peaks, the tail)
+# bump when the arrays stored change meaning (2: truncated peaks, the orders' tail, the aureole)
+TABLE_FORMAT = 2
 _ARRAYS = ("wavelengths_nm", "transmittance", "scattering", "irradiance", "phase",
-           "order_mean_radiance", "order_zenith_radiance", "tail_share")
+           "order_mean_radiance", "order_zenith_radiance", "tail_share", "peak_transmittance",
+           "aureole_shape", "aureole_limits")
 # Where the precomputation starts: the key covers the code it reaches (`code_fingerprint`).
 _PRECOMPUTATION = ("skyscatter.transport.tables", "precompute_tables")
 

@@ -63,6 +63,7 @@ from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfil
 from skyscatter.errors import InputError
 from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
+from skyscatter.transport.aureole import PeakAureole, peak_aureole
 from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
 from skyscatter.transport.table_parameterisation import (
@@ -199,6 +200,12 @@ class AtmosphereTables:
                    beyond are a geometric series below `TAIL_TOLERANCE`)
     tail_share     (n_wl,): the share of the orders >= 2 that is that extrapolated series
                    (0 where none was added): how far from convergence the iteration stopped
+    peak_transmittance (n_r_t, n_mu_t, n_wl) float64: exp(-x), x the peak depth (the
+                   scattering the truncated peaks take out, f beta_s) from (r, mu) to the top,
+                   on the transmittance table's axes [-]
+    aureole_shape  (n_x, n_psi, n_wl) float64: the angular shape of the light scattered twice
+                   or more in the peaks (`transport.aureole.PeakAureole`) [sr^-1]
+    aureole_limits (x_max, psi_max [rad]) of that table; psi_max = 0 where nothing is clipped
     """
 
     wavelengths_nm: np.ndarray
@@ -217,6 +224,9 @@ class AtmosphereTables:
     order_zenith_radiance: np.ndarray
     orders_computed: int
     tail_share: np.ndarray
+    peak_transmittance: np.ndarray
+    aureole_shape: np.ndarray
+    aureole_limits: np.ndarray
 
     @property
     def single_scattering(self) -> np.ndarray:
@@ -232,7 +242,7 @@ class AtmosphereTables:
     @property
     def nbytes(self) -> int:
         return sum(a.nbytes for a in (self.transmittance, self.scattering, self.irradiance,
-                                      self.phase))
+                                      self.phase, self.peak_transmittance, self.aureole_shape))
 
 
 def _sphere_grids(resolution: TableResolution) -> tuple[np.ndarray, ...]:
@@ -348,6 +358,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     scaled = _scaled_optics(profile, scatterer_index, peak)
     scaled_transmittance = (np.exp(-np.einsum("cw,crm->rmw", scaled.extinction, columns))
                             if truncated else transmittance)
+    peak_transmittance, aureole = _peak_aureole(profile, scatterer_index, phase, smooth_phase,
+                                                peak, columns, res.truncation_angle_deg)
     theta_in, phi_in, *_ = _sphere_grids(res)
     node_altitude = np.array([scattering_r_from_u((k + 0.5) / res.scattering_r, bottom, top,
                                                   res.scattering_r)
@@ -467,7 +479,33 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         scattering_constituents=scatterers, transmittance=transmittance,
         scattering=scattering, irradiance=irradiance, phase=phase,
         order_mean_radiance=order_mean, order_zenith_radiance=order_zenith,
-        orders_computed=orders_computed, tail_share=tail_share)
+        orders_computed=orders_computed, tail_share=tail_share,
+        peak_transmittance=peak_transmittance, aureole_shape=aureole.shape,
+        aureole_limits=np.array([aureole.x_max, aureole.psi_max_rad]))
+
+
+def _peak_aureole(profile: OpticalProfile, scatterers: np.ndarray, phase: np.ndarray,
+                  smooth_phase: np.ndarray, peak: np.ndarray, columns: np.ndarray,
+                  truncation_angle_deg: float) -> tuple[np.ndarray, PeakAureole]:
+    """(exp(-x) (n_r_t, n_mu_t, n_wl) with x the peak depth f beta_s along the transmittance
+    table's rays, the aureole of the peaks' multiple scattering) (`transport.aureole`); the
+    peaks of several constituents mixed by their vertical peak depths. Without a clipped peak a
+    transmittance of 1 and an aureole of angle 0 (nothing to add)."""
+    n_wl = profile.n_wavelengths
+    if not np.any(peak > 0.0):
+        return np.ones((2, 2, n_wl)), PeakAureole(np.zeros((2, 2, n_wl)), 1.0, 0.0)
+    removed = np.zeros_like(profile.scattering_per_density)
+    removed[scatterers] = peak * profile.scattering_per_density[scatterers]
+    depth = np.einsum("cw,crm->rmw", removed, columns)
+    vertical = removed[scatterers] * profile.density[scatterers].sum(axis=1)[:, None]
+    share = vertical / np.maximum(vertical.sum(axis=0), np.finfo(float).tiny)  # (n_s, n_wl)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        peak_phase = np.where(peak[:, None, :] > 0.0,
+                              (phase - (1.0 - peak[:, None, :]) * smooth_phase)
+                              / peak[:, None, :], 0.0)
+    mixed = np.einsum("sw,saw->aw", share, peak_phase)
+    aureole = peak_aureole(mixed, truncation_angle_deg, float(depth.max()))
+    return np.exp(-np.minimum(depth, aureole.x_max)), aureole
 
 
 def _geometric_tail(order_mean: np.ndarray, last: bool) -> np.ndarray | None:
