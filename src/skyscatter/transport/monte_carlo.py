@@ -143,6 +143,15 @@ class MonteCarloSolver:
         Intervals along each view ray from which the first collision is drawn.
     batch : int
         Paths per work unit (one random-number seed each).
+    sun_sampling_probability : float
+        eps in [0, 1): the probability of drawing a new direction about the sun instead of
+        about the path (module doc); 0 is plain phase-function sampling.
+    target_relative_error : float or None
+        If given, in (0, 1]: rays whose relative standard error is above it in some band get
+        more paths until it is reached (or `max_samples`).
+    max_samples : int or None
+        Most paths per ray and wavelength with `target_relative_error` (default 32 x
+        `n_samples`).
     """
 
     name = "montecarlo"
