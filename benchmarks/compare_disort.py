@@ -1,25 +1,39 @@
-"""Accuracy: the table solver against PythonicDISORT (plane-parallel, all orders) for the
-`earth` preset. Prints the agreement per sun zenith and wavelength, splits the plane-parallel
-radiance into single and multiple scattering to show where the differences come from, and draws
-the principal plane (docs/images/disort_comparison.png).
+"""Accuracy: the table solver against PythonicDISORT (plane-parallel, all orders).
+
+Default (the `earth` preset): prints the agreement per sun zenith and wavelength, splits the
+plane-parallel radiance into single and multiple scattering to show where the differences come
+from, and draws the principal plane (docs/images/disort_comparison.png).
+
+With --truncation (forward-peaked media, issue 17): the tables of one atmosphere (a preset, or
+`mars-hg-dust`: mars-physical with HG g 0.65 dust, benchmarks/bench_forward_peak.py) computed
+for each forward-peak truncation angle given (`TableResolution.truncation_angle_deg`; 0: none),
+each against the same DISORT reference (delta-M with `--streams` streams and the
+Nakajima-Tanaka corrections from `--moments` Legendre moments); `--check-streams` solves DISORT
+again with another stream count and prints how much the reference moved (its convergence);
+the plane-parallel geometry's own share is the ray-marched spherical single scattering against
+the plane-parallel closed form (printed per sun zenith). Prints |tables / DISORT - 1| (median,
+95th percentile) per sun zenith and band for every angle as a Markdown table.
 
 Run: python benchmarks/compare_disort.py [--orders 10] [--streams 32] [--plot PATH | --no-plot]
+     python benchmarks/compare_disort.py --atmosphere mars-physical --truncation 0 5 10 15 20
+         --suns 0 20 40 60 --streams 64 --check-streams 96 --moments 512
 Needs PythonicDISORT (pip install PythonicDISORT; 1.8 used) and matplotlib for the plot.
-Grid: diffuse sky radiance at the ground, view zenith 6-69 deg (DISORT's 10 nodes up to 70 deg),
+Grid: diffuse sky radiance at the ground, view zenith 6-69 deg (DISORT's nodes up to 70 deg),
 relative azimuth 0, 45, 90, 135, 180 deg, sun zenith 0, 20, 40, 60, 80 deg, 360/440/550/680 nm.
-40-50 s on 2 cores (the tables with 10 orders: 22-36 s; DISORT: 5 s).
+Earth: 40-50 s on 2 cores (the tables with 10 orders: 22-36 s; DISORT: 5 s).
 docs/physics/disort_comparison.md discusses the numbers.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 
 import numpy as np
+from bench_forward_peak import atmosphere as benchmark_atmosphere
 
-from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
@@ -27,12 +41,15 @@ from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN_EARTH,
     scattering_mu_s_from_u,
 )
+from skyscatter.transport.tables import TableResolution, precompute_tables
 from skyscatter.validate.disort import (
     DisortComparison,
     compare_with_disort,
+    disort_reference,
     disort_sky_radiance,
     plane_parallel_layers,
     plane_parallel_single_scattering,
+    solver_on_nodes,
 )
 
 WAVELENGTHS_NM = np.array([360.0, 440.0, 550.0, 680.0])
@@ -40,6 +57,8 @@ SUN_ZENITH_DEG = np.array([0.0, 20.0, 40.0, 60.0, 80.0])
 AZIMUTH_DEG = np.array([0.0, 45.0, 90.0, 135.0, 180.0])
 MAX_VIEW_ZENITH_DEG = 70.0
 PLOT_SUN_ZENITH_DEG = (0.0, 20.0, 60.0, 80.0)
+# the aureole is judged apart: statistics "away from the sun" leave out lines of sight nearer
+AWAY_DEG = 10.0
 DEFAULT_PLOT = Path(__file__).resolve().parents[1] / "docs" / "images" / "disort_comparison.png"
 
 
@@ -152,16 +171,142 @@ def plot_principal_plane(profile, solver: LutSolver, layers, path: Path,
     print(f"\nwrote {path}")
 
 
+def curvature(profile, layers, sun_zenith_rad: np.ndarray, view_zenith_rad: np.ndarray,
+              azimuth_rad: np.ndarray) -> np.ndarray:
+    """|ray-marched spherical / plane-parallel closed-form single scattering - 1| per sun
+    zenith, (n_sun, n_view, n_az, n_wl): what the plane-parallel geometry alone changes."""
+    marcher = SingleScatteringSolver(profile, n_samples=512)
+    position = observer_position(0.0, profile.bottom_radius_m)
+    zenith, phi = np.meshgrid(view_zenith_rad, azimuth_rad, indexing="ij")
+    views = local_frame_directions(zenith, phi)
+    result = []
+    for theta_s in sun_zenith_rad:
+        closed = plane_parallel_single_scattering(layers, profile.toa_irradiance, theta_s,
+                                                  view_zenith_rad, azimuth_rad)
+        marched = marcher.sky_radiance(position, views, local_frame_directions(theta_s, 0.0))
+        result.append(np.abs(marched / closed - 1.0))
+    return np.stack(result)
+
+
+def angle_from_sun_deg(comparison: DisortComparison) -> np.ndarray:
+    """Scattering angle between each line of sight and the sun, (n_sun, n_view, n_az). [deg]"""
+    theta = comparison.view_zenith_rad[None, :, None]
+    theta_s = comparison.sun_zenith_rad[:, None, None]
+    phi = comparison.relative_azimuth_rad[None, None, :]
+    cosine = (np.cos(theta) * np.cos(theta_s)
+              + np.sin(theta) * np.sin(theta_s) * np.cos(phi))
+    return np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
+
+
+def truncation_sweep(args: argparse.Namespace) -> None:
+    """Tables for each truncation angle against one DISORT reference (module docstring)."""
+    atmosphere = benchmark_atmosphere(args.atmosphere)
+    orders = atmosphere.scattering_orders if args.orders is None else args.orders
+    profile = atmosphere.optical_profile(WAVELENGTHS_NM, monochromatic=True)
+    suns = np.radians(args.suns)
+    azimuths = np.radians(AZIMUTH_DEG)
+    start = time.perf_counter()
+    layers = plane_parallel_layers(profile, n_layers=args.layers, n_moments=args.moments)
+    print(f"{args.atmosphere}: {orders} orders; column optical depth "
+          + ", ".join(f"{wl:.0f} nm {tau:.3f}" for wl, tau in zip(
+              WAVELENGTHS_NM, layers.optical_depth[-1], strict=True)))
+    cache = (None if args.reference_cache is None else
+             args.reference_cache / f"disort_{args.atmosphere}_{args.streams}.npz")
+    if cache is not None and cache.exists():
+        reference = DisortComparison(**dict(np.load(cache)))
+    else:
+        reference = disort_reference(profile, suns, azimuths, np.radians(MAX_VIEW_ZENITH_DEG),
+                                     n_streams=args.streams, layers=layers)
+        if cache is not None:
+            cache.parent.mkdir(parents=True, exist_ok=True)
+            np.savez(cache, **dataclasses.asdict(reference))
+    print(f"DISORT: {args.streams} streams, {args.moments} moments, "
+          f"{layers.optical_depth.shape[0]} layers, {time.perf_counter() - start:.0f} s "
+          "; view zenith nodes [deg]: "
+          + ", ".join(f"{z:.1f}" for z in np.degrees(reference.view_zenith_rad)))
+    geometry = curvature(profile, layers, suns, reference.view_zenith_rad, azimuths)
+    for i, theta_s in enumerate(suns):
+        print(f"  plane-parallel geometry, sun zenith {np.degrees(theta_s):.0f}: spherical / "
+              f"plane-parallel single scattering - 1: median {100 * np.median(geometry[i]):.2f}"
+              f" %, max {100 * geometry[i].max():.2f} %")
+    away = angle_from_sun_deg(reference) > AWAY_DEG
+    results, solvers = {}, {}
+    for angle in args.truncation:
+        start = time.perf_counter()
+        tables = precompute_tables(profile, TableResolution(truncation_angle_deg=angle), orders)
+        solver = LutSolver(profile, tables=tables, orders=orders)
+        results[angle] = solver_on_nodes(solver, profile, reference).relative_difference
+        solvers[angle] = solver
+        print(f"  tables, truncation {angle:g} deg: {time.perf_counter() - start:.0f} s, "
+              f"{tables.orders_computed} orders computed, tail share "
+              + ", ".join(f"{100 * t:.2f} %" for t in tables.tail_share)
+              + "; median / 95th pct per sun zenith: " + ", ".join(
+                  f"{100 * np.median(np.abs(r)):.2f} / {100 * np.percentile(np.abs(r), 95):.1f} %"
+                  for r in results[angle]) + f"; beyond {AWAY_DEG:g} deg from the sun: "
+              + ", ".join(f"{100 * np.median(np.abs(r[a])):.2f} / "
+                          f"{100 * np.percentile(np.abs(r[a]), 95):.1f} %"
+                          for r, a in zip(results[angle], away, strict=True)), flush=True)
+    print(f"\n{args.atmosphere}: |tables / DISORT - 1|, median / 95th percentile over view "
+          f"zenith x azimuth, per truncation angle\n")
+    print("| sun zenith | band | " + " | ".join(f"{a:g} deg" for a in args.truncation) + " |")
+    print("|---|---|" + "---|" * len(args.truncation))
+    for i, theta_s in enumerate(args.suns):
+        for w, wl in enumerate([*WAVELENGTHS_NM, None]):
+            cells = []
+            for angle in args.truncation:
+                values = np.abs(results[angle][i] if wl is None else results[angle][i, ..., w])
+                cells.append(f"{100 * np.median(values):.2f} / "
+                             f"{100 * np.percentile(values, 95):.1f} %")
+            label = "all" if wl is None else f"{wl:.0f} nm"
+            print(f"| {theta_s:g} | {label} | " + " | ".join(cells) + " |")
+    if args.check_streams:
+        # the reference's convergence: the same statistics against DISORT with another stream
+        # count (on its own nodes; Gauss nodes of two counts do not coincide)
+        check = disort_reference(profile, suns, azimuths, np.radians(MAX_VIEW_ZENITH_DEG),
+                                 n_streams=args.check_streams, layers=plane_parallel_layers(
+                                     profile, n_layers=args.layers,
+                                     n_moments=max(args.moments, 2 * args.check_streams)))
+        print(f"\nthe same, all bands, against DISORT with {args.check_streams} streams "
+              f"(view zenith nodes " + ", ".join(
+                  f"{z:.1f}" for z in np.degrees(check.view_zenith_rad)) + ")\n")
+        print("| sun zenith | " + " | ".join(f"{a:g} deg" for a in args.truncation) + " |")
+        print("|---|" + "---|" * len(args.truncation))
+        moved = {a: np.abs(solver_on_nodes(solvers[a], profile, check).relative_difference)
+                 for a in args.truncation}
+        for i, theta_s in enumerate(args.suns):
+            print(f"| {theta_s:g} | " + " | ".join(
+                f"{100 * np.median(moved[a][i]):.2f} / {100 * np.percentile(moved[a][i], 95):.1f}"
+                " %" for a in args.truncation) + " |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--orders", type=int, default=10)
+    parser.add_argument("--atmosphere", default="earth",
+                        help="a preset, or mars-hg-dust (benchmarks/bench_forward_peak.py)")
+    parser.add_argument("--orders", type=int, default=None,
+                        help="scattering orders (default: 10 for earth, else the preset's)")
     parser.add_argument("--streams", type=int, default=32, help="DISORT NQuad")
+    parser.add_argument("--check-streams", type=int, default=0,
+                        help="a second NQuad whose reference is compared (convergence)")
+    parser.add_argument("--moments", type=int, default=128,
+                        help="Legendre moments of the layers (delta-M, Nakajima-Tanaka)")
     parser.add_argument("--layers", type=int, default=60, help="plane-parallel layers")
+    parser.add_argument("--truncation", type=float, nargs="+", default=None,
+                        help="truncation angles [deg] to compare (0: none)")
+    parser.add_argument("--suns", type=float, nargs="+", default=[0.0, 20.0, 40.0, 60.0])
+    parser.add_argument("--reference-cache", type=Path, default=None,
+                        help="folder that keeps the DISORT reference between runs")
     parser.add_argument("--plot", type=Path, default=DEFAULT_PLOT)
     parser.add_argument("--no-plot", action="store_true")
     args = parser.parse_args()
+    args.moments = max(args.moments, 2 * args.streams)
+    if args.truncation is not None:
+        truncation_sweep(args)
+        return
+    args.orders = 10 if args.orders is None else args.orders
 
-    profile = load_atmosphere("earth").optical_profile(WAVELENGTHS_NM, monochromatic=True)
+    profile = benchmark_atmosphere(args.atmosphere).optical_profile(WAVELENGTHS_NM,
+                                                                   monochromatic=True)
     start = time.perf_counter()
     solver = LutSolver(profile, orders=args.orders)
     lut_seconds = time.perf_counter() - start
@@ -181,8 +326,7 @@ def main() -> None:
           + ", ".join(f"{z:.1f}" for z in nodes))
 
     start = time.perf_counter()
-    layers = plane_parallel_layers(profile, n_layers=args.layers,
-                                   n_moments=max(128, 2 * args.streams))
+    layers = plane_parallel_layers(profile, n_layers=args.layers, n_moments=args.moments)
     comparison = compare_with_disort(solver, profile, np.radians(SUN_ZENITH_DEG),
                                      np.radians(AZIMUTH_DEG), np.radians(MAX_VIEW_ZENITH_DEG),
                                      n_streams=args.streams, layers=layers)

@@ -24,7 +24,7 @@ docs/physics/disort_comparison.md gives the measured agreement.
 
 Public names: `PlaneParallelLayers`, `plane_parallel_layers`, `legendre_moments`,
 `disort_sky_radiance`, `plane_parallel_single_scattering`, `DisortComparison`,
-`compare_with_disort`.
+`disort_reference`, `solver_on_nodes`, `compare_with_disort`, `disort_fluxes`.
 """
 
 from __future__ import annotations
@@ -60,11 +60,14 @@ __all__ = [
     "DisortComparison",
     "PlaneParallelLayers",
     "compare_with_disort",
+    "disort_fluxes",
+    "disort_reference",
     "disort_sky_radiance",
     "legendre_moments",
     "plane_parallel_layers",
     "plane_parallel_single_scattering",
     "run",
+    "solver_on_nodes",
 ]
 
 # PythonicDISORT requires omega < 1; layers of pure air (no ozone, no aerosol) are clamped to
@@ -246,6 +249,36 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
     return view_zenith[keep], np.stack(radiance, axis=-1)[keep]
 
 
+def disort_fluxes(layers: PlaneParallelLayers, toa_irradiance: ArrayLike, sun_zenith_rad: float,
+                  ground_albedo: ArrayLike, *, n_streams: int = 32
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Plane-parallel irradiances by PythonicDISORT: (upward at the top, diffuse downward at the
+    ground, direct at the ground), each (n_wl,) [W m^-2 nm^-1] on horizontal surfaces, for a
+    beam of `toa_irradiance` (n_wl,) normal to itself at sun zenith `sun_zenith_rad` [rad] over a
+    Lambertian ground of `ground_albedo` (n_wl,) [-]. Delta-M with the moment `n_streams`, as in
+    `disort_sky_radiance`; PythonicDISORT counts the light the truncated peak keeps forward as
+    diffuse, so the direct beam is the true exp(-tau / mu0) one."""
+    from PythonicDISORT import pydisort
+
+    mu0 = float(np.cos(sun_zenith_rad))
+    irradiance = np.broadcast_to(np.asarray(toa_irradiance, dtype=np.float64),
+                                 layers.optical_depth.shape[1:])
+    albedo = np.broadcast_to(np.asarray(ground_albedo, dtype=np.float64), irradiance.shape)
+    up, diffuse, direct = (np.empty(irradiance.shape) for _ in range(3))
+    for w in range(irradiance.size):
+        moments = layers.moments[:, :, w]
+        tau = layers.optical_depth[:, w]
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="Some delta-scaled single-scattering")
+            _, flux_up, flux_down, _ = pydisort(
+                tau, layers.single_scattering_albedo[:, w], n_streams, moments, mu0,
+                float(irradiance[w]), 0.0, f_arr=np.clip(moments[:, n_streams], 0.0, None),
+                only_flux=True, BDRF_Fourier_modes=[float(albedo[w])])
+        up[w] = flux_up(0.0)
+        diffuse[w], direct[w] = flux_down(tau[-1])
+    return up, diffuse, direct
+
+
 def plane_parallel_single_scattering(layers: PlaneParallelLayers, toa_irradiance: ArrayLike,
                                      sun_zenith_rad: float, view_zenith_rad: ArrayLike,
                                      relative_azimuth_rad: ArrayLike) -> np.ndarray:
@@ -326,30 +359,54 @@ class DisortComparison:
         return self.ours / self.reference - 1.0
 
 
+def disort_reference(profile: OpticalProfile, sun_zenith_rad: ArrayLike,
+                     relative_azimuth_rad: ArrayLike,
+                     max_view_zenith_rad: float = np.radians(70.0), *, n_streams: int = 32,
+                     layers: PlaneParallelLayers | None = None) -> DisortComparison:
+    """`disort_sky_radiance` on DISORT's view zenith nodes up to `max_view_zenith_rad` x the
+    relative azimuths [rad] x the sun zenith angles [rad], as a `DisortComparison` whose `ours`
+    is still NaN (`solver_on_nodes` fills it in; one reference serves several solvers)."""
+    sun_zenith = np.atleast_1d(np.asarray(sun_zenith_rad, dtype=np.float64))
+    azimuth = np.atleast_1d(np.asarray(relative_azimuth_rad, dtype=np.float64))
+    if layers is None:
+        layers = plane_parallel_layers(profile, n_moments=max(128, 2 * n_streams))
+    reference = []
+    for theta_s in sun_zenith:
+        view_zenith, radiance = disort_sky_radiance(profile, float(theta_s), azimuth,
+                                                    max_view_zenith_rad, n_streams=n_streams,
+                                                    layers=layers)
+        reference.append(radiance)
+    reference = np.stack(reference)
+    return DisortComparison(profile.wavelengths_nm, sun_zenith, view_zenith, azimuth,
+                            np.full_like(reference, np.nan), reference)
+
+
+def solver_on_nodes(solver: Solver, profile: OpticalProfile,
+                    reference: DisortComparison) -> DisortComparison:
+    """`reference` with `solver`'s ground-level sky radiance on its grid. The observer stands at
+    the north pole, where the local east-north-up frame is the world frame; the sun is at
+    azimuth 0."""
+    position = np.array([0.0, 0.0, profile.bottom_radius_m])
+    zenith, phi = np.meshgrid(reference.view_zenith_rad, reference.relative_azimuth_rad,
+                              indexing="ij")
+    views = local_frame_directions(zenith, phi)
+    ours = np.stack([solver.sky_radiance(position, views, local_frame_directions(theta_s, 0.0))
+                     for theta_s in reference.sun_zenith_rad])
+    return DisortComparison(reference.wavelengths_nm, reference.sun_zenith_rad,
+                            reference.view_zenith_rad, reference.relative_azimuth_rad, ours,
+                            reference.reference)
+
+
 def compare_with_disort(solver: Solver, profile: OpticalProfile,
                         sun_zenith_rad: ArrayLike, relative_azimuth_rad: ArrayLike,
                         max_view_zenith_rad: float = np.radians(70.0), *, n_streams: int = 32,
                         layers: PlaneParallelLayers | None = None) -> DisortComparison:
     """Sky radiance seen from the ground by `solver` and by `disort_sky_radiance` for the same
     profile, on DISORT's view zenith nodes up to `max_view_zenith_rad` x the relative azimuths
-    [rad] x the sun zenith angles [rad]. The observer stands at the north pole, where the local
-    east-north-up frame is the world frame; the sun is at azimuth 0."""
-    sun_zenith = np.atleast_1d(np.asarray(sun_zenith_rad, dtype=np.float64))
-    azimuth = np.atleast_1d(np.asarray(relative_azimuth_rad, dtype=np.float64))
-    if layers is None:
-        layers = plane_parallel_layers(profile, n_moments=max(128, 2 * n_streams))
-    position = np.array([0.0, 0.0, profile.bottom_radius_m])
-    ours, reference = [], []
-    for theta_s in sun_zenith:
-        view_zenith, radiance = disort_sky_radiance(profile, float(theta_s), azimuth,
-                                                    max_view_zenith_rad, n_streams=n_streams,
-                                                    layers=layers)
-        zenith, phi = np.meshgrid(view_zenith, azimuth, indexing="ij")
-        sun = local_frame_directions(theta_s, 0.0)
-        ours.append(solver.sky_radiance(position, local_frame_directions(zenith, phi), sun))
-        reference.append(radiance)
-    return DisortComparison(profile.wavelengths_nm, sun_zenith, view_zenith, azimuth,
-                            np.stack(ours), np.stack(reference))
+    [rad] x the sun zenith angles [rad] (`disort_reference`, `solver_on_nodes`)."""
+    reference = disort_reference(profile, sun_zenith_rad, relative_azimuth_rad,
+                                 max_view_zenith_rad, n_streams=n_streams, layers=layers)
+    return solver_on_nodes(solver, profile, reference)
 
 
 # --- the validation case ------------------------------------------------------------------
