@@ -254,26 +254,34 @@ def single_scattering_table(grid, medium, n_samples, transmittance, scatterers, 
 
 
 @njit(cache=True)
+def _direct_irradiance(r, mu_s, grid, medium, sun_irradiance, sun_angular_radius, col, out):
+    """out (n_wl,) = E_sun T_sun max(mu_s, 0) V on a horizontal surface at radius r [W m^-2
+    nm^-1]; col (n_c,) scratch. `grid`: a `TableGrid`, `medium`: a `RayMedium`."""
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
+    extinction = medium.extinction
+    out[:] = 0.0
+    visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
+    if visible <= 0.0 or mu_s <= 0.0:
+        return
+    columns_to_top(r, mu_s, bottom_radius, top_radius, medium.columns, col)
+    for w in range(extinction.shape[1]):
+        tau = 0.0
+        for c in range(extinction.shape[0]):
+            tau += extinction[c, w] * col[c]
+        out[w] = sun_irradiance[w] * math.exp(-tau) * mu_s * visible
+
+
+@njit(cache=True)
 def direct_ground_irradiance(n_points, grid, medium, sun_irradiance, sun_angular_radius):
     """Direct sun irradiance on the ground E_sun T_sun max(mu_s, 0) V at mu_s = -1 + 2 i /
     (n_points - 1), (n_points, n_wl) [W m^-2 nm^-1]. `grid`: a `TableGrid`, `medium`: a
     `RayMedium`."""
-    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
-    columns, extinction = medium.columns, medium.extinction
-    n_c, n_wl = extinction.shape
+    n_c, n_wl = medium.extinction.shape
     out = np.zeros((n_points, n_wl))
+    col = np.empty(n_c)
     for i in range(n_points):
-        mu_s = -1.0 + 2.0 * i / (n_points - 1)
-        visible = sun_visible_fraction(bottom_radius, mu_s, bottom_radius, sun_angular_radius)
-        if visible <= 0.0 or mu_s <= 0.0:
-            continue
-        col = np.empty(n_c)
-        columns_to_top(bottom_radius, mu_s, bottom_radius, top_radius, columns, col)
-        for w in range(n_wl):
-            tau = 0.0
-            for c in range(n_c):
-                tau += extinction[c, w] * col[c]
-            out[i, w] = sun_irradiance[w] * math.exp(-tau) * mu_s * visible
+        _direct_irradiance(grid.bottom_radius, -1.0 + 2.0 * i / (n_points - 1), grid, medium,
+                           sun_irradiance, sun_angular_radius, col, out[i])
     return out
 
 
@@ -282,25 +290,15 @@ def direct_irradiance_nodes(n_r_e, n_mu_s_e, grid, medium, sun_irradiance, sun_a
     """Direct sun on horizontal surfaces, E_sun T_sun max(mu_s, 0) V, on the irradiance nodes
     (as `indirect_irradiance`), (n_r_e, n_mu_s_e, n_wl) [W m^-2 nm^-1]. `grid`: a `TableGrid`,
     `medium`: a `RayMedium`."""
-    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
-    columns, extinction = medium.columns, medium.extinction
-    n_c, n_wl = extinction.shape
+    n_c, n_wl = medium.extinction.shape
     out = np.zeros((n_r_e, n_mu_s_e, n_wl))
     for node in prange(n_r_e * n_mu_s_e):
         i = node // n_mu_s_e
         j = node % n_mu_s_e
-        r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1), bottom_radius,
-                                           top_radius)
-        visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
-        if visible <= 0.0 or mu_s <= 0.0:
-            continue
-        col = np.empty(n_c)
-        columns_to_top(r, mu_s, bottom_radius, top_radius, columns, col)
-        for w in range(n_wl):
-            tau = 0.0
-            for c in range(n_c):
-                tau += extinction[c, w] * col[c]
-            out[i, j, w] = sun_irradiance[w] * math.exp(-tau) * mu_s * visible
+        r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1),
+                                           grid.bottom_radius, grid.top_radius)
+        _direct_irradiance(r, mu_s, grid, medium, sun_irradiance, sun_angular_radius,
+                           np.empty(n_c), out[i, j])
     return out
 
 

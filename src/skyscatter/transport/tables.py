@@ -83,7 +83,7 @@ __all__ = [
 DIRECT_GROUND_SAMPLES = 1025
 # Forward peaks of particles clipped inside this angle for the orders >= 2 (`phase_truncation`):
 # measured against the Monte Carlo reference, benchmarks/bench_forward_peak.py.
-TRUNCATION_ANGLE_DEG = 10.0
+TRUNCATION_ANGLE_DEG = 15.0
 MAX_TRUNCATION_ANGLE_DEG = 90.0
 # The orders beyond the last one computed follow a geometric series once the ratio of successive
 # orders has settled (the leading eigenvalue of the scattering operator takes over, as in the
