@@ -11,12 +11,18 @@ from skyscatter.atmosphere.variants import only_constituents
 from skyscatter.transport.monte_carlo import MonteCarloSolver
 from skyscatter.validate.common import table_solver
 from skyscatter.validate.lut_vs_montecarlo import (
+    AUREOLE_DEG,
     MEDIAN_LIMIT,
     P95_LIMIT,
+    PEAKED_MAX_FACTOR,
+    PEAKED_TARGET_ERROR,
     TWILIGHT_MEDIAN_LIMIT,
     SolverComparison,
     _checks,
+    _peaked_note,
     _plan,
+    _reference,
+    aureole_grid,
     compare_solvers,
     sky_grid,
 )
@@ -108,3 +114,86 @@ def test_a_band_without_monte_carlo_light_has_no_error_percentile():
                                   mc * 0.1, 100, 1.0)
     median = comparison.percentile(50)
     assert np.isnan(median[0]) and median[1] == pytest.approx(0.075)
+
+
+@pytest.mark.parametrize("sun_zenith", [0.0, 5.0, 30.0, 85.0])
+def test_the_aureole_directions_lie_at_their_angle_from_the_sun(sun_zenith):
+    grid = aureole_grid(sun_zenith)
+    sun = np.array([0.0, np.sin(np.radians(sun_zenith)), np.cos(np.radians(sun_zenith))])
+    angle = np.degrees(np.arccos(np.clip(grid.directions @ sun, -1.0, 1.0)))
+    np.testing.assert_allclose(angle, grid.from_sun_deg, atol=1e-6)
+    assert np.all(grid.view_zenith_deg < 90.0)
+    # towards the zenith and sideways: two directions per offset while both stay above the
+    # horizon (at sun zenith 85 deg the sideways 20 deg one is at view zenith 85.3 deg)
+    assert sorted(grid.from_sun_deg.tolist()) == sorted(2 * list(AUREOLE_DEG))
+
+
+def test_the_aureole_is_reported_apart_from_the_sky_and_not_checked():
+    sky = sky_grid((0.0, 40.0, 85.0), (0.0, 180.0))
+    grid = sky.joined(aureole_grid(30.0))
+    mc = np.ones((grid.view_zenith_deg.size, 2))
+    tables = mc.copy()
+    tables[grid.aureole] = 1.5  # 50 % off in the aureole, exact on the sky grid
+    comparison = SolverComparison("earth, Rayleigh only", 30.0, np.array([440.0, 550.0]), grid,
+                                  tables, mc, mc * 0.01, 100, 1.0)
+    assert grid.aureole.sum() == 2 * len(AUREOLE_DEG)
+    assert not grid.aureole[:sky.view_zenith_deg.size].any()
+    assert comparison.aureole_error == pytest.approx(0.5)
+    np.testing.assert_allclose(comparison.percentile(95), 0.0)
+    assert all(c.passed for c in _checks(comparison))
+
+
+def test_the_forward_peaked_goal_is_reported_with_its_numbers():
+    grid = sky_grid((0.0, 40.0, 85.0), (0.0, 180.0)).joined(aureole_grid(30.0))
+    mc = np.ones((grid.view_zenith_deg.size, 2))
+    comparison = SolverComparison("mars-hg-dust", 30.0, np.array([440.0, 550.0]), grid,
+                                  mc * 1.03, mc, mc * 0.01, 100, 1.0)
+    assert _checks(comparison) == []  # reported, not checked
+    note = _peaked_note("mars-hg-dust", [comparison])
+    assert "median up to 3.0" in note and "not met" in note
+
+
+def test_the_standard_plan_covers_the_forward_peaked_media_by_day_and_quick_stays_quick():
+    standard, quick = _plan(False), _plan(True)
+    names = [a.name for a in standard.all_atmospheres]
+    for name in ("mars-physical", "mars-hg-dust", "mars-dust-storm",
+                 "earth, Rayleigh + ozone + aerosol"):
+        assert name in names
+    storm = next(a for a in standard.peaked if a.name == "mars-dust-storm")
+    assert max(standard.sun_zeniths_deg(storm)) < 90.0
+    assert quick.peaked == ()
+
+
+def test_the_reference_adds_paths_only_for_forward_peaked_media_by_day():
+    profile = api.load_atmosphere("mars-costa").optical_profile([550.0], monochromatic=True)
+    standard = {"seed": 1, "target_relative_error": _plan(False).target_relative_error}
+    peaked = _reference(profile, "mars-physical", 30.0, 1000, **standard)
+    assert peaked.target_relative_error == PEAKED_TARGET_ERROR
+    assert peaked.max_samples == PEAKED_MAX_FACTOR * 1000
+    assert peaked.sun_sampling_probability > 0.0
+    storm = _reference(profile, "mars-dust-storm", 30.0, 1000, **standard)
+    assert storm.sun_sampling_probability == 0.0
+    assert _reference(profile, "mars-physical", 94.0, 1000, **standard
+                      ).target_relative_error is None
+    assert _reference(profile, "mars-costa", 30.0, 1000, **standard).target_relative_error is None
+    quick = {"seed": 1, "target_relative_error": _plan(True).target_relative_error}
+    assert _reference(profile, "mars-physical", 30.0, 1000, **quick).target_relative_error is None
+
+
+def test_mars_hg_dust_keeps_the_dust_and_its_phase_has_the_asymmetry_g():
+    from skyscatter.atmosphere.variants import MARS_HG_DUST_G, mars_hg_dust
+
+    variant, mars = mars_hg_dust(), api.load_atmosphere("mars-physical")
+    assert variant.name == "mars-hg-dust"
+    wl = np.array([450.0, 700.0])
+    dust = {a: next(c for c in a.constituents if c.name == "dust") for a in (variant, mars)}
+    np.testing.assert_array_equal(dust[variant].optics.extinction_per_density(wl),
+                                  dust[mars].optics.extinction_per_density(wl))
+    # HG's mean cosine is g (Henyey & Greenstein 1941): integrate 2 pi p(nu) nu dnu
+    nu = np.linspace(-1.0, 1.0, 200001)
+    p = dust[variant].optics.phase.evaluate(nu, wl)
+    p = p if p.shape[0] == nu.size else p.T
+    for w in range(wl.size):
+        assert 2 * np.pi * np.trapezoid(p[:, w], nu) == pytest.approx(1.0, rel=1e-4)
+        assert 2 * np.pi * np.trapezoid(p[:, w] * nu, nu) == pytest.approx(MARS_HG_DUST_G,
+                                                                           rel=1e-4)

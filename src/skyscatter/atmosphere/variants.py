@@ -1,25 +1,49 @@
 """Variants of an atmosphere for comparisons: some constituents only, or one constituent's
-amount scaled ("a dustier Mars", "Earth without aerosol").
+amount scaled ("a dustier Mars", "Earth without aerosol"), or one constituent's phase function
+replaced by a Henyey-Greenstein one ("Mars with HG dust").
 
-Public names: `only_constituents`, `scaled_constituent`, `load_variant`.
+Public names: `only_constituents`, `scaled_constituent`, `with_hg_phase`, `load_variant`,
+`mars_hg_dust`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
+
+import numpy as np
 
 from skyscatter.atmosphere.config import load_atmosphere
-from skyscatter.atmosphere.model import Atmosphere
+from skyscatter.atmosphere.model import Atmosphere, ConstituentOptics
 from skyscatter.atmosphere.profiles import ScaledProfile
 from skyscatter.checks import Bounds
 from skyscatter.errors import InputError
+from skyscatter.optics.phase import HenyeyGreensteinPhase
 
-__all__ = ["SCALE_FACTOR", "load_variant", "only_constituents", "scaled_constituent"]
+__all__ = ["MARS_HG_DUST_G", "SCALE_FACTOR", "load_variant", "mars_hg_dust", "only_constituents",
+           "scaled_constituent", "with_hg_phase"]
 
 # A constituent's amount times 0 (removed) to 1e6: a million times any constituent's amount is
 # beyond every comparison; inf or NaN would reach the solvers as NaN optics.
 SCALE_FACTOR = Bounds(0.0, 1e6)
+# Asymmetry parameter of the Henyey-Greenstein stand-in for Martian dust: the "dusty Mars,
+# HG g 0.65" case of issue 17's error table (a test medium, not a retrieval; mars-physical's
+# Mie dust, whose phase it replaces, is sourced in its preset).
+MARS_HG_DUST_G = 0.65
+
+
+@dataclass(frozen=True)
+class _HgOptics:
+    """Another constituent's extinction and scattering, with a Henyey-Greenstein phase."""
+
+    inner: ConstituentOptics
+    phase: HenyeyGreensteinPhase
+
+    def extinction_per_density(self, wavelengths_nm: np.ndarray) -> np.ndarray:
+        return self.inner.extinction_per_density(wavelengths_nm)
+
+    def scattering_per_density(self, wavelengths_nm: np.ndarray) -> np.ndarray:
+        return self.inner.scattering_per_density(wavelengths_nm)
 
 
 def _check_names(atmosphere: Atmosphere, names: Sequence[str]) -> None:
@@ -54,6 +78,27 @@ def scaled_constituent(atmosphere: Atmosphere, name: str, factor: float,
         for c in atmosphere.constituents)
     return replace(atmosphere, constituents=scaled,
                    name=label or f"{atmosphere.name}:{name}*{factor:g}")
+
+
+def with_hg_phase(atmosphere: Atmosphere, name: str, g: float,
+                  label: str | None = None) -> Atmosphere:
+    """`atmosphere` with the phase function of constituent `name` replaced by a
+    Henyey-Greenstein one of asymmetry `g` (-1 < g < 1), its extinction and scattering kept,
+    called `label` (default: 'NAME:CONSTITUENT~hg(G)')."""
+    _check_names(atmosphere, [name])
+    phase = HenyeyGreensteinPhase(g)
+    changed = tuple(replace(c, optics=_HgOptics(c.optics, phase)) if c.name == name else c
+                    for c in atmosphere.constituents)
+    return replace(atmosphere, constituents=changed,
+                   name=label or f"{atmosphere.name}:{name}~hg({g:g})")
+
+
+def mars_hg_dust() -> Atmosphere:
+    """`mars-physical` with its Mie dust's phase function replaced by Henyey-Greenstein
+    g = `MARS_HG_DUST_G` (optical depth 0.5 kept), called 'mars-hg-dust': a forward-peaked
+    medium without the Mie peak's narrow spike (issue 17's "dusty Mars, HG g 0.65")."""
+    return with_hg_phase(load_atmosphere("mars-physical"), "dust", MARS_HG_DUST_G,
+                         label="mars-hg-dust")
 
 
 def load_variant(spec: str) -> Atmosphere:
