@@ -187,9 +187,11 @@ def test_aerial_perspective_of_order_one_matches_the_ray_marching_solver(
 
 
 def test_aerial_perspective_to_a_point_beyond_the_atmosphere_is_the_sky(small_lut):
+    # away from the sun: the aureole of light scattered twice or more in forward peaks
+    # (`transport.aureole`, within 3 truncation angles of the sun) is the sky's alone
     origin = observer_position(500.0, EARTH_RADIUS_M)
     sun = local_frame_directions(np.radians(50.0), 0.0)
-    directions = local_frame_directions(np.radians([0.0, 45.0, 85.0]), np.radians(60.0))
+    directions = local_frame_directions(np.radians([0.0, 45.0, 85.0]), np.radians(120.0))
     inscattered, transmittance = small_lut.aerial_perspective(origin, origin + 1e9 * directions,
                                                               sun)
     np.testing.assert_allclose(inscattered, small_lut.sky_radiance(origin, directions, sun),

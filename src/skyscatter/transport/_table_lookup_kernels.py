@@ -599,7 +599,8 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                     for w in range(n_wl):
                         value[w] += (marched * weights[s * n_wl + w] * single_factor[s, w]
                                      * exact[s, w])
-            if not hits_ground and nu > math.cos(tables.aureole_psi_max):
+            if (not hits_ground and tables.aureole_psi_max > 0.0
+                    and nu > math.cos(tables.aureole_psi_max)):
                 peak_aureole(r, mu, mu_s, nu, tables, t_view, scratch, value)
             if hits_ground:
                 mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)

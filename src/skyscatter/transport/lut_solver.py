@@ -164,7 +164,9 @@ class LutSolver:
         Single scattering is the difference of two table lookups (Bruneton 2017) by day and,
         as in `sky_radiance`, ray-marched through the sunlit part of the segment once the sun
         at either of its ends nears the horizon (`_table_lookup_kernels.exact_single_weight`), with
-        the orders >= 2 interpolated geometrically in the sun's zenith cosine."""
+        the orders >= 2 interpolated geometrically in the sun's zenith cosine. The sun's aureole
+        of light scattered twice or more in forward peaks (`transport.aureole`) is the sky's
+        alone: objects in front of the sun are not veiled by it."""
         origins, targets, shape = _rays(position, points)
         sun = _sun(sun_direction)
         p = self.profile
