@@ -19,7 +19,6 @@ Run: PYTHONPATH=src python benchmarks/bench_forward_peak.py [--paths 20000]
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import resource
 import time
 from pathlib import Path
@@ -28,7 +27,7 @@ import numpy as np
 
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.atmosphere.model import Atmosphere
-from skyscatter.optics.phase import HenyeyGreensteinPhase
+from skyscatter.atmosphere.variants import mars_hg_dust
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
@@ -41,27 +40,8 @@ AZIMUTHS_DEG = (0.0, 45.0, 90.0, 135.0, 180.0)
 AUREOLE_DEG = (2.0, 5.0, 10.0, 20.0)
 
 
-@dataclasses.dataclass(frozen=True)
-class HgOptics:
-    """Another constituent's extinction and scattering with a Henyey-Greenstein phase."""
-
-    inner: object
-    phase: HenyeyGreensteinPhase
-
-    def extinction_per_density(self, wavelengths_nm: np.ndarray) -> np.ndarray:
-        return self.inner.extinction_per_density(wavelengths_nm)
-
-    def scattering_per_density(self, wavelengths_nm: np.ndarray) -> np.ndarray:
-        return self.inner.scattering_per_density(wavelengths_nm)
-
-
 def atmosphere(name: str) -> Atmosphere:
-    if name != "mars-hg-dust":
-        return load_atmosphere(name)
-    mars = load_atmosphere("mars-physical")
-    dust = [dataclasses.replace(c, optics=HgOptics(c.optics, HenyeyGreensteinPhase(0.65)))
-            if c.name == "dust" else c for c in mars.constituents]
-    return dataclasses.replace(mars, constituents=tuple(dust), name=name)
+    return mars_hg_dust() if name == "mars-hg-dust" else load_atmosphere(name)
 
 
 def directions(sun_zenith_deg: float) -> tuple[np.ndarray, np.ndarray]:
