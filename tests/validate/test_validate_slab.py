@@ -20,9 +20,9 @@ from skyscatter.validate.slab import (
     table_slab_fluxes,
 )
 
-# Small tables (a few seconds per slab). Bruneton's default sizes do not close the gap: there
-# (truncation 10 deg) tau 1 gives R 0.0771, T_d 0.687 and tau 8 R 0.690, T_d 1.135 (measured,
-# benchmarks/compare_slab_fluxes.py --resolution default).
+# Small tables (a few seconds per slab). Bruneton's default sizes fix R but not T_d: with them
+# (truncation 10 deg) tau 1 gives R 0.0768, T_d 0.686 (benchmarks/compare_slab_fluxes.py
+# --resolution default; docs/physics/disort_comparison.md).
 SMALL = TableResolution(scattering_r=8, scattering_mu=32, scattering_mu_s=16, scattering_nu=4,
                         transmittance_r=16, transmittance_mu=64, irradiance_r=4,
                         irradiance_mu_s=16)
