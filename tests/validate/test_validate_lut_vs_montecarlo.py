@@ -172,7 +172,7 @@ def test_the_reference_adds_paths_only_for_forward_peaked_media_by_day():
     assert peaked.max_samples == PEAKED_MAX_FACTOR * 1000
     assert peaked.sun_sampling_probability > 0.0
     storm = _reference(profile, "mars-dust-storm", 30.0, 1000, **standard)
-    assert storm.sun_sampling_probability == 0.0
+    assert storm.sun_sampling_probability == 0.0 and storm.target_relative_error is None
     assert _reference(profile, "mars-physical", 94.0, 1000, **standard
                       ).target_relative_error is None
     assert _reference(profile, "mars-costa", 30.0, 1000, **standard).target_relative_error is None
