@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 from transport_cases import EARTH_RADIUS_M, SMALL, homogeneous_shell
 
+from skyscatter.atmosphere.config import load_atmosphere
+from skyscatter.errors import InputError
 from skyscatter.transport.geometry import horizon_cos_zenith, local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
@@ -24,7 +26,7 @@ from skyscatter.transport.table_parameterisation import (
     transmittance_x_from_r_mu,
     unit_range_from_texture_coord,
 )
-from skyscatter.transport.tables import AtmosphereTables, precompute_tables
+from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
 PERCENT = 0.01
 TOP_RADIUS_M = EARTH_RADIUS_M + 60e3  # exponential_earth()
@@ -420,3 +422,12 @@ def test_lut_solver_is_registered(profile):
     solver = make_solver("lut", profile, SolverOptions(resolution=SMALL, orders=1))
     assert isinstance(solver, LutSolver) and solver.tables.orders == 1
 
+
+
+def test_orders_that_grow_are_refused_with_a_message_naming_the_cause():
+    # earth-fog: 200 m visibility in a 300 m layer, thinner than the table rays' samples; its
+    # orders grew 1.3x per order (issue 17). Light cannot grow from order to order: the tables
+    # refuse the atmosphere and name the solver that holds it.
+    profile = load_atmosphere("earth-fog").optical_profile(np.array([650.0]))
+    with pytest.raises(InputError, match="grow instead of converging.*--solver montecarlo"):
+        precompute_tables(profile, TableResolution().scaled(0.25), orders=20)

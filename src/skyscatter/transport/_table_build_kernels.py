@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from skyscatter.transport._kernels import columns_along_segment
+from skyscatter.transport._kernels import density_at
 from skyscatter.transport._table_common_kernels import (
     linear_axis,
     lookup_scratch,
@@ -58,10 +58,6 @@ from skyscatter.transport.table_parameterisation import (
     transmittance_x_mu,
     transmittance_x_r,
 )
-
-# Sub-samples of the profile per interval of a table ray for its column (`_interval_weights`):
-# a 500 m cloud in a 300 m-2 km interval is then sampled every 20-120 m.
-INTERVAL_SAMPLES = 16
 
 
 class TableGrid(NamedTuple):
@@ -107,13 +103,15 @@ def columns_to_top(r, mu, bottom_radius, top_radius, columns, out):
 
 
 @njit(cache=True)
-def _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, col_view):
+def _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, weight, dens,
+                 col_view):
     """Samples of the table ray (r, mu) up to the ground or the top (`table_ray_distances`):
-    distances t, radii, cosines mu_t and view columns col_view (n, n_c) from the start. Returns
-    the number of samples (0 for a ray of zero length)."""
+    distances t, radii, cosines mu_t, trapezoid weights [m], densities dens (n, n_c) and view
+    columns col_view (n, n_c) from the start. Returns the number of samples (0 for a ray of
+    zero length)."""
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
-    columns = medium.columns
-    n_c = columns.shape[0]
+    h_step, density, columns = medium.h_step, medium.density, medium.columns
+    n_c = density.shape[0]
     if hits_ground:
         d = distance_to_bottom_boundary(r, mu, bottom_radius)
     else:
@@ -131,6 +129,7 @@ def _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, c
         mj = min(max((r * mu + tj) / rj, -1.0), 1.0)
         radius[j] = rj
         mu_t[j] = mj
+        density_at(rj - bottom_radius, h_step, density, dens[j])
         if hits_ground:
             columns_to_top(rj, -mj, bottom_radius, top_radius, columns, here)
             for c in range(n_c):
@@ -139,46 +138,34 @@ def _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, c
             columns_to_top(rj, mj, bottom_radius, top_radius, columns, here)
             for c in range(n_c):
                 col_view[j, c] = max(start[c] - here[c], 0.0)
+    for j in range(total):
+        left = t[j] - t[j - 1] if j > 0 else 0.0
+        right = t[j + 1] - t[j] if j < total - 1 else 0.0
+        weight[j] = 0.5 * (left + right)
     return total
 
 
 @njit(cache=True)
-def _interval_weights(r, mu, total, t, col_view, bottom_radius, medium, out):
-    """out[j, c, w]: the weight of sample j in int_0^d T(x, p) n_c(p) f(p) dt for constituent c,
-    f taken linear between samples: each interval [t_k, t_k+1] carries its own column dcol_c of
-    c (integrated on INTERVAL_SAMPLES sub-samples of the profile), attenuated as the interval's
-    optical depth dtau attenuates it, T(x, t_k) (1 - exp(-dtau)) / dtau dcol_c, half to each
-    end. Unlike densities at the samples, this holds a layer thinner than the sample spacing (a
-    cloud, a fog) with its true optical depth, and the light scattered in an interval never
-    exceeds what the interval takes out of the beam."""
-    extinction = medium.extinction
+def _view_transmittance(total, weight, col_view, extinction, out):
+    """out[j, w] = T(x, p_j) * weight[j] from the view columns of `_ray_samples`."""
     n_c, n_wl = extinction.shape
-    out[:total] = 0.0
-    column = np.empty(n_c)
-    for k in range(total - 1):
-        columns_along_segment(r, mu, t[k], t[k + 1], INTERVAL_SAMPLES, bottom_radius,
-                              medium.h_step, medium.density, column)
+    for j in range(total):
         for w in range(n_wl):
             tau = 0.0
-            d_tau = 0.0
             for c in range(n_c):
-                tau += extinction[c, w] * col_view[k, c]
-                d_tau += extinction[c, w] * column[c]
-            escape = -math.expm1(-d_tau) / d_tau if d_tau > 1e-12 else 1.0 - 0.5 * d_tau
-            factor = 0.5 * math.exp(-tau) * escape
-            for c in range(n_c):
-                out[k, c, w] += factor * column[c]
-                out[k + 1, c, w] += factor * column[c]
+                tau += extinction[c, w] * col_view[j, c]
+            out[j, w] = math.exp(-tau) * weight[j]
 
 
 @njit(cache=True)
 def _table_ray(i_r, i_mu, n_samples, grid, medium):
-    """The ray of scattering-table cell (i_r, i_mu): (r, mu, total, t, radius, mu_t, weights)
-    with its `total` samples (`_ray_samples`) and the weights (total, n_c, n_wl) of the
-    integrals along it (`_interval_weights`)."""
+    """The ray of scattering-table cell (i_r, i_mu): (r, mu, total, t, radius, mu_t, dens,
+    view) with its `total` samples (`_ray_samples`) and the transmittance from the cell's point
+    to each sample, view (total, n_wl)."""
     n_r, n_mu = grid.n_r, grid.n_mu
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
-    n_c, n_wl = medium.extinction.shape
+    extinction = medium.extinction
+    n_c, n_wl = extinction.shape
     n_max = n_samples + 8
     r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
     mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
@@ -186,12 +173,14 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium):
     t = np.empty(n_max)
     radius = np.empty(n_max)
     mu_t = np.empty(n_max)
+    weight = np.empty(n_max)
+    dens = np.empty((n_max, n_c))
     col_view = np.empty((n_max, n_c))
-    total = _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t,
-                         col_view)
-    weights = np.empty((max(total, 1), n_c, n_wl))
-    _interval_weights(r, mu, total, t, col_view, bottom_radius, medium, weights)
-    return r, mu, total, t, radius, mu_t, weights
+    total = _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, weight,
+                         dens, col_view)
+    view = np.empty((total, n_wl))
+    _view_transmittance(total, weight, col_view, extinction, view)
+    return r, mu, total, t, radius, mu_t, dens, view
 
 
 @njit(parallel=True, cache=True)
@@ -217,8 +206,8 @@ def single_scattering_table(grid, medium, n_samples, transmittance, scatterers, 
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r, mu, total, t, radius, mu_t, weights = _table_ray(i_r, i_mu, n_samples, grid,
-                                                            medium)
+        r, mu, total, t, radius, mu_t, dens, view = _table_ray(i_r, i_mu, n_samples, grid,
+                                                               medium)
         if total == 0:
             continue
         # Per sample: the horizon, and the r part of the transmittance lookup towards the sun.
@@ -255,8 +244,9 @@ def single_scattering_table(grid, medium, n_samples, transmittance, scatterers, 
                                               row_d_min[j], row_d_max[j])
                     transmittance_in_row(transmittance, row_i[j], row_a[j], x_mu, sun)
                     for s in range(n_s):
+                        dv = dens[j, scatterers[s]] * visible
                         for w in range(n_wl):
-                            acc[s, w] += weights[j, scatterers[s], w] * visible * sun[w]
+                            acc[s, w] += dv * view[j, w] * sun[w]
                 for s in range(n_s):
                     for w in range(n_wl):
                         table[i_r, i_mu, i_s, i_nu, s, w] = acc[s, w] * factor[s, w]
@@ -519,15 +509,16 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r, mu, total, t, radius, mu_t, weights = _table_ray(i_r, i_mu, n_samples, grid,
-                                                            medium)
+        r, mu, total, t, radius, mu_t, dens, view = _table_ray(i_r, i_mu, n_samples, grid,
+                                                               medium)
         if total == 0:
             continue
-        view = np.zeros((total, n_wl))  # T(x, p) dt beta_s(p)
-        for j in range(total):
+        for j in range(total):  # T(x, p) dt beta_s(p)
             for w in range(n_wl):
+                beta = 0.0
                 for c in range(n_c):
-                    view[j, w] += weights[j, c, w] * scattering[c, w]
+                    beta += dens[j, c] * scattering[c, w]
+                view[j, w] *= beta
         nu_cells = np.empty((n_mu_s, n_nu))
         for i_s in range(n_mu_s):
             mu_s = mu_s_nodes[i_s]

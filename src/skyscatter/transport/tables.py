@@ -92,6 +92,8 @@ MAX_TRUNCATION_ANGLE_DEG = 90.0
 # RATIO_SETTLED from one order to the next, the iteration stops as soon as the tail is below
 # TAIL_TOLERANCE of the orders >= 2, and at the last order allowed the tail is added.
 TAIL_MIN_ORDER = 4
+# Orders that grow by this factor twice in a row are refused (`_check_converging`).
+DIVERGING_RATIO = 1.0
 RATIO_SETTLED = 0.02
 TAIL_TOLERANCE = 1e-3
 
@@ -453,6 +455,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             previous, use_phase = delta[..., None, :], False
             order_mean[order - 1, batch], order_zenith[order - 1, batch] = (
                 _table_build_kernels.order_statistics(previous, False, phase_b, grid))
+            _check_converging(order_mean[:order, batch], wavelengths[batch])
             tail = _geometric_tail(order_mean[:order, batch], last=order == orders)
             if tail is not None:
                 # orders > n as the geometric series of order n (module docstring)
@@ -506,6 +509,29 @@ def _peak_aureole(profile: OpticalProfile, scatterers: np.ndarray, phase: np.nda
     mixed = np.einsum("sw,saw->aw", share, peak_phase)
     aureole = peak_aureole(mixed, truncation_angle_deg, float(depth.max()))
     return np.exp(-np.minimum(depth, aureole.x_max)), aureole
+
+
+def _check_converging(order_mean: np.ndarray, wavelengths_nm: np.ndarray) -> None:
+    """Raise InputError when the orders grow (`order_mean` (n, n_b), orders 1 .. n): each of
+    the last two at least `DIVERGING_RATIO` times the one before, from order TAIL_MIN_ORDER on.
+    Light cannot grow from order to order; it does in the tables when a layer thinner than
+    their ray samples (fog, a low cloud deck) scatters more than the samples' transmittance
+    takes out."""
+    n = order_mean.shape[0]
+    if n < TAIL_MIN_ORDER:
+        return
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = order_mean[-1] / order_mean[-2]
+        before = order_mean[-2] / order_mean[-3]
+    growing = (ratio >= DIVERGING_RATIO) & (before >= DIVERGING_RATIO)
+    if np.any(growing):
+        w = int(np.argmax(growing))
+        raise InputError(
+            f"the tables' scattering orders grow instead of converging (order {n} is "
+            f"{ratio[w]:.2f} x order {n - 1} at {wavelengths_nm[w]:g} nm): this atmosphere has "
+            "an optically thick layer thinner than the tables resolve (fog, a low cloud deck); "
+            "use --solver montecarlo for it", key="orders", value=n,
+            allowed="an atmosphere whose thick layers the tables resolve")
 
 
 def _geometric_tail(order_mean: np.ndarray, last: bool) -> np.ndarray | None:
