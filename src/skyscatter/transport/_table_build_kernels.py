@@ -91,6 +91,16 @@ class LitOrder(NamedTuple):
 
 
 @njit(cache=True)
+def cell_nu(mu, mu_s, i_nu, n_nu):
+    """nu of slice i_nu of a scattering-table cell (mu, mu_s), clamped to the values the two
+    directions allow, mu mu_s -+ sqrt((1 - mu^2)(1 - mu_s^2)) (Bruneton 2017,
+    `ComputeSingleScatteringTexture`)."""
+    spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
+    nu = scattering_nu_from_u(i_nu / (n_nu - 1))
+    return min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+
+
+@njit(cache=True)
 def columns_to_top(r, mu, bottom_radius, top_radius, columns, out):
     """Column densities from (r, mu) to the top, bilinear in `columns` (n_c, n_r_t, n_mu_t),
     into out (n_c,). For rays that do not hit the ground."""
@@ -226,10 +236,8 @@ def single_scattering_table(grid, medium, n_samples, transmittance, scatterers, 
         for i_s in range(n_mu_s):
             mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
                                           mu_s_min, n_mu_s)
-            spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
             for i_nu in range(n_nu):
-                nu = scattering_nu_from_u(i_nu / (n_nu - 1))
-                nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 acc[:, :] = 0.0
                 for j in range(total):
                     rj = radius[j]
@@ -322,10 +330,8 @@ def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
         for i_s in range(n_mu_s):
             mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
                                           mu_s_min, n_mu_s)
-            spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
             for i_nu in range(n_nu):
-                nu = scattering_nu_from_u(i_nu / (n_nu - 1))
-                nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 phase_values(smooth_phase, nu, phase)
                 for s in range(n_s):
                     for w in range(n_wl):
@@ -522,10 +528,8 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
         nu_cells = np.empty((n_mu_s, n_nu))
         for i_s in range(n_mu_s):
             mu_s = mu_s_nodes[i_s]
-            spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
             for i_nu in range(n_nu):
-                nu = scattering_nu_from_u(i_nu / (n_nu - 1))
-                nu_cells[i_s, i_nu] = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                nu_cells[i_s, i_nu] = cell_nu(mu, mu_s, i_nu, n_nu)
         acc = np.zeros((n_mu_s, n_nu, n_wl))
         slab = np.empty(n_block, dtype=np.float32)
         for j in range(total):
@@ -595,10 +599,8 @@ def order_statistics(tables, use_phase, phase_table, grid):
             for i_s in range(n_mu_s):
                 mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
                                               mu_s_min, n_mu_s)
-                spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
                 for i_nu in range(n_nu):
-                    nu = scattering_nu_from_u(i_nu / (n_nu - 1))
-                    nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+                    nu = cell_nu(mu, mu_s, i_nu, n_nu)
                     if use_phase:
                         phase_values(phase_table, nu, weights)
                     for t in range(n_t):
