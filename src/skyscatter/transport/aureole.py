@@ -25,6 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.polynomial import legendre
 
 __all__ = ["PeakAureole", "peak_aureole"]
 
@@ -52,16 +53,6 @@ class PeakAureole:
     psi_max_rad: float
 
 
-def _legendre_rows(mu: np.ndarray, degree: int) -> np.ndarray:
-    """P_l(mu) for l = 0 .. degree, (degree + 1, n) (Bonnet's recursion, stable upwards)."""
-    rows = np.empty((degree + 1, mu.size))
-    rows[0] = 1.0
-    rows[1] = mu
-    for n in range(1, degree):
-        rows[n + 1] = ((2 * n + 1) * mu * rows[n] - n * rows[n - 1]) / (n + 1)
-    return rows
-
-
 def peak_aureole(peak_phase: np.ndarray, truncation_angle_deg: float, x_max: float
                  ) -> PeakAureole:
     """The aureole of a peak `peak_phase` (n_angle, n_wl) [sr^-1] sampled uniformly over
@@ -72,7 +63,7 @@ def peak_aureole(peak_phase: np.ndarray, truncation_angle_deg: float, x_max: flo
     psi_max = min(ANGLE_FACTOR * np.radians(truncation_angle_deg), np.pi)
     inside = theta <= np.radians(truncation_angle_deg) + theta[1]
     weight = 2.0 * np.pi * np.sin(theta[inside]) * theta[1]  # the peak is 0 at both ends
-    moments = _legendre_rows(np.cos(theta[inside]), MAX_DEGREE) @ (
+    moments = legendre.legvander(np.cos(theta[inside]), MAX_DEGREE).T @ (
         peak_phase[inside] * weight[:, None])  # (degree + 1, n_wl)
     total = moments[0]
     moments = np.where(total > 0.0, moments / np.where(total > 0.0, total, 1.0), 0.0)
@@ -84,7 +75,7 @@ def peak_aureole(peak_phase: np.ndarray, truncation_angle_deg: float, x_max: flo
     degree = np.arange(MAX_DEGREE + 1)
     psi = theta[theta <= psi_max]
     terms = series * ((2 * degree + 1) / (4.0 * np.pi))[None, :, None]
-    table = (_legendre_rows(np.cos(psi), MAX_DEGREE).T
+    table = (legendre.legvander(np.cos(psi), MAX_DEGREE)
              @ terms.transpose(1, 0, 2).reshape(MAX_DEGREE + 1, -1))
     table = table.reshape(psi.size, X_NODES, n_wl).transpose(1, 0, 2)
     return PeakAureole(np.ascontiguousarray(np.maximum(table, 0.0)), x_max, float(psi[-1]))

@@ -360,8 +360,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     scaled = _scaled_optics(profile, scatterer_index, peak)
     scaled_transmittance = (np.exp(-np.einsum("cw,crm->rmw", scaled.extinction, columns))
                             if truncated else transmittance)
-    peak_transmittance, aureole = _peak_aureole(profile, scatterer_index, phase, smooth_phase,
-                                                peak, columns, res.truncation_angle_deg)
+    peak_transmittance, aureole = _peak_aureole(profile, scaled, scatterer_index, phase,
+                                                smooth_phase, peak, columns,
+                                                res.truncation_angle_deg)
     theta_in, phi_in, *_ = _sphere_grids(res)
     node_altitude = np.array([scattering_r_from_u((k + 0.5) / res.scattering_r, bottom, top,
                                                   res.scattering_r)
@@ -457,6 +458,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                 _table_build_kernels.order_statistics(previous, False, phase_b, grid))
             _check_converging(order_mean[:order, batch], wavelengths[batch])
             tail = _geometric_tail(order_mean[:order, batch], last=order == orders)
+            orders_computed = max(orders_computed, order)
             if tail is not None:
                 # orders > n as the geometric series of order n (module docstring)
                 factor = (tail / (1.0 - tail)).astype(np.float32)
@@ -464,11 +466,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                 irradiance[..., batch] += delta_irradiance * factor
                 tail_share[batch] = (order_mean[order - 1, batch] * factor
                                      / order_mean[1:order, batch].sum(axis=0))
-                orders_computed = max(orders_computed, order)
                 step += orders - order
                 report(f"order {order} and the tail of the orders beyond, {label}")
                 break
-            orders_computed = max(orders_computed, order)
             report(f"order {order}, {label}")
             if on_order is not None:
                 on_order(order, batch, _read_only(scattering[..., n_s, :]),
@@ -487,9 +487,10 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         aureole_limits=np.array([aureole.x_max, aureole.psi_max_rad]))
 
 
-def _peak_aureole(profile: OpticalProfile, scatterers: np.ndarray, phase: np.ndarray,
-                  smooth_phase: np.ndarray, peak: np.ndarray, columns: np.ndarray,
-                  truncation_angle_deg: float) -> tuple[np.ndarray, PeakAureole]:
+def _peak_aureole(profile: OpticalProfile, scaled: _ScaledOptics, scatterers: np.ndarray,
+                  phase: np.ndarray, smooth_phase: np.ndarray, peak: np.ndarray,
+                  columns: np.ndarray, truncation_angle_deg: float
+                  ) -> tuple[np.ndarray, PeakAureole]:
     """(exp(-x) (n_r_t, n_mu_t, n_wl) with x the peak depth f beta_s along the transmittance
     table's rays, the aureole of the peaks' multiple scattering) (`transport.aureole`); the
     peaks of several constituents mixed by their vertical peak depths. Without a clipped peak a
@@ -497,8 +498,7 @@ def _peak_aureole(profile: OpticalProfile, scatterers: np.ndarray, phase: np.nda
     n_wl = profile.n_wavelengths
     if not np.any(peak > 0.0):
         return np.ones((2, 2, n_wl)), PeakAureole(np.zeros((2, 2, n_wl)), 1.0, 0.0)
-    removed = np.zeros_like(profile.scattering_per_density)
-    removed[scatterers] = peak * profile.scattering_per_density[scatterers]
+    removed = scaled.removed
     depth = np.einsum("cw,crm->rmw", removed, columns)
     vertical = removed[scatterers] * profile.density[scatterers].sum(axis=1)[:, None]
     share = vertical / np.maximum(vertical.sum(axis=0), np.finfo(float).tiny)  # (n_s, n_wl)
@@ -511,6 +511,13 @@ def _peak_aureole(profile: OpticalProfile, scatterers: np.ndarray, phase: np.nda
     return np.exp(-np.minimum(depth, aureole.x_max)), aureole
 
 
+def _last_ratios(order_mean: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(order n / order n - 1, order n - 1 / order n - 2) per wavelength of `order_mean`
+    (n, n_b), n >= 3; NaN or inf where an order is 0."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return order_mean[-1] / order_mean[-2], order_mean[-2] / order_mean[-3]
+
+
 def _check_converging(order_mean: np.ndarray, wavelengths_nm: np.ndarray) -> None:
     """Raise InputError when the orders grow (`order_mean` (n, n_b), orders 1 .. n): each of
     the last two at least `DIVERGING_RATIO` times the one before, from order TAIL_MIN_ORDER on.
@@ -520,9 +527,7 @@ def _check_converging(order_mean: np.ndarray, wavelengths_nm: np.ndarray) -> Non
     n = order_mean.shape[0]
     if n < TAIL_MIN_ORDER:
         return
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = order_mean[-1] / order_mean[-2]
-        before = order_mean[-2] / order_mean[-3]
+    ratio, before = _last_ratios(order_mean)
     growing = (ratio >= DIVERGING_RATIO) & (before >= DIVERGING_RATIO)
     if np.any(growing):
         w = int(np.argmax(growing))
@@ -539,12 +544,9 @@ def _geometric_tail(order_mean: np.ndarray, last: bool) -> np.ndarray | None:
     last computed one (`order_mean` (n, n_b), orders 1 .. n) are to be added as a geometric
     series: at the last order allowed, or earlier when that tail is below `TAIL_TOLERANCE` of
     the orders >= 2 in every wavelength; None to go on (or where the ratio has not settled)."""
-    n = order_mean.shape[0]
-    if n < TAIL_MIN_ORDER:
+    if order_mean.shape[0] < TAIL_MIN_ORDER:
         return None
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = order_mean[-1] / order_mean[-2]
-        before = order_mean[-2] / order_mean[-3]
+    ratio, before = _last_ratios(order_mean)
     settled = (np.all(np.isfinite(ratio)) and np.all(ratio < 1.0) and np.all(ratio >= 0.0)
                and np.all(np.abs(ratio - before) <= RATIO_SETTLED * ratio))
     if not settled:
@@ -555,10 +557,12 @@ def _geometric_tail(order_mean: np.ndarray, last: bool) -> np.ndarray | None:
 
 @dataclass(frozen=True)
 class _ScaledOptics:
-    """Extinction and scattering per density (n_c, n_wl) of the delta-M scaled medium."""
+    """Extinction and scattering per density (n_c, n_wl) of the delta-M scaled medium, and
+    the scattering per density its truncated peaks take out, f beta_s."""
 
     extinction: np.ndarray
     scattering: np.ndarray
+    removed: np.ndarray
 
 
 def _scaled_optics(profile: OpticalProfile, scatterers: np.ndarray, peak: np.ndarray
@@ -569,7 +573,8 @@ def _scaled_optics(profile: OpticalProfile, scatterers: np.ndarray, peak: np.nda
     removed = np.zeros_like(profile.scattering_per_density)
     removed[scatterers] = peak * profile.scattering_per_density[scatterers]
     return _ScaledOptics(np.ascontiguousarray(profile.extinction_per_density - removed),
-                         np.ascontiguousarray(profile.scattering_per_density - removed))
+                         np.ascontiguousarray(profile.scattering_per_density - removed),
+                         removed)
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
