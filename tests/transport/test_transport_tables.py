@@ -12,6 +12,7 @@ from transport_cases import EARTH_RADIUS_M, SMALL, homogeneous_shell
 
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.errors import InputError
+from skyscatter.transport import tables as tables_module
 from skyscatter.transport.geometry import horizon_cos_zenith, local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
@@ -424,10 +425,25 @@ def test_lut_solver_is_registered(profile):
 
 
 
-def test_orders_that_grow_are_refused_with_a_message_naming_the_cause():
-    # earth-fog: 200 m visibility in a 300 m layer, thinner than the table rays' samples; its
-    # orders grew 1.3x per order (issue 17). Light cannot grow from order to order: the tables
-    # refuse the atmosphere and name the solver that holds it.
+def test_a_thin_thick_layer_converges_and_stops_at_the_geometric_tail():
+    # earth-fog: 200 m visibility in a 300 m layer (optical depth ~6). Its orders grew 1.3x per
+    # order when the tables' view-zenith cells were linear in the distance to the boundary
+    # (the first cell inside the layer spanned the zenith to ~80 deg) and the ray samples were
+    # summed by the trapezoid rule (up to +50 % per optically thick interval). Light cannot grow
+    # from order to order: each order is weaker than the one before, and the iteration stops
+    # once the ratio settles, well before the preset's 60 orders.
     profile = load_atmosphere("earth-fog").optical_profile(np.array([650.0]))
+    tables = precompute_tables(profile, TableResolution().scaled(0.25), orders=60)
+    means = tables.order_mean_radiance[1:tables.orders_computed, 0]
+    assert tables.orders_computed < 60
+    assert np.all(np.diff(means[2:]) < 0.0)
+    assert 0.0 < tables.tail_share[0] < 0.5
+
+
+def test_orders_that_grow_are_refused_with_a_message_naming_the_cause():
+    # The safety net behind the test above: order means that grow twice in a row (what the
+    # trapezoid rule made of earth-fog) are refused in one line naming the solver that holds
+    # the atmosphere.
+    growing = np.array([[1.0], [1.3], [1.69], [2.2]])
     with pytest.raises(InputError, match="grow instead of converging.*--solver montecarlo"):
-        precompute_tables(profile, TableResolution().scaled(0.25), orders=20)
+        tables_module._check_converging(growing, np.array([650.0]))

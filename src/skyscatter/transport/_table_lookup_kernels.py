@@ -369,9 +369,8 @@ def lit_single_scattering(r, mu, mu_s, nu, d, hits_ground, bottom_radius, top_ra
                    observer, here, sun, dens, out)
 
 
-# The view table of `single_scattering_view_table`: rays that hit the ground on the
-# scattering table's mu mapping, the others on `_view_sky_theta`; the azimuth from the sun's
-# vertical plane uniform.
+# The view table of `single_scattering_view_table`: view zenith on the scattering table's mu
+# mapping (`scattering_mu_from_u`), the azimuth from the sun's vertical plane uniform.
 VIEW_TABLE_MU = 256
 VIEW_TABLE_PHI = 64
 # The view table holds log(value): in twilight the light of neighbouring directions differs by
@@ -381,32 +380,14 @@ VIEW_TABLE_PHI = 64
 VIEW_TABLE_FLOOR = 1e-300
 
 
-@njit(cache=True)
-def _view_sky_theta(x, theta_h):
-    """View zenith angle [rad] of entry x in [0, 1] of the sky half of the view table:
-    theta = theta_h (1 - (1 - x)^2), theta_h the horizon's zenith angle: uniform at the zenith
-    (the Bruneton mapping's first cells there are 18-26 deg wide, too coarse for the shadow's
-    edge crossing the zenith in twilight) and dense at the horizon."""
-    return theta_h * (1.0 - (1.0 - x) * (1.0 - x))
-
-
-@njit(cache=True)
-def _view_sky_axis(mu, theta_h, n_half):
-    """(i, a): lower entry and weight of the view zenith cosine mu on the sky half of the view
-    table (n_half entries; inverse of `_view_sky_theta`)."""
-    theta = math.acos(min(max(mu, -1.0), 1.0))
-    x = 1.0 - math.sqrt(max(1.0 - theta / theta_h, 0.0))
-    return linear_axis(x * (n_half - 1), n_half)
-
-
 @njit(parallel=True, cache=True)
 def single_scattering_view_table(r, mu_s, n_samples, tables):
     """`lit_single_scattering` for every view direction of one observer at radius r [m]
     inside the atmosphere with the sun at zenith cosine mu_s: (VIEW_TABLE_MU, VIEW_TABLE_PHI,
     n_s, n_wl), the logarithm of each value (floored at VIEW_TABLE_FLOOR), on view zenith
-    cosines mu (first half: rays that hit the ground, `scattering_mu_from_u`; second half:
-    the others, `_view_sky_theta`) x azimuths phi = pi k / (VIEW_TABLE_PHI - 1)
-    from the sun's vertical plane, nu = mu mu_s + sqrt((1 - mu^2)(1 - mu_s^2)) cos phi. For one
+    cosines mu on the scattering table's mapping (`scattering_mu_from_u`) x azimuths
+    phi = pi k / (VIEW_TABLE_PHI - 1) from the sun's vertical plane,
+    nu = mu mu_s + sqrt((1 - mu^2)(1 - mu_s^2)) cos phi. For one
     observer and sun the single scattering depends on (mu, phi) only, so a frame marches
     16 k rays instead of one per pixel and `view_table_lookup` interpolates (the sky-view
     table of Hillaire 2020, "A scalable and production ready sky and atmosphere rendering
@@ -419,20 +400,14 @@ def single_scattering_view_table(r, mu_s, n_samples, tables):
     n_wl = transmittance.shape[2]
     table = np.zeros((VIEW_TABLE_MU, VIEW_TABLE_PHI, n_s, n_wl))
     sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-    half = VIEW_TABLE_MU // 2
-    theta_h = math.acos(horizon_cos_zenith(r, bottom_radius))
     for i in prange(VIEW_TABLE_MU):
         samples = np.empty(n_samples + 8)
         observer = np.empty(n_wl)
         here = np.empty(n_wl)
         sun = np.empty(n_wl)
         dens = np.empty(density.shape[0])
-        if i < half:
-            mu, hits_ground = scattering_mu_from_u((i + 0.5) / VIEW_TABLE_MU, r, bottom_radius,
-                                                   top_radius, VIEW_TABLE_MU)
-        else:
-            mu = math.cos(_view_sky_theta((i - half) / (half - 1.0), theta_h))
-            hits_ground = False
+        mu, hits_ground = scattering_mu_from_u((i + 0.5) / VIEW_TABLE_MU, r, bottom_radius,
+                                               top_radius, VIEW_TABLE_MU)
         sin_v = math.sqrt(max(1.0 - mu * mu, 0.0))
         if hits_ground:
             d = distance_to_bottom_boundary(r, mu, bottom_radius)
@@ -457,11 +432,7 @@ def view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius, t
     """Lookup of `single_scattering_view_table` for the ray (r, mu, nu) of its observer,
     bilinear in the logarithm (geometric interpolation), into out (n_s, n_wl)."""
     n_mu, n_phi = view_table.shape[0], view_table.shape[1]
-    if hits_ground:
-        i, a = mu_axis(r, mu, True, bottom_radius, top_radius, n_mu)
-    else:
-        i, a = _view_sky_axis(mu, math.acos(horizon_cos_zenith(r, bottom_radius)), n_mu // 2)
-        i += n_mu // 2
+    i, a = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
     spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
     cos_phi = 1.0
     if spread > 1e-12:

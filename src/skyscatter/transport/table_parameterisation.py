@@ -26,11 +26,16 @@ Transmittance table (r, mu), rays that do not hit the ground only:
 Scattering table (r, mu, mu_s, nu), 4-D with axes (u_r, u_mu, u_mu_s, u_nu):
   u_r = tc(rho / H, n_r);
   rays hitting the ground use the lower half of the mu axis,
-    u_mu = 1/2 - 1/2 tc((d - d_min) / (d_max - d_min), n_mu / 2),
-    d = distance to the ground, d_min = r - R_b, d_max = rho;
+    u_mu = 1/2 - 1/2 tc(1 - sqrt(1 - (pi - theta) / (pi - theta_h)), n_mu / 2),
   other rays the upper half,
-    u_mu = 1/2 + 1/2 tc((d - d_min) / (d_max - d_min), n_mu / 2),
-    d = distance to the top, d_min = R_t - r, d_max = rho + H;
+    u_mu = 1/2 + 1/2 tc(1 - sqrt(1 - theta / theta_h), n_mu / 2),
+    theta = acos(mu) the view zenith angle, theta_h = acos(-rho / r) the horizon's;
+  cells are uniform in angle at the zenith and the nadir (2.9 deg wide with 128 cells) and
+  crowd quadratically at the horizon (0.02 deg), as the sky-view table of Hillaire 2020
+  (doi:10.1111/cgf.14050, §5.3). Bruneton's u_mu, linear in the distance to the boundary,
+  makes the first cell next to the zenith 18-26 deg wide on Earth and nearly the whole
+  hemisphere inside a thin dense layer (a cloud deck 1 km thick: zenith to 80 deg), where
+  a forward-peaked radiance changes most (docs/physics/tables.md);
   the half is chosen by the caller's `ray_hits_ground` flag, never recomputed, so rays at the
   horizon stay on their side;
   u_mu_s = tc(max(1 - a / A, 0) / (1 + a), n_mu_s), a = (d_s - d_min) / (d_max - d_min) with
@@ -55,7 +60,9 @@ __all__ = [
     "COS_SUN_ZENITH_MIN",
     "COS_SUN_ZENITH_MIN_EARTH",
     "distance_to_bottom_boundary",
+    "angle_from_horizon_dense",
     "distance_to_top_boundary",
+    "horizon_dense_from_angle",
     "irradiance_r_mu_s_from_x",
     "irradiance_x_from_r_mu_s",
     "mu_s_mapping_constants",
@@ -210,48 +217,53 @@ def scattering_r_from_u(u_r, bottom_radius, top_radius, n_r):
 
 
 @njit(cache=True)
+def horizon_dense_from_angle(a):
+    """x = 1 - sqrt(1 - a): a in [0, 1], the angle from the zenith (or nadir) as a fraction of
+    the angle to the horizon, to a unit range uniform at the pole and dense at the horizon."""
+    return 1.0 - math.sqrt(max(1.0 - a, 0.0))
+
+
+@njit(cache=True)
+def angle_from_horizon_dense(x):
+    """Inverse of `horizon_dense_from_angle`: a = 1 - (1 - x)^2."""
+    return 1.0 - (1.0 - x) * (1.0 - x)
+
+
+@njit(cache=True)
+def _zenith_angles(r, mu, bottom_radius):
+    """(theta, theta_h): the view zenith angle of mu and the horizon's, acos(-rho / r), both as
+    atan2 (float32 twins keep their precision next to the zenith and the horizon) [rad]."""
+    rho = math.sqrt(max((r - bottom_radius) * (r + bottom_radius), 0.0))
+    mu = min(max(mu, -1.0), 1.0)
+    return (math.atan2(math.sqrt(max((1.0 - mu) * (1.0 + mu), 0.0)), mu),
+            math.atan2(bottom_radius, -rho))
+
+
+@njit(cache=True)
 def scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu):
-    """u_mu of the ray (r, mu): lower half of the axis for rays that hit the ground (distance
-    to the ground between r - R_b and rho), upper half for the others (distance to the top
-    between R_t - r and rho + H); module docstring. Bruneton 2017,
-    `GetScatteringTextureUvwzFromRMuMuSNu`."""
-    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
-    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
-    r_mu = r * mu
-    discriminant = r_mu * r_mu - r * r + bottom_radius * bottom_radius
+    """u_mu of the ray (r, mu): lower half of the axis for rays that hit the ground (nadir to
+    horizon), upper half for the others (zenith to horizon), each on the angle fraction
+    `horizon_dense_from_angle` (module docstring). `top_radius` is unused (the signature is
+    the one of the other axes)."""
+    theta, theta_h = _zenith_angles(r, mu, bottom_radius)
     half = n_mu // 2
     if ray_hits_ground:
-        d = -r_mu - math.sqrt(max(discriminant, 0.0))
-        d_min = r - bottom_radius
-        d_max = rho
-        x = 0.0 if d_max == d_min else (d - d_min) / (d_max - d_min)
+        x = horizon_dense_from_angle((math.pi - theta) / (math.pi - theta_h))
         return 0.5 - 0.5 * texture_coord_from_unit_range(min(max(x, 0.0), 1.0), half)
-    d = -r_mu + math.sqrt(max(discriminant + big_h * big_h, 0.0))
-    d_min = top_radius - r
-    d_max = rho + big_h
-    x = (d - d_min) / (d_max - d_min)
+    x = horizon_dense_from_angle(theta / theta_h)
     return 0.5 + 0.5 * texture_coord_from_unit_range(min(max(x, 0.0), 1.0), half)
 
 
 @njit(cache=True)
 def scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu):
     """Inverse of `scattering_u_mu` at radius r: (mu [-], ray_hits_ground)."""
-    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
-    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
+    _, theta_h = _zenith_angles(r, 1.0, bottom_radius)
     half = n_mu // 2
     if u_mu < 0.5:
-        d_min = r - bottom_radius
-        d_max = rho
-        d = d_min + (d_max - d_min) * unit_range_from_texture_coord(1.0 - 2.0 * u_mu, half)
-        if d <= 0.0:
-            return -1.0, True
-        return min(max(-(rho * rho + d * d) / (2.0 * r * d), -1.0), 1.0), True
-    d_min = top_radius - r
-    d_max = rho + big_h
-    d = d_min + (d_max - d_min) * unit_range_from_texture_coord(2.0 * u_mu - 1.0, half)
-    if d <= 0.0:
-        return 1.0, False
-    return min(max((big_h * big_h - rho * rho - d * d) / (2.0 * r * d), -1.0), 1.0), False
+        a = angle_from_horizon_dense(unit_range_from_texture_coord(1.0 - 2.0 * u_mu, half))
+        return math.cos(math.pi - a * (math.pi - theta_h)), True
+    a = angle_from_horizon_dense(unit_range_from_texture_coord(2.0 * u_mu - 1.0, half))
+    return math.cos(a * theta_h), False
 
 
 @njit(cache=True)

@@ -51,25 +51,30 @@ float scattering_u_r(float r, float bottom_radius, float top_radius, float n_r) 
     return texture_coord_from_unit_range(min(rho / big_h, 1.0), n_r);
 }
 
+// twin of _zenith_angles: (theta, theta_h)
+vec2 zenith_angles(float r, float mu, float bottom_radius) {
+    float c = clamp(mu, -1.0, 1.0);
+    return vec2(atan(sqrt(max((1.0 - c) * (1.0 + c), 0.0)), c),
+                atan(bottom_radius, -horizon_distance(r, bottom_radius)));
+}
+
+// twin of horizon_dense_from_angle
+float horizon_dense_from_angle(float a) {
+    return 1.0 - sqrt(max(1.0 - a, 0.0));
+}
+
 // twin of scattering_u_mu
 float scattering_u_mu(float r, float mu, bool ray_hits_ground, float bottom_radius,
                       float top_radius, float n_mu) {
-    float big_h = horizon_distance(top_radius, bottom_radius);
-    float rho = horizon_distance(r, bottom_radius);
-    float r_mu = r * mu;
-    float discriminant = r_mu * r_mu - (r - bottom_radius) * (r + bottom_radius);
+    vec2 angles = zenith_angles(r, mu, bottom_radius);
+    float theta = angles.x;
+    float theta_h = angles.y;
     float half_n = floor(n_mu / 2.0);
     if (ray_hits_ground) {
-        float d = -r_mu - sqrt(max(discriminant, 0.0));
-        float d_min = r - bottom_radius;
-        float d_max = rho;
-        float x = d_max == d_min ? 0.0 : (d - d_min) / (d_max - d_min);
+        float x = horizon_dense_from_angle((PI - theta) / (PI - theta_h));
         return 0.5 - 0.5 * texture_coord_from_unit_range(clamp(x, 0.0, 1.0), half_n);
     }
-    float d = -r_mu + sqrt(max(discriminant + big_h * big_h, 0.0));
-    float d_min = top_radius - r;
-    float d_max = rho + big_h;
-    float x = (d - d_min) / (d_max - d_min);
+    float x = horizon_dense_from_angle(theta / theta_h);
     return 0.5 + 0.5 * texture_coord_from_unit_range(clamp(x, 0.0, 1.0), half_n);
 }
 
