@@ -165,36 +165,34 @@ def _exponential_end_weights(a):
 
 
 @njit(cache=True)
-def _view_transmittance(total, t, col_view, extinction, beta, out):
-    """out[j, w]: the weight [m] of S(p_j) in int_0^d beta(p) S(p) T(x, p) dt over the samples
-    of `_ray_samples` (distances t, view columns col_view), with S linear between samples,
-    beta (total, n_wl) exponential between them (linear where one end is 0) and T exact inside
-    each interval (optical depth linear in t). So sum_j out[j] is the light a ray scatters,
-    1 - T(d) for a homogeneous conservative layer, however few samples cross an optically
-    thick one (the trapezoid rule gains up to 50 % per interval there), and an exponential
-    density profile is not overestimated between samples. beta = 1: the weights of S alone."""
+def _view_transmittance(total, dens, col_view, extinction, beta, out):
+    """out[j, w]: the weight of S(p_j) in int_0^d beta(p) S(p) T(x, p) dt over the samples of
+    `_ray_samples` (densities dens, view columns col_view), integrated in optical depth:
+    int beta S T dt = int (beta / beta_e) S e^(-tau) dtau, with (beta / beta_e) S linear in
+    tau between samples (beta_e = sum_c dens_c extinction_c at the samples, beta (total, n_wl))
+    and each interval's optical depth from the columns, exact for any density between the
+    samples. An interval scatters at most the light its own column takes out of the ray, so
+    a layer thinner than the samples (fog, a cloud deck) cannot create light, and the orders
+    of an optically thick layer converge."""
     n_c, n_wl = extinction.shape
     out[:total, :] = 0.0
     for w in range(n_wl):
+        ratio_next = 0.0
         tau_next = 0.0
-        for c in range(n_c):
-            tau_next += extinction[c, w] * col_view[0, c]
-        for j in range(total - 1):
-            tau = tau_next
-            tau_next = 0.0
+        for j in range(total):
+            extinct = 0.0
+            tau = 0.0
             for c in range(n_c):
-                tau_next += extinction[c, w] * col_view[j + 1, c]
-            a = max(tau_next - tau, 0.0)
-            base = math.exp(-tau) * (t[j + 1] - t[j])
-            b0, b1 = beta[j, w], beta[j + 1, w]
-            if b0 > 0.0 and b1 > 0.0:
-                w0, w1 = _exponential_end_weights(a - math.log(b1 / b0))
-                out[j, w] += base * b0 * w0
-                out[j + 1, w] += base * b0 * w1
-            else:
+                extinct += dens[j, c] * extinction[c, w]
+                tau += extinction[c, w] * col_view[j, c]
+            ratio = beta[j, w] / extinct if extinct > 0.0 else 0.0
+            if j > 0:
+                a = max(tau - tau_next, 0.0)
                 w0, w1 = _exponential_end_weights(a)
-                out[j, w] += base * b0 * w0
-                out[j + 1, w] += base * b1 * w1
+                base = math.exp(-tau_next) * a
+                out[j - 1, w] += base * w0 * ratio_next
+                out[j, w] += base * w1 * ratio
+            ratio_next, tau_next = ratio, tau
 
 
 @njit(cache=True)
@@ -229,7 +227,7 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
                 for c in range(n_c):
                     value += dens[j, c] * coefficients[k, c, w]
                 beta[j, w] = value
-        _view_transmittance(total, t, col_view, extinction, beta, view[k])
+        _view_transmittance(total, dens, col_view, extinction, beta, view[k])
     return r, mu, total, t, radius, mu_t, dens, view
 
 
@@ -360,7 +358,10 @@ def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
     medium has more than the exact first order's smooth part (`phase_truncation`). Tables
     (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl) without phase functions, as `single_scattering_table`
     writes them; kept = 1 - f (n_s, n_wl); p* from `smooth_phase` (n_s, n_angle, n_wl) at each
-    cell's nu. `grid`: a `TableGrid`."""
+    cell's nu. `grid`: a `TableGrid`. The scaled medium attenuates less, so each difference is
+    >= 0; where the true one is ~0 (air above the particles) the two quadratures can differ by
+    a hair in either direction (measured: 33 of 131 072 cells of a small table, down to
+    -0.8 % of its largest value), which is clipped to 0."""
     n_r, n_mu, n_mu_s, n_nu, n_s, n_wl = single.shape
     bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
     out = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
@@ -378,9 +379,9 @@ def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
                 phase_values(smooth_phase, nu, phase)
                 for s in range(n_s):
                     for w in range(n_wl):
-                        out[i_r, i_mu, i_s, i_nu, w] += phase[s * n_wl + w] * (
+                        out[i_r, i_mu, i_s, i_nu, w] += phase[s * n_wl + w] * max(
                             scaled_single[i_r, i_mu, i_s, i_nu, s, w]
-                            - kept[s, w] * single[i_r, i_mu, i_s, i_nu, s, w])
+                            - kept[s, w] * single[i_r, i_mu, i_s, i_nu, s, w], 0.0)
     return out
 
 
