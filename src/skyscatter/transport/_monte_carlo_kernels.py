@@ -114,13 +114,11 @@ def pick_interval(cdf, n, u):
 
 @njit(cache=True)
 def sample_phase(cdf, cos_grid, u):
-    """(mu, proposal pdf [sr^-1]) drawn with uniform u from the cumulative masses `cdf`
-    (n_angle,) over the nodes cos_grid = cos(theta_i)."""
+    """mu drawn with uniform u from the cumulative masses `cdf` (n_angle,) over the nodes
+    cos_grid = cos(theta_i); its density is `proposal_density`."""
     k, mass = pick_interval(cdf, cdf.shape[0], u)
     f = min(1.0, max(0.0, (u - cdf[k]) / mass)) if mass > 0.0 else 0.5
-    mu = cos_grid[k] + f * (cos_grid[k + 1] - cos_grid[k])
-    pdf = mass / (TWO_PI * (cos_grid[k] - cos_grid[k + 1]))
-    return mu, pdf
+    return cos_grid[k] + f * (cos_grid[k + 1] - cos_grid[k])
 
 
 @njit(cache=True)
@@ -194,6 +192,13 @@ def roulette(weight):
     return weight / survive
 
 
+@njit(cache=True)
+def mixed_phase(w, nu, dens, scattering, scatterers, phase):
+    """sum_c beta_s,c p_c(nu) [m^-1 sr^-1] at the densities `dens`."""
+    total = 0.0
+    for s in range(scatterers.shape[0]):
+        total += scattering[scatterers[s], w] * dens[scatterers[s]] * phase_value(phase[s, w], nu)
+    return total
 
 
 @njit(cache=True)
@@ -223,7 +228,7 @@ def sun_centred_direction(w, sun, sun_share, cdf, cos_grid):
     """A direction drawn from the sun-centred proposal: a constituent with probability
     sun_share[c, w], then its phase-function proposal about the sun direction."""
     chosen = pick_row(sun_share[:, w], np.random.random())
-    mu, _ = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
+    mu = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
     return rotate(sun[0], sun[1], sun[2], mu, TWO_PI * np.random.random())
 
 
@@ -247,16 +252,15 @@ def scatter_direction(dx, dy, dz, w, bs, dens, scattering, scatterers, phase, cd
             if pick < 0.0:
                 chosen = s
                 break
-        mu, _ = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
+        mu = sample_phase(cdf[chosen, w], cos_grid, np.random.random())
         nx, ny, nz = rotate(dx, dy, dz, mu, TWO_PI * np.random.random())
     nu = dx * nx + dy * ny + dz * nz
-    p = 0.0
+    p = mixed_phase(w, nu, dens, scattering, scatterers, phase) / bs
     q = 0.0
     for s in range(n_s):
-        share = scattering[scatterers[s], w] * dens[scatterers[s]] / bs
-        p += share * phase_value(phase[s, w], nu)
-        q += share * proposal_density(cdf[s, w], cos_grid, nu)
-    q *= 1.0 - sun_probability
+        q += (scattering[scatterers[s], w] * dens[scatterers[s]]
+              * proposal_density(cdf[s, w], cos_grid, nu))
+    q *= (1.0 - sun_probability) / bs
     if sun_probability > 0.0:
         nu_sun = sun[0] * nx + sun[1] * ny + sun[2] * nz
         q += sun_probability * sun_proposal_density(w, nu_sun, sun_share, cdf, cos_grid)
@@ -283,15 +287,6 @@ def reflect_direction(nx, ny, nz, w, sun, sun_share, cdf, cos_grid, sun_probabil
         q += sun_probability * sun_proposal_density(
             w, sun[0] * x + sun[1] * y + sun[2] * z, sun_share, cdf, cos_grid)
     return x, y, z, p / q
-
-
-@njit(cache=True)
-def mixed_phase(w, nu, dens, scattering, scatterers, phase):
-    """sum_c beta_s,c p_c(nu) [m^-1 sr^-1] at the densities `dens`."""
-    total = 0.0
-    for s in range(scatterers.shape[0]):
-        total += scattering[scatterers[s], w] * dens[scatterers[s]] * phase_value(phase[s, w], nu)
-    return total
 
 
 @njit(cache=True)
