@@ -116,8 +116,8 @@ def sun_proposal_shares(profile: OpticalProfile, scatterers: np.ndarray,
     depth = np.asarray(profile.scattering_per_density, dtype=np.float64) * column[:, None]
     weight = depth[scatterers] * phase[:, :, 0]
     total = weight.sum(axis=0)
-    return np.ascontiguousarray(np.where(total > 0.0, weight / np.where(total > 0.0, total, 1.0),
-                                         1.0 / scatterers.size))
+    shares = np.full_like(weight, 1.0 / scatterers.size)
+    return np.divide(weight, total, out=shares, where=total > 0.0)
 
 
 class MonteCarloSolver:
@@ -286,9 +286,9 @@ class MonteCarloSolver:
         with np.errstate(divide="ignore", invalid="ignore"):
             relative = np.where(mean > 0.0, error / mean, 0.0).max(axis=1)
         needed = paths * (relative / self.target_relative_error) ** 2
-        extra = np.ceil((np.minimum(needed, self.max_samples) - paths) / self.n_samples)
-        extra = np.where(relative > self.target_relative_error, np.maximum(extra, 0.0), 0.0)
-        return np.minimum(extra * self.n_samples, self.max_samples - paths).astype(np.int64)
+        extra = np.ceil((needed - paths) / self.n_samples) * self.n_samples
+        return np.where(relative > self.target_relative_error,
+                        np.minimum(extra, self.max_samples - paths), 0).astype(np.int64)
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
                       distance_m: ArrayLike = np.inf, n_samples: int = 256) -> np.ndarray:
