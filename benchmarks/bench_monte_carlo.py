@@ -34,7 +34,7 @@ from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.optics.phase import HenyeyGreensteinPhase
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.transport.geometry import local_frame_directions
-from skyscatter.transport.monte_carlo import MonteCarloSolver
+from skyscatter.transport.monte_carlo import SUN_SAMPLING_PROBABILITY, MonteCarloSolver
 from skyscatter.transport.single_scattering import observer_position
 
 N_PATHS = 4000
@@ -106,7 +106,7 @@ def noise(seeds: int, paths: int, long_paths: int) -> None:
                 origin, views, sun)
             lit = long > 0.0
             parts = []
-            for eps in (0.0, MonteCarloSolver(profile).sun_sampling_probability):
+            for eps in (0.0, SUN_SAMPLING_PROBABILITY):
                 start = time.perf_counter()
                 runs = [MonteCarloSolver(profile, n_samples=paths, seed=seed + 1,
                                          sun_sampling_probability=eps
