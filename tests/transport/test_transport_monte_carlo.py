@@ -171,14 +171,14 @@ def test_standard_errors_cover_the_spread_of_seeds_with_a_forward_peak():
     means, errors = (np.array(values) for values in zip(*runs, strict=True))
     z = (means - reference) / np.hypot(errors, reference_error)
     assert np.mean(np.abs(z) <= 2.0) >= 0.9
-    assert np.median(errors / means) < 0.05  # the noise is low, not just honest
+    assert np.median(errors / means) < 0.05  # the noise is low, not just honest (measured 3.7 %)
 
 
 def test_more_paths_go_where_the_relative_error_is_above_the_target(earth_profile):
     # target_relative_error: rays above it get more paths (multiples of n_samples, at most
     # max_samples). Expected: every value within 1.5x the target (the extra paths are
-    # predicted from the first estimate of the variance), the mean within 4 standard errors
-    # of a plain run with 20x the paths.
+    # predicted from the first estimate of the variance; measured: largest 0.99 %), the mean
+    # within 4 standard errors of a plain run with 20x the paths (measured: largest 2.5).
     sun = local_frame_directions(np.radians(30.0), 0.0)
     adaptive = MonteCarloSolver(earth_profile, n_samples=200, seed=9,
                                 target_relative_error=0.01)
@@ -188,12 +188,15 @@ def test_more_paths_go_where_the_relative_error_is_above_the_target(earth_profil
     long, long_error = MonteCarloSolver(earth_profile, n_samples=4000, seed=10
                                         ).sky_radiance_with_error(GROUND, VIEWS, sun)
     assert np.all(error <= 0.015 * mean)
-    assert np.median(plain_error / plain) > 0.02  # without the target it would be noisier
+    # Without the target it would be noisier: measured 2.01 %, a thin margin, so a change to
+    # the case or the path count may need a new threshold here (the target is 1 %).
+    assert np.median(plain_error / plain) > 0.02
     assert np.all(np.abs(mean - long) <= 4.0 * np.hypot(error, long_error))
     capped = MonteCarloSolver(earth_profile, n_samples=200, seed=9, target_relative_error=0.001,
                               max_samples=400)
     _, capped_error = capped.sky_radiance_with_error(GROUND, VIEWS, sun)
-    # At most twice the paths: the error falls by at most sqrt(2), plus noise in its estimate.
+    # At most twice the paths: the error falls by at most sqrt(2), plus noise in its estimate
+    # (measured: smallest ratio to plain_error / sqrt(2) 0.88).
     assert np.all(capped_error >= plain_error / np.sqrt(2.0) * 0.8)
 
 
