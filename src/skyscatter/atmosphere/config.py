@@ -310,9 +310,9 @@ def _parse_constituent(table: ConfigTable, top_m: float) -> Constituent:
     kind = optics_table.text("type", choices=("rayleigh", "absorber", "angstrom", "coefficients",
                                               "mie"))
     # A layer's column is known exactly (and kept on any altitude levels); others are sampled.
-    column = (profile.column if isinstance(profile, UniformLayerProfile)
-              else vertical_column(profile, top_m))
-    target_column = column if isinstance(profile, UniformLayerProfile) and column > 0 else None
+    exact = isinstance(profile, UniformLayerProfile)
+    column = profile.column if exact else vertical_column(profile, top_m)
+    target_column = column if exact and column > 0.0 else None
     zero = f"a density profile that is not zero everywhere ({table.prefix}.density is)"
     if kind == "absorber" and table.has("column_dobson"):
         if column <= 0.0:

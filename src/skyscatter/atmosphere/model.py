@@ -139,8 +139,9 @@ class Atmosphere:
         """Uniform altitude levels that resolve every constituent: `DEFAULT_PROFILE_LEVELS`, or
         enough for the finest `altitude_step_m` a profile asks for, at most
         `MAX_PROFILE_LEVELS`."""
-        steps = [getattr(c.profile, "altitude_step_m", math.inf) for c in self.constituents]
-        needed = math.ceil(self.top_altitude_m / min(steps)) + 1 if min(steps) < math.inf else 0
+        step = min((getattr(c.profile, "altitude_step_m", math.inf) for c in self.constituents),
+                   default=math.inf)
+        needed = math.ceil(self.top_altitude_m / step) + 1  # 1 when no profile asks (step inf)
         return min(max(DEFAULT_PROFILE_LEVELS, needed), MAX_PROFILE_LEVELS)
 
     def optical_profile(self, wavelengths_nm: ArrayLike, n_levels: int | None = None,
@@ -162,11 +163,11 @@ class Atmosphere:
             if constituent.vertical_column is not None:
                 sampled = np.trapezoid(row, altitudes)
                 if sampled <= 0.0 < constituent.vertical_column:
+                    needed = self.profile_levels
                     raise InputError(
                         f"n_levels = {n_levels} misses constituent {constituent.name!r}: its "
-                        f"density is zero on every level; use n_levels >= "
-                        f"{self.profile_levels} (or None)", key="n_levels", value=n_levels,
-                        allowed=f">= {self.profile_levels}")
+                        f"density is zero on every level; use n_levels >= {needed} (or None)",
+                        key="n_levels", value=n_levels, allowed=f">= {needed}")
                 row *= constituent.vertical_column / sampled
 
         def spectrum(function) -> np.ndarray:

@@ -210,11 +210,6 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
     radiance : ndarray, shape (n_view, n_az, n_wl)
         Diffuse spectral radiance. [W m^-2 sr^-1 nm^-1]
     """
-    try:
-        from PythonicDISORT import pydisort
-    except ImportError as error:  # pragma: no cover - depends on the environment
-        raise ImportError("skyscatter.validate.disort needs PythonicDISORT: "
-                          "pip install PythonicDISORT") from error
     if not 0.0 <= sun_zenith_rad < 0.5 * np.pi:
         raise InputError(f"disort_sky_radiance: sun_zenith_rad = {sun_zenith_rad} must lie in "
                          "[0, pi/2)", key="sun_zenith_rad", value=sun_zenith_rad,
@@ -231,19 +226,13 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
     half = n_streams // 2
     radiance = []
     for w in range(profile.n_wavelengths):
-        moments = layers.moments[:, :, w]
-        tau = layers.optical_depth[:, w]
-        with warnings.catch_warnings():
-            # Pure-air layers have omega = MAX_SINGLE_SCATTERING_ALBEDO by design.
-            warnings.filterwarnings("ignore", message="Some delta-scaled single-scattering")
-            mu, _, _, _, u = pydisort(
-                tau, layers.single_scattering_albedo[:, w], n_streams, moments,
-                mu0, float(profile.toa_irradiance[w]), 0.0,
-                f_arr=np.clip(moments[:, n_streams], 0.0, None), NT_cor=True,
-                BDRF_Fourier_modes=[float(profile.ground_albedo[w])])
+        mu, _, _, _, u = _pydisort(layers, w, n_streams, mu0,
+                                   float(profile.toa_irradiance[w]),
+                                   float(profile.ground_albedo[w]), NT_cor=True)
         # Rows half: hold the downward nodes mu = -mu_i with mu_i increasing: reversed, the
         # view zenith angle increases.
-        radiance.append(np.reshape(u(tau[-1], phi), (n_streams, phi.size))[half:][::-1])
+        radiance.append(np.reshape(u(layers.optical_depth[-1, w], phi),
+                                   (n_streams, phi.size))[half:][::-1])
     view_zenith = np.arccos(-mu[half:][::-1])
     keep = view_zenith <= max_view_zenith_rad
     return view_zenith[keep], np.stack(radiance, axis=-1)[keep]
@@ -258,25 +247,38 @@ def disort_fluxes(layers: PlaneParallelLayers, toa_irradiance: ArrayLike, sun_ze
     Lambertian ground of `ground_albedo` (n_wl,) [-]. Delta-M with the moment `n_streams`, as in
     `disort_sky_radiance`; PythonicDISORT counts the light the truncated peak keeps forward as
     diffuse, so the direct beam is the true exp(-tau / mu0) one."""
-    from PythonicDISORT import pydisort
-
     mu0 = float(np.cos(sun_zenith_rad))
     irradiance = np.broadcast_to(np.asarray(toa_irradiance, dtype=np.float64),
                                  layers.optical_depth.shape[1:])
     albedo = np.broadcast_to(np.asarray(ground_albedo, dtype=np.float64), irradiance.shape)
     up, diffuse, direct = (np.empty(irradiance.shape) for _ in range(3))
     for w in range(irradiance.size):
-        moments = layers.moments[:, :, w]
-        tau = layers.optical_depth[:, w]
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message="Some delta-scaled single-scattering")
-            _, flux_up, flux_down, _ = pydisort(
-                tau, layers.single_scattering_albedo[:, w], n_streams, moments, mu0,
-                float(irradiance[w]), 0.0, f_arr=np.clip(moments[:, n_streams], 0.0, None),
-                only_flux=True, BDRF_Fourier_modes=[float(albedo[w])])
+        _, flux_up, flux_down, _ = _pydisort(layers, w, n_streams, mu0,
+                                             float(irradiance[w]), float(albedo[w]),
+                                             only_flux=True)
         up[w] = flux_up(0.0)
-        diffuse[w], direct[w] = flux_down(tau[-1])
+        diffuse[w], direct[w] = flux_down(layers.optical_depth[-1, w])
     return up, diffuse, direct
+
+
+def _pydisort(layers: PlaneParallelLayers, w: int, n_streams: int, mu0: float,
+              irradiance: float, ground_albedo: float, **options):
+    """PythonicDISORT's `pydisort` at wavelength index `w` of `layers`: beam `irradiance` at
+    cosine `mu0`, no isotropic source, Lambertian ground, delta-M with the moment `n_streams`;
+    `options` are pydisort's (NT_cor, only_flux). Returns what pydisort returns."""
+    try:
+        from PythonicDISORT import pydisort
+    except ImportError as error:  # pragma: no cover - depends on the environment
+        raise ImportError("skyscatter.validate.disort needs PythonicDISORT: "
+                          "pip install PythonicDISORT") from error
+    moments = layers.moments[:, :, w]
+    with warnings.catch_warnings():
+        # Pure-air layers have omega = MAX_SINGLE_SCATTERING_ALBEDO by design.
+        warnings.filterwarnings("ignore", message="Some delta-scaled single-scattering")
+        return pydisort(layers.optical_depth[:, w], layers.single_scattering_albedo[:, w],
+                        n_streams, moments, mu0, irradiance, 0.0,
+                        f_arr=np.clip(moments[:, n_streams], 0.0, None),
+                        BDRF_Fourier_modes=[ground_albedo], **options)
 
 
 def plane_parallel_single_scattering(layers: PlaneParallelLayers, toa_irradiance: ArrayLike,

@@ -98,9 +98,7 @@ class SkyGrid:
     @property
     def aureole(self) -> np.ndarray:
         """Mask of the aureole's directions (n,)."""
-        if self.from_sun_deg is None:
-            return np.zeros(self.view_zenith_deg.size, dtype=bool)
-        return np.isfinite(self.from_sun_deg)
+        return np.isfinite(_from_sun(self))
 
     def joined(self, other: SkyGrid) -> SkyGrid:
         """This grid's directions followed by `other`'s."""
@@ -110,6 +108,7 @@ class SkyGrid:
 
 
 def _from_sun(grid: SkyGrid) -> np.ndarray:
+    """`grid.from_sun_deg`, NaN for every direction of a grid without the aureole (n,)."""
     if grid.from_sun_deg is None:
         return np.full(grid.view_zenith_deg.size, np.nan)
     return grid.from_sun_deg
@@ -529,7 +528,7 @@ def _notes(comparisons: list[SolverComparison]) -> list[str]:
             "is not held to a limit only because the issue sets the limits for Earth. Costa's "
             "dust is thin (optical depth about 0.18), and the 6 orders of the preset leave "
             "< 0.5 % out (docs/physics/orders.md).")
-    for name in FORWARD_PEAKED[1:]:
+    for name in (n for n in FORWARD_PEAKED if n != EARTH_AEROSOL):  # Earth's are checked
         rows = [c for c in day if c.atmosphere == name]
         if rows:
             notes.append(_peaked_note(name, rows))
