@@ -26,6 +26,7 @@ from skyscatter.validate.disort import (
     plane_parallel_layers,
     plane_parallel_single_scattering,
 )
+from skyscatter.validate.slab import slab_profile
 
 PERCENT = 0.01
 WAVELENGTHS_NM = np.array([440.0, 680.0])
@@ -45,19 +46,6 @@ def comparison(earth):
     solver = LutSolver(earth, orders=8)
     return compare_with_disort(solver, earth, np.radians(SUN_ZENITH_DEG),
                                np.radians(AZIMUTH_DEG), max_view_zenith_rad=np.radians(70.0))
-
-
-def thin_slab(optical_depth: float, g: float, single_scattering_albedo: float) -> OpticalProfile:
-    """A homogeneous 1 km slab of one Henyey-Greenstein scatterer over a black ground."""
-    altitudes = np.linspace(0.0, 1000.0, 11)
-    extinction = optical_depth / 1000.0
-    return OpticalProfile(
-        wavelengths_nm=np.array([550.0]), bottom_radius_m=6.371e6, top_radius_m=6.372e6,
-        altitudes_m=altitudes, density=np.ones((1, altitudes.size)),
-        extinction_per_density=np.array([[extinction]]),
-        scattering_per_density=np.array([[extinction * single_scattering_albedo]]),
-        phases=(HenyeyGreensteinPhase(g),), names=("haze",), ground_albedo=np.zeros(1),
-        toa_irradiance=np.array([1.7]), sun_angular_radius_rad=0.0)
 
 
 # --------------------------------------------------------------------------------------------
@@ -91,7 +79,7 @@ def test_disort_set_up_matches_closed_form_single_scattering_of_a_thin_slab():
     # Fixes the conventions: beam irradiance normal to the beam, phase normalised over 4 pi sr,
     # azimuth 0 = looking towards the sun (HG g = 0.5 makes it 5x brighter than 180 deg at view
     # zenith 29 deg). At optical depth 1e-4 the orders >= 2 add at most 0.026 % (measured).
-    profile = thin_slab(optical_depth=1e-4, g=0.5, single_scattering_albedo=0.5)
+    profile = slab_profile(1e-4, g=0.5, single_scattering_albedo=0.5)  # 1 km, black ground
     azimuth = np.radians([0.0, 90.0, 180.0])
     sun_zenith = np.radians(30.0)
     view_zenith, disort = disort_sky_radiance(profile, sun_zenith, azimuth, np.radians(80.0))

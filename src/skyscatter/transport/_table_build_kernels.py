@@ -152,9 +152,9 @@ def _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, d
 @njit(cache=True)
 def _exponential_end_weights(a):
     """(int_0^1 (1 - s) e^(-a s) ds, int_0^1 s e^(-a s) ds): the weights of the two ends of
-    an interval for an integrand linear between them times e^(-a s), exact for any real a
-    (series for |a| < 1e-3, where the closed form cancels)."""
-    if abs(a) < 1e-3:
+    an interval of optical depth a >= 0 for an integrand linear between them times the
+    transmittance (series below a = 1e-3, where the closed form cancels)."""
+    if a < 1e-3:
         i0 = 1.0 - a / 2.0 + a * a / 6.0
         i1 = 0.5 - a / 3.0 + a * a / 8.0
     else:
@@ -165,34 +165,28 @@ def _exponential_end_weights(a):
 
 
 @njit(cache=True)
-def _view_transmittance(total, dens, col_view, extinction, beta, out):
-    """out[j, w]: the weight of S(p_j) in int_0^d beta(p) S(p) T(x, p) dt over the samples of
-    `_ray_samples` (densities dens, view columns col_view), integrated in optical depth:
-    int beta S T dt = int (beta / beta_e) S e^(-tau) dtau, with (beta / beta_e) S linear in
-    tau between samples (beta_e = sum_c dens_c extinction_c at the samples, beta (total, n_wl))
-    and each interval's optical depth from the columns, exact for any density between the
-    samples. An interval scatters at most the light its own column takes out of the ray, so
-    a layer thinner than the samples (fog, a cloud deck) cannot create light, and the orders
-    of an optically thick layer converge."""
-    n_c, n_wl = extinction.shape
+def _ray_weights(total, tau, extinct, beta, out):
+    """out[j, w]: the weight of S(p_j) in int_0^d beta(p) S(p) T(x, p) dt over `total` ray
+    samples with optical depths tau (total, n_wl) from the ray's start (from the columns) and
+    extinction coefficients extinct (total, n_wl), taken in optical depth:
+    int beta S T dt = int (beta / beta_e) S e^(-tau) dtau with (beta / beta_e) S linear in tau
+    between samples (beta (total, n_wl)), exact in the transmittance for any density between
+    the samples. An interval scatters at most the light its own column takes out of the ray,
+    so a layer thinner than the samples (fog, a cloud deck) cannot create light, and the
+    orders of an optically thick layer converge."""
+    n_wl = tau.shape[1]
     out[:total, :] = 0.0
     for w in range(n_wl):
-        ratio_next = 0.0
-        tau_next = 0.0
+        ratio_before = 0.0
         for j in range(total):
-            extinct = 0.0
-            tau = 0.0
-            for c in range(n_c):
-                extinct += dens[j, c] * extinction[c, w]
-                tau += extinction[c, w] * col_view[j, c]
-            ratio = beta[j, w] / extinct if extinct > 0.0 else 0.0
+            ratio = beta[j, w] / extinct[j, w] if extinct[j, w] > 0.0 else 0.0
             if j > 0:
-                a = max(tau - tau_next, 0.0)
+                a = max(tau[j, w] - tau[j - 1, w], 0.0)
                 w0, w1 = _exponential_end_weights(a)
-                base = math.exp(-tau_next) * a
-                out[j - 1, w] += base * w0 * ratio_next
+                base = math.exp(-tau[j - 1, w]) * a
+                out[j - 1, w] += base * w0 * ratio_before
                 out[j, w] += base * w1 * ratio
-            ratio_next, tau_next = ratio, tau
+            ratio_before = ratio
 
 
 @njit(cache=True)
@@ -201,7 +195,7 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
     view) with its `total` samples (`_ray_samples`) and, for each k of `coefficients` (n_k,
     n_c, n_wl), the weights view[k] (total, n_wl) of a source S at the samples in
     int beta_k S T dt along the ray, beta_k = sum_c dens_c coefficients[k, c]
-    (`_view_transmittance`)."""
+    (`_ray_weights`)."""
     n_r, n_mu = grid.n_r, grid.n_mu
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
     extinction = medium.extinction
@@ -217,6 +211,17 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
     col_view = np.empty((n_max, n_c))
     total = _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, dens,
                          col_view)
+    tau = np.empty((total, n_wl))
+    extinct = np.empty((total, n_wl))
+    for j in range(total):
+        for w in range(n_wl):
+            depth = 0.0
+            coefficient = 0.0
+            for c in range(n_c):
+                depth += extinction[c, w] * col_view[j, c]
+                coefficient += extinction[c, w] * dens[j, c]
+            tau[j, w] = depth
+            extinct[j, w] = coefficient
     n_k = coefficients.shape[0]
     beta = np.empty((total, n_wl))
     view = np.empty((n_k, total, n_wl))
@@ -227,7 +232,7 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
                 for c in range(n_c):
                     value += dens[j, c] * coefficients[k, c, w]
                 beta[j, w] = value
-        _view_transmittance(total, dens, col_view, extinction, beta, view[k])
+        _ray_weights(total, tau, extinct, beta, view[k])
     return r, mu, total, t, radius, mu_t, dens, view
 
 
@@ -537,7 +542,8 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
 def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi):
     """One order of multiple scattering: int_0^d T(x, p) J(p, v) dt for every cell, with
     J(p, v) = beta_s(p) S(r, theta, mu_s, phi): beta_s(p) = sum_c n_c(p) scattering[c] the
-    exact scattering coefficient at the sample, S the source function J / beta_s interpolated
+    scattering coefficient at the samples (weighed in by `_ray_weights`), S the source
+    function J / beta_s interpolated
     in `source` (n_r, n_theta, n_mu_s * n_phi * n_wl) (r, mu_s on the scattering-table nodes;
     theta = view zenith and phi = azimuth from the sun on regular grids over [0, pi]). For each
     ray sample the (r, theta) interpolation is done once, to a (mu_s, phi) slab shared by the
@@ -546,8 +552,7 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
     `RayMedium`."""
     n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
     bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
-    extinction = medium.extinction
-    n_c, n_wl = extinction.shape
+    n_wl = medium.extinction.shape[1]
     n_theta = source.shape[1]
     n_block = source.shape[2]
     table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)

@@ -59,10 +59,11 @@ from numba import njit
 __all__ = [
     "COS_SUN_ZENITH_MIN",
     "COS_SUN_ZENITH_MIN_EARTH",
-    "distance_to_bottom_boundary",
     "angle_from_horizon_dense",
+    "distance_to_bottom_boundary",
     "distance_to_top_boundary",
     "horizon_dense_from_angle",
+    "horizon_zenith_angle",
     "irradiance_r_mu_s_from_x",
     "irradiance_x_from_r_mu_s",
     "mu_s_mapping_constants",
@@ -230,22 +231,23 @@ def angle_from_horizon_dense(x):
 
 
 @njit(cache=True)
-def _zenith_angles(r, mu, bottom_radius):
-    """(theta, theta_h): the view zenith angle of mu and the horizon's, acos(-rho / r), both as
-    atan2 (float32 twins keep their precision next to the zenith and the horizon) [rad]."""
-    rho = math.sqrt(max((r - bottom_radius) * (r + bottom_radius), 0.0))
-    mu = min(max(mu, -1.0), 1.0)
-    return (math.atan2(math.sqrt(max((1.0 - mu) * (1.0 + mu), 0.0)), mu),
-            math.atan2(bottom_radius, -rho))
+def horizon_zenith_angle(r, bottom_radius):
+    """The zenith angle of the geometric horizon seen from radius r, acos(-rho / r), as
+    atan2(R_b, -rho) (the float32 twin keeps its precision next to the horizon) [rad]."""
+    return math.atan2(bottom_radius, -math.sqrt(max((r - bottom_radius) * (r + bottom_radius),
+                                                    0.0)))
 
 
 @njit(cache=True)
 def scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu):
     """u_mu of the ray (r, mu): lower half of the axis for rays that hit the ground (nadir to
     horizon), upper half for the others (zenith to horizon), each on the angle fraction
-    `horizon_dense_from_angle` (module docstring). `top_radius` is unused (the signature is
-    the one of the other axes)."""
-    theta, theta_h = _zenith_angles(r, mu, bottom_radius)
+    `horizon_dense_from_angle` (module docstring); the view zenith angle as atan2, precise at
+    the zenith in float32 too. `top_radius` is unused (the signature is the one of the other
+    axes)."""
+    theta_h = horizon_zenith_angle(r, bottom_radius)
+    mu = min(max(mu, -1.0), 1.0)
+    theta = math.atan2(math.sqrt(max((1.0 - mu) * (1.0 + mu), 0.0)), mu)
     half = n_mu // 2
     if ray_hits_ground:
         x = horizon_dense_from_angle((math.pi - theta) / (math.pi - theta_h))
@@ -257,7 +259,7 @@ def scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu):
 @njit(cache=True)
 def scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu):
     """Inverse of `scattering_u_mu` at radius r: (mu [-], ray_hits_ground)."""
-    _, theta_h = _zenith_angles(r, 1.0, bottom_radius)
+    theta_h = horizon_zenith_angle(r, bottom_radius)
     half = n_mu // 2
     if u_mu < 0.5:
         a = angle_from_horizon_dense(unit_range_from_texture_coord(1.0 - 2.0 * u_mu, half))

@@ -521,9 +521,9 @@ def _last_ratios(order_mean: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _check_converging(order_mean: np.ndarray, wavelengths_nm: np.ndarray) -> None:
     """Raise InputError when the orders grow (`order_mean` (n, n_b), orders 1 .. n): each of
     the last two at least `DIVERGING_RATIO` times the one before, from order TAIL_MIN_ORDER on.
-    Light cannot grow from order to order; it does in the tables when a layer thinner than
-    their ray samples (fog, a low cloud deck) scatters more than the samples' transmittance
-    takes out."""
+    Light cannot grow from order to order, and with the ray integrals in optical depth
+    (`_table_build_kernels._ray_weights`) no shipped preset makes it; a safety net for what
+    the tables cannot resolve (the trapezoid rule they used before made fog's orders grow)."""
     n = order_mean.shape[0]
     if n < TAIL_MIN_ORDER:
         return

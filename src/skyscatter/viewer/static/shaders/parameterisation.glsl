@@ -51,11 +51,9 @@ float scattering_u_r(float r, float bottom_radius, float top_radius, float n_r) 
     return texture_coord_from_unit_range(min(rho / big_h, 1.0), n_r);
 }
 
-// twin of _zenith_angles: (theta, theta_h)
-vec2 zenith_angles(float r, float mu, float bottom_radius) {
-    float c = clamp(mu, -1.0, 1.0);
-    return vec2(atan(sqrt(max((1.0 - c) * (1.0 + c), 0.0)), c),
-                atan(bottom_radius, -horizon_distance(r, bottom_radius)));
+// twin of horizon_zenith_angle
+float horizon_zenith_angle(float r, float bottom_radius) {
+    return atan(bottom_radius, -horizon_distance(r, bottom_radius));
 }
 
 // twin of horizon_dense_from_angle
@@ -66,9 +64,9 @@ float horizon_dense_from_angle(float a) {
 // twin of scattering_u_mu
 float scattering_u_mu(float r, float mu, bool ray_hits_ground, float bottom_radius,
                       float top_radius, float n_mu) {
-    vec2 angles = zenith_angles(r, mu, bottom_radius);
-    float theta = angles.x;
-    float theta_h = angles.y;
+    float theta_h = horizon_zenith_angle(r, bottom_radius);
+    float c = clamp(mu, -1.0, 1.0);
+    float theta = atan(sqrt(max((1.0 - c) * (1.0 + c), 0.0)), c);
     float half_n = floor(n_mu / 2.0);
     if (ray_hits_ground) {
         float x = horizon_dense_from_angle((PI - theta) / (PI - theta_h));
