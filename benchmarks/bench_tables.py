@@ -134,8 +134,9 @@ def main() -> None:
     print(f"precompute: {seconds:.2f} s, peak memory added {memory.added_mib:.0f} MiB "
           f"(tables themselves {tables.nbytes / 2**20:.0f} MiB)")
 
-    zenith = tables.order_zenith_radiance
-    mean = tables.order_mean_radiance
+    # the orders iterated; the rest, if any, was added as their geometric tail
+    zenith = tables.order_zenith_radiance[:tables.orders_computed]
+    mean = tables.order_mean_radiance[:tables.orders_computed]
     pick = [int(np.argmin(np.abs(wavelengths - w))) for w in (440.0, 550.0, 680.0)]
     print("convergence with orders (radiance of each order alone; ratio to the previous one):")
     for w in pick:

@@ -20,7 +20,9 @@ from skyscatter.transport.solvers import SolverOptions, make_solver
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN_EARTH,
     ray_intersects_ground,
+    scattering_nu_from_u,
     scattering_r_mu_mu_s_nu_from_uvwz,
+    scattering_u_nu,
     scattering_uvwz_from_r_mu_mu_s_nu,
     texture_coord_from_unit_range,
     transmittance_r_mu_from_x,
@@ -100,6 +102,24 @@ def test_scattering_mapping_round_trips_on_both_halves_of_the_mu_axis(altitude_m
                                                      COS_SUN_ZENITH_MIN_EARTH, 32, 128, 32)
             assert back[:4] == pytest.approx((r, mu, mu_s, nu), rel=1e-7, abs=1e-7)
             assert back[4] == hits
+
+
+def test_view_sun_slices_span_exactly_the_angles_a_view_and_a_sun_allow():
+    # The u_nu axis is the view's azimuth from the sun's: its ends are the view-sun angles
+    # |theta - theta_s| (same azimuth) and theta + theta_s (opposite azimuth), spherical
+    # trigonometry; in between nu = cos theta cos theta_s + sin theta sin theta_s cos phi.
+    for view_deg, sun_deg in ((50.0, 60.0), (10.0, 85.0), (120.0, 30.0), (89.0, 89.0)):
+        mu, mu_s = np.cos(np.radians(view_deg)), np.cos(np.radians(sun_deg))
+        ends = [scattering_nu_from_u(u, mu, mu_s) for u in (1.0, 0.0)]
+        np.testing.assert_allclose(np.degrees(np.arccos(ends)),
+                                   [abs(view_deg - sun_deg), view_deg + sun_deg], atol=1e-6)
+        spread = np.sin(np.radians(view_deg)) * np.sin(np.radians(sun_deg))
+        for phi_deg in (0.0, 30.0, 90.0, 150.0, 180.0):
+            nu = mu * mu_s + spread * np.cos(np.radians(phi_deg))
+            assert scattering_u_nu(nu, mu, mu_s) == pytest.approx(1.0 - phi_deg / 180.0, abs=1e-7)
+    # a sun at the zenith: the azimuth is undefined and every slice is the same direction
+    assert scattering_nu_from_u(0.3, 0.6, 1.0) == pytest.approx(0.6)
+    assert scattering_u_nu(0.6, 0.6, 1.0) == 1.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -302,8 +322,10 @@ def test_orders_decrease_geometrically_in_a_thin_atmosphere(profile):
     # 0.016 / 0.0065, so it is only bounded.
     thin = dataclasses.replace(profile, density=0.1 * profile.density,
                                ground_albedo=np.zeros(3))
-    tables = precompute_tables(thin, SMALL, orders=5)
-    contribution = tables.order_mean_radiance  # (orders, n_wl)
+    tables = precompute_tables(thin, SMALL, orders=6)
+    # the orders iterated (the rest is their geometric tail; 4 here)
+    contribution = tables.order_mean_radiance[:tables.orders_computed]  # (orders, n_wl)
+    assert tables.orders_computed >= 4
     ratios = contribution[1:] / contribution[:-1]
     assert np.all(ratios < 0.1)
     later = ratios[1:]
@@ -438,6 +460,25 @@ def test_a_thin_thick_layer_converges_and_stops_at_the_geometric_tail():
     assert tables.orders_computed < 60
     assert np.all(np.diff(means[2:]) < 0.0)
     assert 0.0 < tables.tail_share[0] < 0.5
+
+
+def test_the_geometric_tail_stops_once_the_extrapolated_sum_is_within_its_tolerance():
+    # Orders n >= 1 of a two-mode medium, m_n = r^n + q^n (leading ratio r = 0.953 of a stratus
+    # deck, a transient q): the orders >= 2 sum to r^2 / (1 - r) + q^2 / (1 - q) in closed
+    # form. Where the iteration stops, the orders so far plus the last one's geometric tail
+    # must be within 2 x TAIL_TOLERANCE of that sum: the tolerance bounds the tail's error
+    # from the last change of the ratio, and the ratio still drifts by about that much again
+    # (q / (1 - q) <= 1.5 x it for q <= 0.6).
+    for q in (0.3, 0.6):
+        orders = np.arange(1, 400)
+        means = (0.953 ** orders + q ** orders)[:, None]
+        exact = 0.953 ** 2 / (1 - 0.953) + q ** 2 / (1 - q)
+        n = next(n for n in range(3, 400)
+                 if tables_module._geometric_tail(means[:n], last=False) is not None)
+        ratio = tables_module._geometric_tail(means[:n], last=False)[0]
+        estimate = means[1:n, 0].sum() + means[n - 1, 0] * ratio / (1.0 - ratio)
+        assert abs(estimate / exact - 1.0) < 2.0 * tables_module.TAIL_TOLERANCE
+        assert n < 40  # far fewer than the ~230 orders summed one by one would need
 
 
 def test_orders_that_grow_are_refused_with_a_message_naming_the_cause():

@@ -64,16 +64,20 @@ def test_single_scattering_below_the_horizon_matches_the_ray_marching_solver(
 
 
 @pytest.mark.parametrize(("view_zenith_deg", "sun_zenith_deg", "tolerance"),
-                         [(0.0, 96.0, 3.0 * PERCENT), (60.0, 96.0, 3.0 * PERCENT),
+                         [(0.0, 96.0, 3.0 * PERCENT), (60.0, 96.0, 4.5 * PERCENT),
                           (0.0, 100.0, 8.0 * PERCENT)])
 def test_second_order_in_twilight_matches_a_brute_force_double_integral(
         profile, tables_two_orders, view_zenith_deg, sun_zenith_deg, tolerance):
     # Reference: `_second_order_brute_force` (48 x 64 directions per point, 40 points; the
     # incoming light is the ray-marched single scattering). Linear interpolation of the orders
     # >= 2 in mu_s made them +15-21 % (96 deg) and +13-29 % (100 deg) too bright; with the
-    # geometric interpolation of the twilight lookups measured -1.3..+1.8 % (96 deg) and
-    # -4.2 % (100 deg, zenith). Tolerances: those plus the reference's own quadrature, which
-    # grows as the sunlit air shrinks to a thin band of directions.
+    # geometric interpolation of the twilight lookups measured -0.4..-0.2 % (96 deg, zenith),
+    # +2.3..+3.9 % (96 deg, view 60 deg towards the sun) and -4.2 % (100 deg, zenith). The
+    # view-sun slices are azimuths (table_parameterisation): between two sun-zenith cells the
+    # lookup at a fixed azimuth sees two view-sun angles, where slices of nu saw one (then
+    # -1.3..+1.8 % at view 60 deg); with 80 sun-zenith cells instead of 40 it is +0.7..+1.3 %.
+    # Tolerances: those plus the reference's own quadrature, which grows as the sunlit air
+    # shrinks to a thin band of directions.
     view = local_frame_directions(np.radians(view_zenith_deg), 0.0)
     sun = local_frame_directions(np.radians(sun_zenith_deg), 0.0)
     origin = observer_position(0.0, EARTH_RADIUS_M)

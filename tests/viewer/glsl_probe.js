@@ -21,7 +21,7 @@ async ({inputs, radii, mu_s_min, sizes}) => {
   const outputs = {
     scattering_uvwz: `vec4(scattering_u_r(r, R_b, R_t, N_R),
         scattering_u_mu(r, mu, ray_intersects_ground(r, mu, R_b), R_b, R_t, N_MU),
-        scattering_u_mu_s(mu_s, R_b, R_t, MU_S_MIN, N_MU_S), scattering_u_nu(nu))`,
+        scattering_u_mu_s(mu_s, R_b, R_t, MU_S_MIN, N_MU_S), scattering_u_nu(nu, mu, mu_s))`,
     transmittance_irradiance: `vec4(transmittance_x_from_r_mu(r, mu, R_b, R_t),
         irradiance_x_from_r_mu_s(r, mu_s, R_b, R_t))`,
     distances: `vec4(distance_to_top_boundary(r, mu, R_t),

@@ -92,12 +92,9 @@ class LitOrder(NamedTuple):
 
 @njit(cache=True)
 def cell_nu(mu, mu_s, i_nu, n_nu):
-    """nu of slice i_nu of a scattering-table cell (mu, mu_s), clamped to the values the two
-    directions allow, mu mu_s -+ sqrt((1 - mu^2)(1 - mu_s^2)) (Bruneton 2017,
-    `ComputeSingleScatteringTexture`)."""
-    spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
-    nu = scattering_nu_from_u(i_nu / (n_nu - 1))
-    return min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+    """nu of slice i_nu of a scattering-table cell (mu, mu_s): the slices are azimuths, so
+    every nu lies within the values the two directions allow (`scattering_nu_from_u`)."""
+    return scattering_nu_from_u(i_nu / (n_nu - 1), mu, mu_s)
 
 
 @njit(cache=True)

@@ -94,7 +94,7 @@ def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, 
     i_mu, a_mu = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
     i_s, a_s = linear_axis(texel_index(
         scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s), n_mu_s), n_mu_s)
-    i_nu, a_nu = linear_axis(scattering_u_nu(nu) * (n_nu - 1), n_nu)
+    i_nu, a_nu = linear_axis(scattering_u_nu(nu, mu, mu_s) * (n_nu - 1), n_nu)
     return i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu
 
 

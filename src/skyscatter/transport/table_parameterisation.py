@@ -42,11 +42,15 @@ Scattering table (r, mu, mu_s, nu), 4-D with axes (u_r, u_mu, u_mu_s, u_nu):
     d_s the distance to the top from the ground along mu_s, d_min = R_t - R_b, d_max = H, and A
     the same for mu_s = mu_s_min (the smallest sun cosine tabulated; below it the first texel
     is used). Samples crowd near the horizon;
-  u_nu = 1 - sqrt(theta / pi), theta = acos(nu) the view-sun angle, with the n_nu slices at
-    the exact ends (index f = u_nu (n_nu - 1)); Bruneton's u_nu = (nu + 1) / 2 spaces the
-    slices 44 deg apart next to the sun, too coarse for a Mie dust forward peak
-    (docs/physics/tables.md); this one puts 8 slices at 0, 3.7, 15, 33, 59, 92, 132 and
-    180 deg.
+  u_nu = 1 - phi / pi, phi in [0, pi] the view's azimuth about the local zenith from the
+    sun's, cos phi = (nu - mu mu_s) / sqrt((1 - mu^2)(1 - mu_s^2)), with the n_nu slices at
+    the exact ends (index f = u_nu (n_nu - 1)): every slice lies inside the view-sun angles
+    that (mu, mu_s) allow, |theta - theta_s| .. theta + theta_s. A mapping of nu over all of
+    [-1, 1] (Bruneton's (nu + 1) / 2, or 1 - sqrt(acos(nu) / pi) used here before) leaves
+    half the slices outside that range (with the sun 60 deg from the zenith and a view 50 deg
+    from it, 4 of 8 fall inside with either); uniform in azimuth, the tables on a dusty Mars
+    with the sun 30-60 deg from the zenith are 4-5 x closer to the Monte Carlo
+    (docs/physics/tables.md).
 Irradiance table (r, mu_s), affine: x_r = (r - R_b) / (R_t - R_b), x_mu_s = (mu_s + 1) / 2.
 """
 
@@ -59,6 +63,7 @@ from numba import njit
 __all__ = [
     "COS_SUN_ZENITH_MIN",
     "COS_SUN_ZENITH_MIN_EARTH",
+    "SPREAD_MIN",
     "angle_from_horizon_dense",
     "distance_to_bottom_boundary",
     "distance_to_top_boundary",
@@ -86,6 +91,7 @@ __all__ = [
     "transmittance_x_mu",
     "transmittance_x_r",
     "unit_range_from_texture_coord",
+    "view_sun_spread",
 ]
 
 # cos(102 deg): Bruneton 2017's suggestion for Earth (definitions.glsl, `mu_s_min`): the sun
@@ -99,6 +105,10 @@ COS_SUN_ZENITH_MIN_EARTH = math.cos(math.radians(102.0))
 # mapping keeps its daytime cells about where 32 cells down to 102 deg had them (the second at
 # 36.2 deg instead of 37.4 deg; docs/physics/tables.md, "Twilight").
 COS_SUN_ZENITH_MIN = -0.5
+# Below this sqrt((1 - mu^2)(1 - mu_s^2)) the view's azimuth from the sun is taken as 0
+# (`scattering_u_nu`): a view or a sun within 0.06 deg of the zenith, where the azimuth is
+# undefined and the radiance changes by at most spread x its derivative in nu.
+SPREAD_MIN = 1e-6
 
 
 @njit(cache=True)
@@ -312,17 +322,28 @@ def scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s):
 
 
 @njit(cache=True)
-def scattering_u_nu(nu):
-    """u_nu = 1 - sqrt(theta / pi), theta = acos(nu) [-]: the slices crowd towards the sun
-    (module docstring); nu is clamped to [-1, 1]."""
-    return 1.0 - math.sqrt(math.acos(min(max(nu, -1.0), 1.0)) / math.pi)
+def view_sun_spread(mu, mu_s):
+    """sqrt((1 - mu^2)(1 - mu_s^2)) [-]: nu = mu mu_s + spread cos(phi), phi the azimuth of the
+    view about the zenith from the sun's."""
+    return math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
 
 
 @njit(cache=True)
-def scattering_nu_from_u(u_nu):
-    """Inverse of `scattering_u_nu`: nu = cos(pi (1 - u_nu)^2), u_nu clamped to [0, 1]."""
-    v = 1.0 - min(max(u_nu, 0.0), 1.0)
-    return math.cos(math.pi * v * v)
+def scattering_u_nu(nu, mu, mu_s):
+    """u_nu = 1 - phi / pi, phi the view's azimuth from the sun's (module docstring), from
+    nu = cos(view-sun angle) and the zenith cosines mu, mu_s [-]; phi = 0 where the azimuth
+    is undefined (spread <= SPREAD_MIN: a view or a sun at the zenith or the nadir)."""
+    spread = view_sun_spread(mu, mu_s)
+    cos_phi = (nu - mu * mu_s) / spread if spread > SPREAD_MIN else 1.0
+    return 1.0 - math.acos(min(max(cos_phi, -1.0), 1.0)) / math.pi
+
+
+@njit(cache=True)
+def scattering_nu_from_u(u_nu, mu, mu_s):
+    """Inverse of `scattering_u_nu`: nu = mu mu_s + spread cos(pi (1 - u_nu)), u_nu clamped to
+    [0, 1]."""
+    phi = math.pi * (1.0 - min(max(u_nu, 0.0), 1.0))
+    return mu * mu_s + view_sun_spread(mu, mu_s) * math.cos(phi)
 
 
 @njit(cache=True)
@@ -334,7 +355,7 @@ def scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, ray_hits_ground, bottom_r
     return (scattering_u_r(r, bottom_radius, top_radius, n_r),
             scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu),
             scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s),
-            scattering_u_nu(nu))
+            scattering_u_nu(nu, mu, mu_s))
 
 
 @njit(cache=True)
@@ -348,9 +369,7 @@ def scattering_r_mu_mu_s_nu_from_uvwz(u_r, u_mu, u_mu_s, u_nu, bottom_radius, to
     r = scattering_r_from_u(u_r, bottom_radius, top_radius, n_r)
     mu, hits_ground = scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu)
     mu_s = scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s)
-    nu = scattering_nu_from_u(u_nu)
-    spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
-    nu = min(max(nu, mu * mu_s - spread), mu * mu_s + spread)
+    nu = scattering_nu_from_u(u_nu, mu, mu_s)
     return r, mu, mu_s, nu, hits_ground
 
 

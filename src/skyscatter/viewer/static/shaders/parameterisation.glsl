@@ -88,9 +88,11 @@ float scattering_u_mu_s(float mu_s, float bottom_radius, float top_radius, float
     return texture_coord_from_unit_range(max(1.0 - a / big_a, 0.0) / (1.0 + a), n_mu_s);
 }
 
-// twin of scattering_u_nu
-float scattering_u_nu(float nu) {
-    return 1.0 - sqrt(acos(clamp(nu, -1.0, 1.0)) / PI);
+// twin of scattering_u_nu: 1 - phi / pi, phi the view's azimuth from the sun's
+float scattering_u_nu(float nu, float mu, float mu_s) {
+    float spread = sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0));
+    float cos_phi = spread > SPREAD_MIN ? (nu - mu * mu_s) / spread : 1.0;
+    return 1.0 - acos(clamp(cos_phi, -1.0, 1.0)) / PI;
 }
 
 // twin of irradiance_x_from_r_mu_s: (x_mu_s, x_r)

@@ -123,7 +123,7 @@ vec3 sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir) {
                                  u_scattering_shape.y);
     float u_mu_s = scattering_u_mu_s(mu_s, u_bottom_radius, u_top_radius, u_mu_s_min,
                                      u_scattering_shape.z);
-    float f_nu = clamp(scattering_u_nu(nu) * (u_scattering_shape.w - 1.0), 0.0,
+    float f_nu = clamp(scattering_u_nu(nu, mu, mu_s) * (u_scattering_shape.w - 1.0), 0.0,
                        u_scattering_shape.w - 1.0);
     int i_nu = min(int(f_nu), int(u_scattering_shape.w) - 2);
     float a_nu = f_nu - float(i_nu);
