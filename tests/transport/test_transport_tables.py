@@ -21,6 +21,7 @@ from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN_EARTH,
     ray_intersects_ground,
     scattering_nu_from_u,
+    scattering_r_from_u,
     scattering_r_mu_mu_s_nu_from_uvwz,
     scattering_u_nu,
     scattering_uvwz_from_r_mu_mu_s_nu,
@@ -28,6 +29,8 @@ from skyscatter.transport.table_parameterisation import (
     transmittance_r_mu_from_x,
     transmittance_x_from_r_mu,
     unit_range_from_texture_coord,
+    unwarped,
+    warped,
 )
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
@@ -83,8 +86,14 @@ def test_transmittance_mapping_round_trips():
             assert (back_mu, back_r) == pytest.approx((x_mu, x_r), abs=1e-9)
 
 
+IDENTITY_WARP = np.linspace(0.0, 1.0, tables_module.RADIUS_WARP_SEGMENTS + 1)
+# half the radius cells in a layer at rho / H 0.07-0.11 (600-1500 m on Earth: a cloud deck)
+LAYER_WARP = 0.5 * IDENTITY_WARP + 0.5 * np.clip((IDENTITY_WARP - 0.07) / 0.04, 0.0, 1.0)
+
+
+@pytest.mark.parametrize("warp", [IDENTITY_WARP, LAYER_WARP], ids=["identity", "layer"])
 @pytest.mark.parametrize("altitude_m", [0.0, 1000.0, 20_000.0, 60_000.0])
-def test_scattering_mapping_round_trips_on_both_halves_of_the_mu_axis(altitude_m):
+def test_scattering_mapping_round_trips_on_both_halves_of_the_mu_axis(altitude_m, warp):
     bottom, top = EARTH_RADIUS_M, TOP_RADIUS_M
     r = bottom + altitude_m
     mu_h = horizon_cos_zenith(r, bottom)
@@ -96,10 +105,12 @@ def test_scattering_mapping_round_trips_on_both_halves_of_the_mu_axis(altitude_m
             spread = np.sqrt((1 - mu**2) * (1 - mu_s**2))
             nu = mu * mu_s + 0.3 * spread
             uvwz = scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, hits, bottom, top,
-                                                     COS_SUN_ZENITH_MIN_EARTH, 32, 128, 32)
+                                                     COS_SUN_ZENITH_MIN_EARTH, 32, 128, 32,
+                                                     warp)
             assert (uvwz[1] < 0.5) == hits  # the explicit flag picks the half
             back = scattering_r_mu_mu_s_nu_from_uvwz(*uvwz, bottom, top,
-                                                     COS_SUN_ZENITH_MIN_EARTH, 32, 128, 32)
+                                                     COS_SUN_ZENITH_MIN_EARTH, 32, 128, 32,
+                                                     warp)
             assert back[:4] == pytest.approx((r, mu, mu_s, nu), rel=1e-7, abs=1e-7)
             assert back[4] == hits
 
@@ -120,6 +131,33 @@ def test_view_sun_slices_span_exactly_the_angles_a_view_and_a_sun_allow():
     # a sun at the zenith: the azimuth is undefined and every slice is the same direction
     assert scattering_nu_from_u(0.3, 0.6, 1.0) == pytest.approx(0.6)
     assert scattering_u_nu(0.6, 0.6, 1.0) == 1.0
+
+
+def test_the_radius_axis_is_bruneton_s_unless_a_cell_would_hold_a_thick_layer():
+    # Earth's air and aerosol (vertical optical depth 0.6 at 375 nm, at most ~0.05 in a cell):
+    # Bruneton's u_r = tc(rho / H) exactly. A stratus deck of optical depth 20, 500 m thick:
+    # the share of the cells inside it is THICK_CELL_SHARE (1 - 1 / 20) ~ 0.48 of them
+    # (tables.radius_warp), instead of the one it spans on Bruneton's axis.
+    earth = load_atmosphere("earth").optical_profile(np.array([375.0, 550.0]))
+    np.testing.assert_array_equal(tables_module.radius_warp(earth), IDENTITY_WARP)
+    overcast = load_atmosphere("earth-overcast").optical_profile(np.array([550.0]))
+    warp = tables_module.radius_warp(overcast)
+    assert np.all(np.diff(warp) > 0.0) and warp[0] == 0.0 and warp[-1] == 1.0
+    bottom, top = overcast.bottom_radius_m, overcast.top_radius_m
+    nodes = np.array([scattering_r_from_u((k + 0.5) / 32, bottom, top, 32, warp)
+                      for k in range(32)]) - bottom
+    inside = np.count_nonzero((nodes > 500.0) & (nodes < 1200.0))
+    assert abs(inside / 32 - tables_module.THICK_CELL_SHARE * (1 - 1 / 20.4)) < 3 / 32
+    identity = np.array([scattering_r_from_u((k + 0.5) / 32, bottom, top, 32, IDENTITY_WARP)
+                         for k in range(32)]) - bottom
+    assert np.count_nonzero((identity > 500.0) & (identity < 1200.0)) <= 2
+
+
+def test_the_warp_and_its_inverse_agree():
+    x = np.linspace(0.0, 1.0, 1001)
+    w = np.array([warped(v, LAYER_WARP) for v in x])
+    np.testing.assert_allclose(w, np.interp(x, IDENTITY_WARP, LAYER_WARP), atol=1e-12)
+    np.testing.assert_allclose([unwarped(v, LAYER_WARP) for v in w], x, atol=1e-12)
 
 
 # --------------------------------------------------------------------------------------------

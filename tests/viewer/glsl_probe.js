@@ -1,8 +1,9 @@
 // Evaluates the viewer's GLSL parameterisations (static/shaders/parameterisation.glsl) in the
 // browser's WebGL2 on a list of inputs and returns the results (test_viewer_browser.py).
 // Called by Playwright's page.evaluate with {inputs: [[r, mu, mu_s, nu], ...], radii: [R_b, R_t],
-// mu_s_min, sizes: [n_r, n_mu, n_mu_s]}; returns {name: [values...]} per output.
-async ({inputs, radii, mu_s_min, sizes}) => {
+// mu_s_min, sizes: [n_r, n_mu, n_mu_s], radius_warp: [...]}; returns {name: [values...]} per
+// output.
+async ({inputs, radii, mu_s_min, sizes, radius_warp}) => {
   const canvas = document.createElement("canvas");
   const gl = canvas.getContext("webgl2");
   if (!gl.getExtension("EXT_color_buffer_float")) throw new Error("no EXT_color_buffer_float");
@@ -72,6 +73,9 @@ void main() {
     gl.activeTexture(gl.TEXTURE0);
     gl.bindTexture(gl.TEXTURE_2D, input);
     gl.uniform1i(gl.getUniformLocation(program, "inputs"), 0);
+    const warp = new Float32Array(4 * Math.ceil(radius_warp.length / 4));
+    warp.set(radius_warp);
+    gl.uniform4fv(gl.getUniformLocation(program, "u_radius_warp"), warp);
     gl.viewport(0, 0, width, height);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
     const pixels = new Float32Array(width * height * 4);

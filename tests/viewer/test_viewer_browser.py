@@ -18,6 +18,7 @@ from skyscatter.render.sky_at_time import render_sky_at
 from skyscatter.render.tonemap import night_adapted_exposure
 from skyscatter.transport import table_parameterisation as tp
 from skyscatter.transport.lut_solver import LutSolver
+from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS
 from skyscatter.viewer import codegen
 
 PROBE = (Path(__file__).parent / "glsl_probe.js").read_text()
@@ -143,14 +144,15 @@ def test_bad_address_parameter_is_shown_in_the_page(page, viewer_url):
 
 
 def _python_mappings(inputs: np.ndarray, bottom: float, top: float, mu_s_min: float,
-                     sizes: tuple[int, int, int]) -> dict[str, np.ndarray]:
+                     sizes: tuple[int, int, int], radius_warp: np.ndarray
+                     ) -> dict[str, np.ndarray]:
     n_r, n_mu, n_mu_s = sizes
     rows = {"scattering_uvwz": [], "transmittance_irradiance": [], "distances": []}
     for r, mu, mu_s, nu in inputs:
         ground = tp.ray_intersects_ground(r, mu, bottom)
         rows["scattering_uvwz"].append(
             tp.scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, ground, bottom, top, mu_s_min,
-                                                 n_r, n_mu, n_mu_s))
+                                                 n_r, n_mu, n_mu_s, radius_warp))
         rows["transmittance_irradiance"].append(
             tp.transmittance_x_from_r_mu(r, mu, bottom, top)
             + tp.irradiance_x_from_r_mu_s(r, mu_s, bottom, top))
@@ -185,10 +187,14 @@ def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii):
             rows.append([r, mu, mu_s, nu])
     inputs = np.array(rows, dtype=np.float32).astype(np.float64)
     sizes = (32, 128, 40)
+    # a radius warp with half the cells in a layer at rho / H 0.07-0.11 (a low cloud deck)
+    x = np.linspace(0.0, 1.0, RADIUS_WARP_SEGMENTS + 1)
+    warp = 0.5 * x + 0.5 * np.clip((x - 0.07) / 0.04, 0.0, 1.0)
     page.goto(viewer_url.url + "&controls=0&quality=preview&width=8&height=8")
     result = page.evaluate(PROBE, {"inputs": inputs.tolist(), "radii": list(radii),
-                                   "mu_s_min": tp.COS_SUN_ZENITH_MIN, "sizes": list(sizes)})
-    expected = _python_mappings(inputs, bottom, top, tp.COS_SUN_ZENITH_MIN, sizes)
+                                   "mu_s_min": tp.COS_SUN_ZENITH_MIN, "sizes": list(sizes),
+                                   "radius_warp": warp.tolist()})
+    expected = _python_mappings(inputs, bottom, top, tp.COS_SUN_ZENITH_MIN, sizes, warp)
     gl = {name: np.array(values).reshape(-1, 4) for name, values in result.items()}
     np.testing.assert_allclose(gl["scattering_uvwz"], expected["scattering_uvwz"], rtol=0,
                                atol=3e-4)

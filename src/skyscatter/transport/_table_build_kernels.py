@@ -70,6 +70,7 @@ class TableGrid(NamedTuple):
     bottom_radius: float  # R_b [m]
     top_radius: float  # R_t [m]
     mu_s_min: float  # smallest cos(sun zenith) tabulated [-]
+    radius_warp: np.ndarray  # the u_r axis's warp (table_parameterisation.scattering_u_r)
 
 
 class RayMedium(NamedTuple):
@@ -198,7 +199,8 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
     extinction = medium.extinction
     n_c, n_wl = extinction.shape
     n_max = n_samples + 8
-    r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+    r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r,
+                                grid.radius_warp)
     mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
                                            n_mu)
     t = np.empty(n_max)
@@ -370,7 +372,8 @@ def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r,
+                                grid.radius_warp)
         mu, _ = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius, n_mu)
         phase = np.empty(n_s * n_wl)
         for i_s in range(n_mu_s):
@@ -460,7 +463,8 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
     for kl in prange(n_r * n_mu_s):
         k = kl // n_mu_s
         l = kl % n_mu_s
-        r = scattering_r_from_u((k + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        r = scattering_r_from_u((k + 0.5) / n_r, bottom_radius, top_radius, n_r,
+                                grid.radius_warp)
         mu_s = scattering_mu_s_from_u((l + 0.5) / n_mu_s, bottom_radius, top_radius, mu_s_min,
                                       n_mu_s)
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
@@ -479,7 +483,7 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
                 value[:] = 0.0
                 i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
                     r, mu_in, mu_s, nu_in, hits_ground, bottom_radius, top_radius, mu_s_min,
-                    n_r, n_mu, n_mu_s, n_nu)
+                    n_r, n_mu, n_mu_s, n_nu, grid.radius_warp)
                 scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 if hits_ground:
@@ -527,7 +531,7 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
                 value[:] = 0.0
                 i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
                     r, mu_in, mu_s, nu_in, False, bottom_radius, top_radius, mu_s_min, n_r,
-                    n_mu, n_mu_s, n_nu)
+                    n_mu, n_mu_s, n_nu, grid.radius_warp)
                 scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 for w in range(n_wl):
@@ -574,7 +578,7 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
         slab = np.empty(n_block, dtype=np.float32)
         for j in range(total):
             k, a_r = linear_axis(texel_index(scattering_u_r(radius[j], bottom_radius, top_radius,
-                                                      n_r), n_r), n_r)
+                                                      n_r, grid.radius_warp), n_r), n_r)
             o, a_th = linear_axis(math.acos(mu_t[j]) / math.pi * (n_theta - 1), n_theta)
             c00 = np.float32((1.0 - a_r) * (1.0 - a_th))
             c01 = np.float32((1.0 - a_r) * a_th)
@@ -631,7 +635,8 @@ def order_statistics(tables, use_phase, phase_table, grid):
     n_r, n_mu, n_mu_s, n_nu, n_t, n_wl = tables.shape
     partial = np.zeros((n_r, n_wl))
     for i_r in range(n_r):
-        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r)
+        r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r,
+                                grid.radius_warp)
         weights = np.ones(n_t * n_wl)
         for i_mu in range(n_mu):
             mu, _ = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,

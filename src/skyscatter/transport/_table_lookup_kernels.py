@@ -64,6 +64,7 @@ class LookupTables(NamedTuple):
     n_mu: int
     n_mu_s: int
     n_nu: int
+    radius_warp: np.ndarray  # the u_r axis's warp (table_parameterisation.scattering_u_r)
     phase_table: np.ndarray  # (n_s, n_angle, n_wl) phase functions [sr^-1]
     transmittance: np.ndarray  # (n_r_t, n_mu_t, n_wl) to the top [-]
     irradiance: np.ndarray  # (n_r_e, n_mu_s_e, n_wl) indirect irradiance [W m^-2 nm^-1]
@@ -545,7 +546,7 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
             value[:] = 0.0
             i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
                 r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
-                n_mu_s, n_nu)
+                n_mu_s, n_nu, tables.radius_warp)
             scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s,
                               a_s, i_nu, a_nu, pair_weights, pair_values, value)
             if marched > 0.0:
@@ -663,7 +664,7 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_w
     at_point[:] = 0.0
     i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
         r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu, n_mu_s,
-        n_nu)
+        n_nu, tables.radius_warp)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
                       i_nu, a_nu, pair_weights, pair_values, inscatter_out)
     if marched > 0.0:
@@ -671,7 +672,7 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_w
                                   i_s, a_s, i_nu, a_nu, marched, slices, inscatter_out)
     i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
         r_p, mu_p, mu_s_p, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
-        n_mu_s, n_nu)
+        n_mu_s, n_nu, tables.radius_warp)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
                       i_nu, a_nu, pair_weights, pair_values, at_point)
     if marched > 0.0:

@@ -80,7 +80,7 @@ class LutSolver:
             mu_s_min=tables.min_cos_sun_zenith, scattering=flat_tables(tables.scattering),
             n_r=int(tables.scattering.shape[0]), n_mu=int(tables.scattering.shape[1]),
             n_mu_s=int(tables.scattering.shape[2]), n_nu=int(tables.scattering.shape[3]),
-            phase_table=tables.phase,
+            radius_warp=tables.radius_warp, phase_table=tables.phase,
             transmittance=tables.transmittance, irradiance=tables.irradiance,
             sun_irradiance=sun_irradiance,
             sun_angular_radius=float(profile.sun_angular_radius_rad),

@@ -24,7 +24,11 @@ Transmittance table (r, mu), rays that do not hit the ground only:
   d = distance to the top, d_min = R_t - r, d_max = rho + H;
   inverse mu = (H^2 - rho^2 - d^2) / (2 r d).
 Scattering table (r, mu, mu_s, nu), 4-D with axes (u_r, u_mu, u_mu_s, u_nu):
-  u_r = tc(rho / H, n_r);
+  u_r = tc(W(rho / H), n_r), W a piecewise-linear warp through `radius_warp`[k] at rho / H =
+    k / (n_k - 1), increasing from 0 to 1: the identity (Bruneton's u_r) for an atmosphere
+    without optically thick layers, and for one with them a share of the radius cells
+    proportional to the optical depth they hold (`tables.radius_warp`), so that a cloud deck
+    500 m thick gets ~15 of 32 cells instead of 1-2;
   rays hitting the ground use the lower half of the mu axis,
     u_mu = 1/2 - 1/2 tc(1 - sqrt(1 - (pi - theta) / (pi - theta_h)), n_mu / 2),
   other rays the upper half,
@@ -91,7 +95,9 @@ __all__ = [
     "transmittance_x_mu",
     "transmittance_x_r",
     "unit_range_from_texture_coord",
+    "unwarped",
     "view_sun_spread",
+    "warped",
 ]
 
 # cos(102 deg): Bruneton 2017's suggestion for Earth (definitions.glsl, `mu_s_min`): the sun
@@ -212,18 +218,42 @@ def transmittance_r_mu_from_x(x_mu, x_r, bottom_radius, top_radius):
 # --------------------------------------------------------------------------------------------
 
 @njit(cache=True)
-def scattering_u_r(r, bottom_radius, top_radius, n_r):
-    """u_r = tc(rho / H, n_r) [-]."""
-    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
-    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
-    return texture_coord_from_unit_range(min(rho / big_h, 1.0), n_r)
+def warped(x, warp):
+    """W(x) [-]: piecewise linear through warp[k] at x = k / (warp.size - 1), x clamped to
+    [0, 1]; `warp` increases strictly from 0 to 1 (module docstring, u_r)."""
+    n = warp.size - 1
+    f = min(max(x, 0.0), 1.0) * n
+    k = min(int(f), n - 1)
+    return warp[k] + (f - k) * (warp[k + 1] - warp[k])
 
 
 @njit(cache=True)
-def scattering_r_from_u(u_r, bottom_radius, top_radius, n_r):
-    """Inverse of `scattering_u_r`: r = sqrt((H x_r)^2 + R_b^2) [m]."""
+def unwarped(w, warp):
+    """Inverse of `warped`: x with W(x) = w, w clamped to [0, 1]."""
+    w = min(max(w, 0.0), 1.0)
+    low, high = 0, warp.size - 1
+    while high - low > 1:
+        middle = (low + high) // 2
+        if warp[middle] <= w:
+            low = middle
+        else:
+            high = middle
+    return (low + (w - warp[low]) / (warp[high] - warp[low])) / (warp.size - 1)
+
+
+@njit(cache=True)
+def scattering_u_r(r, bottom_radius, top_radius, n_r, radius_warp):
+    """u_r = tc(W(rho / H), n_r) [-], W the piecewise-linear `radius_warp` (`warped`)."""
     big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
-    rho = big_h * unit_range_from_texture_coord(u_r, n_r)
+    rho = math.sqrt(max(r * r - bottom_radius * bottom_radius, 0.0))
+    return texture_coord_from_unit_range(warped(min(rho / big_h, 1.0), radius_warp), n_r)
+
+
+@njit(cache=True)
+def scattering_r_from_u(u_r, bottom_radius, top_radius, n_r, radius_warp):
+    """Inverse of `scattering_u_r`: r = sqrt((H W^-1(x_r))^2 + R_b^2) [m]."""
+    big_h = math.sqrt(top_radius * top_radius - bottom_radius * bottom_radius)
+    rho = big_h * unwarped(unit_range_from_texture_coord(u_r, n_r), radius_warp)
     return math.sqrt(rho * rho + bottom_radius * bottom_radius)
 
 
@@ -348,11 +378,11 @@ def scattering_nu_from_u(u_nu, mu, mu_s):
 
 @njit(cache=True)
 def scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, ray_hits_ground, bottom_radius,
-                                      top_radius, mu_s_min, n_r, n_mu, n_mu_s):
+                                      top_radius, mu_s_min, n_r, n_mu, n_mu_s, radius_warp):
     """(r, mu, mu_s, nu, ray_hits_ground) -> (u_r, u_mu, u_mu_s, u_nu), the table axis order
     (n_r, n_mu, n_mu_s, n_nu); module docstring. Bruneton 2017,
     `GetScatteringTextureUvwzFromRMuMuSNu` (which returns them as (u_nu, u_mu_s, u_mu, u_r))."""
-    return (scattering_u_r(r, bottom_radius, top_radius, n_r),
+    return (scattering_u_r(r, bottom_radius, top_radius, n_r, radius_warp),
             scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu),
             scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s),
             scattering_u_nu(nu, mu, mu_s))
@@ -360,13 +390,13 @@ def scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, ray_hits_ground, bottom_r
 
 @njit(cache=True)
 def scattering_r_mu_mu_s_nu_from_uvwz(u_r, u_mu, u_mu_s, u_nu, bottom_radius, top_radius,
-                                      mu_s_min, n_r, n_mu, n_mu_s):
+                                      mu_s_min, n_r, n_mu, n_mu_s, radius_warp):
     """Inverse of `scattering_uvwz_from_r_mu_mu_s_nu`: (r, mu, mu_s, nu, ray_hits_ground).
 
     nu is clamped to the values possible for (mu, mu_s),
     mu mu_s -+ sqrt((1 - mu^2)(1 - mu_s^2)) (Bruneton 2017,
     `GetRMuMuSNuFromScatteringTextureFragCoord`)."""
-    r = scattering_r_from_u(u_r, bottom_radius, top_radius, n_r)
+    r = scattering_r_from_u(u_r, bottom_radius, top_radius, n_r, radius_warp)
     mu, hits_ground = scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu)
     mu_s = scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s)
     nu = scattering_nu_from_u(u_nu, mu, mu_s)

@@ -25,15 +25,21 @@ from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache, profile_fingerprint
 from skyscatter.transport.code_fingerprint import code_fingerprint
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
-from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
+from skyscatter.transport.tables import (
+    AtmosphereTables,
+    TableResolution,
+    precompute_tables,
+    thick_layer_resolution,
+)
 
 __all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_arrays"]
 
-# bump when the arrays stored change meaning (2: truncated peaks, the orders' tail, the aureole)
-TABLE_FORMAT = 2
+# bump when the arrays stored change meaning (2: truncated peaks, the orders' tail, the aureole;
+# 3: the radius axis's warp)
+TABLE_FORMAT = 3
 _ARRAYS = ("wavelengths_nm", "transmittance", "scattering", "irradiance", "phase",
            "order_mean_radiance", "order_zenith_radiance", "tail_share", "peak_transmittance",
-           "aureole_shape", "aureole_limits")
+           "aureole_shape", "aureole_limits", "radius_warp")
 # Where the precomputation starts: the key covers the code it reaches (`code_fingerprint`).
 _PRECOMPUTATION = ("skyscatter.transport.tables", "precompute_tables")
 
@@ -80,7 +86,9 @@ def tables_from_arrays(arrays: dict[str, np.ndarray],
     return AtmosphereTables(
         bottom_radius_m=bottom, top_radius_m=top,
         min_cos_sun_zenith=float(metadata["min_cos_sun_zenith"]),
-        resolution=TableResolution(**metadata["resolution"]), orders=int(metadata["orders"]),
+        resolution=thick_layer_resolution(TableResolution(**metadata["resolution"]),
+                                          arrays["radius_warp"]),
+        orders=int(metadata["orders"]),
         scattering_names=tuple(str(n) for n in arrays["scattering_names"]),
         scattering_constituents=tuple(int(c) for c in arrays["scattering_constituents"]),
         orders_computed=int(arrays["orders_computed"]),

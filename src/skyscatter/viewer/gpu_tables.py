@@ -55,7 +55,7 @@ __all__ = ["FORMAT_VERSION", "GpuTables", "LAYOUT", "MAGIC", "MAX_TABLES", "PHAS
            "SUN_DISK_SAMPLES", "decode", "encode", "gpu_tables"]
 
 MAGIC = b"SKYT"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: the header holds the radius warp
 MAX_TABLES = 8  # scattering tables the shader loops over: 7 scattering constituents + orders >= 2
 PHASE_ROW = 1024  # texels per row of the phase texture (WebGL2 guarantees 2048)
 SUN_DISK_SAMPLES = 33  # limb-darkened disk radiance at cos(limb angle) = 0, 1/32, .., 1
@@ -138,6 +138,7 @@ def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
         "bottom_radius_m": float(tables.bottom_radius_m),
         "top_radius_m": float(tables.top_radius_m),
         "mu_s_min": float(tables.min_cos_sun_zenith),
+        "radius_warp": [float(v) for v in tables.radius_warp],
         "orders": int(tables.orders),
         "n_wavelengths": int(profile.n_wavelengths),
         "scattering_names": list(tables.scattering_names),

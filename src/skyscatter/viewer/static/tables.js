@@ -79,6 +79,7 @@ export function uploadTables(gl, decoded) {
       u_bottom_radius: header.bottom_radius_m,
       u_top_radius: header.top_radius_m,
       u_mu_s_min: header.mu_s_min,
+      u_radius_warp: paddedToVec4s(header.radius_warp),
       u_ground_albedo: header.ground_albedo_xyz,
       u_sun_irradiance: header.sun_irradiance_xyz,
       u_sun_angular_radius: header.sun_angular_radius_rad,
@@ -86,6 +87,13 @@ export function uploadTables(gl, decoded) {
       u_sun_disk: header.sun_disk_xyz.flat(),
     },
   };
+}
+
+// the values of `list` followed by zeros up to a whole number of vec4s
+function paddedToVec4s(list) {
+  const padded = new Float32Array(4 * Math.ceil(list.length / 4));
+  padded.set(list);
+  return padded;
 }
 
 export function deleteTables(gl, tables) {

@@ -154,6 +154,7 @@ class Viewer {
       else if (matrices.has(name)) gl.uniformMatrix3fv(location, false, value);
       else if (name === "u_scattering_scales") gl.uniform1fv(location, value);
       else if (name === "u_sun_disk") gl.uniform3fv(location, value);
+      else if (name === "u_radius_warp") gl.uniform4fv(location, value);
       else if (!Array.isArray(value)) gl.uniform1f(location, value);
       else if (value.length === 2) gl.uniform2fv(location, value);
       else if (value.length === 3) gl.uniform3fv(location, value);

@@ -44,11 +44,27 @@ vec2 transmittance_x_from_r_mu(float r, float mu, float bottom_radius, float top
     return vec2(clamp((d - d_min) / (d_max - d_min), 0.0, 1.0), x_r);
 }
 
-// twin of scattering_u_r
+// the scattering table's radius warp (AtmosphereTables.radius_warp): RADIUS_WARP_SEGMENTS + 1
+// values, four per vec4
+uniform vec4 u_radius_warp[RADIUS_WARP_VEC4S];
+
+float radius_warp_value(int k) {
+    return u_radius_warp[k / 4][k % 4];
+}
+
+// twin of warped, on u_radius_warp
+float warped_radius(float x) {
+    float f = clamp(x, 0.0, 1.0) * float(RADIUS_WARP_SEGMENTS);
+    int k = min(int(f), RADIUS_WARP_SEGMENTS - 1);
+    float low = radius_warp_value(k);
+    return low + (f - float(k)) * (radius_warp_value(k + 1) - low);
+}
+
+// twin of scattering_u_r, with the warp u_radius_warp
 float scattering_u_r(float r, float bottom_radius, float top_radius, float n_r) {
     float big_h = horizon_distance(top_radius, bottom_radius);
     float rho = horizon_distance(r, bottom_radius);
-    return texture_coord_from_unit_range(min(rho / big_h, 1.0), n_r);
+    return texture_coord_from_unit_range(warped_radius(min(rho / big_h, 1.0)), n_r);
 }
 
 // twin of horizon_zenith_angle
