@@ -8,6 +8,7 @@ import csv
 import io
 import json
 import math
+import re
 import tomllib
 
 import numpy as np
@@ -287,6 +288,20 @@ def test_orbit_camera_sees_the_lit_side_towards_the_sun(capsys, tmp_path):
 # --- precompute and the table cache -------------------------------------------------------------
 
 PRECOMPUTE_ARGS = ["--wavelengths", "550", "--orders", "1"]
+
+
+def test_precompute_says_how_many_orders_it_iterated(capsys, tmp_path):
+    # Earth's orders fall off by ~0.4 per order and their ratio settles within a few orders:
+    # with 12 allowed the iteration stops early and adds the rest as a geometric series
+    # (tables.TAIL_TOLERANCE); the log names the orders iterated, not only the limit.
+    code, _, err = run_cli(capsys, ["precompute", "earth", "--monochromatic", "--wavelengths",
+                                    "550", "--orders", "12", "--cache-dir", str(tmp_path)])
+    assert code == 0, err
+    assert "precomputing 12 orders for 1 wavelengths" in err
+    match = re.search(r"tables: (\d+) orders iterated, the orders beyond added as their "
+                      r"geometric series \(up to (\d+) % of the orders >= 2\)", err)
+    assert match is not None, err
+    assert 4 <= int(match.group(1)) < 12 and int(match.group(2)) < 10
 
 
 def test_precompute_stores_tables_that_radiance_then_reuses(capsys, tmp_path):
