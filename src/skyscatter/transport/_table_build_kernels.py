@@ -200,7 +200,7 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
     n_c, n_wl = extinction.shape
     n_max = n_samples + 8
     r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r,
-                                grid.radius_warp)
+                            grid.radius_warp)
     mu, hits_ground = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
                                            n_mu)
     t = np.empty(n_max)

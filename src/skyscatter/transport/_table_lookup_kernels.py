@@ -45,6 +45,7 @@ from skyscatter.transport.table_parameterisation import (
     transmittance_x_from_r_mu,
     transmittance_x_mu,
     transmittance_x_r,
+    view_sun_azimuth,
 )
 
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loops of the lookups
@@ -434,11 +435,7 @@ def view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius, t
     bilinear in the logarithm (geometric interpolation), into out (n_s, n_wl)."""
     n_mu, n_phi = view_table.shape[0], view_table.shape[1]
     i, a = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
-    spread = math.sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0))
-    cos_phi = 1.0
-    if spread > 1e-12:
-        cos_phi = min(max((nu - mu * mu_s) / spread, -1.0), 1.0)
-    k, b = linear_axis(math.acos(cos_phi) / math.pi * (n_phi - 1), n_phi)
+    k, b = linear_axis(view_sun_azimuth(nu, mu, mu_s) / math.pi * (n_phi - 1), n_phi)
     floor = 0.5 * math.log(VIEW_TABLE_FLOOR)  # below it a corner was dark: 0
     for s in range(out.shape[0]):
         for w in range(out.shape[1]):

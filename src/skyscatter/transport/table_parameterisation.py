@@ -28,7 +28,7 @@ Scattering table (r, mu, mu_s, nu), 4-D with axes (u_r, u_mu, u_mu_s, u_nu):
     k / (n_k - 1), increasing from 0 to 1: the identity (Bruneton's u_r) for an atmosphere
     without optically thick layers, and for one with them a share of the radius cells
     proportional to the optical depth they hold (`tables.radius_warp`), so that a cloud deck
-    500 m thick gets ~15 of 32 cells instead of 1-2;
+    500 m thick gets 13 of 32 cells instead of 1-2;
   rays hitting the ground use the lower half of the mu axis,
     u_mu = 1/2 - 1/2 tc(1 - sqrt(1 - (pi - theta) / (pi - theta_h)), n_mu / 2),
   other rays the upper half,
@@ -96,6 +96,7 @@ __all__ = [
     "transmittance_x_r",
     "unit_range_from_texture_coord",
     "unwarped",
+    "view_sun_azimuth",
     "view_sun_spread",
     "warped",
 ]
@@ -359,13 +360,19 @@ def view_sun_spread(mu, mu_s):
 
 
 @njit(cache=True)
-def scattering_u_nu(nu, mu, mu_s):
-    """u_nu = 1 - phi / pi, phi the view's azimuth from the sun's (module docstring), from
-    nu = cos(view-sun angle) and the zenith cosines mu, mu_s [-]; phi = 0 where the azimuth
-    is undefined (spread <= SPREAD_MIN: a view or a sun at the zenith or the nadir)."""
+def view_sun_azimuth(nu, mu, mu_s):
+    """phi in [0, pi] [rad], the view's azimuth about the local zenith from the sun's, from
+    nu = cos(view-sun angle) and the zenith cosines mu, mu_s; 0 where it is undefined
+    (spread <= SPREAD_MIN: a view or a sun at the zenith or the nadir)."""
     spread = view_sun_spread(mu, mu_s)
     cos_phi = (nu - mu * mu_s) / spread if spread > SPREAD_MIN else 1.0
-    return 1.0 - math.acos(min(max(cos_phi, -1.0), 1.0)) / math.pi
+    return math.acos(min(max(cos_phi, -1.0), 1.0))
+
+
+@njit(cache=True)
+def scattering_u_nu(nu, mu, mu_s):
+    """u_nu = 1 - phi / pi, phi = `view_sun_azimuth` (module docstring) [-]."""
+    return 1.0 - view_sun_azimuth(nu, mu, mu_s) / math.pi
 
 
 @njit(cache=True)
@@ -393,9 +400,9 @@ def scattering_r_mu_mu_s_nu_from_uvwz(u_r, u_mu, u_mu_s, u_nu, bottom_radius, to
                                       mu_s_min, n_r, n_mu, n_mu_s, radius_warp):
     """Inverse of `scattering_uvwz_from_r_mu_mu_s_nu`: (r, mu, mu_s, nu, ray_hits_ground).
 
-    nu is clamped to the values possible for (mu, mu_s),
-    mu mu_s -+ sqrt((1 - mu^2)(1 - mu_s^2)) (Bruneton 2017,
-    `GetRMuMuSNuFromScatteringTextureFragCoord`)."""
+    nu lies within the values possible for (mu, mu_s), mu mu_s -+ sqrt((1 - mu^2)(1 - mu_s^2)),
+    by construction (u_nu is an azimuth); Bruneton 2017,
+    `GetRMuMuSNuFromScatteringTextureFragCoord`, clamps it there."""
     r = scattering_r_from_u(u_r, bottom_radius, top_radius, n_r, radius_warp)
     mu, hits_ground = scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu)
     mu_s = scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s)
