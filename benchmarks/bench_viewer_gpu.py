@@ -173,6 +173,7 @@ class Frame:
             "u_sun_angular_radius": header["sun_angular_radius_rad"],
             "u_sun_solid_angle": header["sun_solid_angle_sr"],
             "u_sun_disk": np.asarray(header["sun_disk_xyz"]).reshape(-1),
+            "u_radius_warp": list(header["radius_warp"]),  # vec4 array, zero-padded (tables.js)
         }
         return {"textures": textures, "uniforms": uniforms, "view": data["view"]}
 
