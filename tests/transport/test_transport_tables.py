@@ -8,7 +8,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from transport_cases import EARTH_RADIUS_M, SMALL, homogeneous_shell
+from transport_cases import EARTH_RADIUS_M, SMALL, cloud_deck, homogeneous_shell
 
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.errors import InputError
@@ -20,6 +20,8 @@ from skyscatter.transport.solvers import SolverOptions, make_solver
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN_EARTH,
     ray_intersects_ground,
+    scattering_mu_from_u,
+    scattering_mu_s_from_u,
     scattering_nu_from_u,
     scattering_r_from_u,
     scattering_r_mu_mu_s_nu_from_uvwz,
@@ -526,3 +528,40 @@ def test_orders_that_grow_are_refused_with_a_message_naming_the_cause():
     growing = np.array([[1.0], [1.3], [1.69], [2.2]])
     with pytest.raises(InputError, match="grow instead of converging.*--solver montecarlo"):
         tables_module._check_converging(growing, np.array([650.0]))
+
+
+def test_first_order_of_a_thin_thick_deck_matches_the_plane_parallel_closed_form():
+    # A deck of optical depth 8, 100 m thick at 1 km (isotropic, conservative) seen from the
+    # table's radii above it, views and sun within 72 deg of the vertical: single scattering is
+    # int_0^tau exp(-x c) dx / |mu| = (1 - exp(-tau c)) / (c |mu|), c = 1 / |mu| + 1 / mu_s
+    # (plane-parallel: over the few km the paths run, the shell's curvature tilts them by
+    # < 1e-3 rad). Before the table rays were refined in optical depth, their columns
+    # integrated along the ray and an interval at the deck's edge weighted by the deck's own
+    # beta_s / beta_e, these cells were 27 % too dark (median; 1-32 % per radius). Measured
+    # now: median 0.6 %, 95th percentile 1.3 %, max 1.7 % (linear interpolation of the sun's
+    # optical depth between the column table's rows, 11 of its 1024 inside the deck).
+    profile = cloud_deck(8.0)
+    tables = precompute_tables(profile, dataclasses.replace(SMALL, scattering_mu_s=16), orders=1)
+    bottom, top = profile.bottom_radius_m, profile.top_radius_m
+    res = tables.resolution
+    errors = []
+    for k in range(res.scattering_r):
+        r = scattering_r_from_u((k + 0.5) / res.scattering_r, bottom, top, res.scattering_r,
+                                tables.radius_warp)
+        if r - bottom < 1500.0:
+            continue
+        for i_mu in range(res.scattering_mu // 2):  # the half that hits the ground
+            mu, _ = scattering_mu_from_u((i_mu + 0.5) / res.scattering_mu, r, bottom, top,
+                                         res.scattering_mu)
+            for i_s in range(res.scattering_mu_s):
+                mu_s = scattering_mu_s_from_u((i_s + 0.5) / res.scattering_mu_s, bottom, top,
+                                              tables.min_cos_sun_zenith, res.scattering_mu_s)
+                if min(-mu, mu_s) < 0.3:
+                    continue
+                c = 1.0 / -mu + 1.0 / mu_s
+                exact = -np.expm1(-8.0 * c) / (c * -mu)
+                cells = tables.scattering[k, i_mu, i_s, :, 0, 0]
+                errors.extend(cells / exact - 1.0)
+    errors = np.abs(np.array(errors))
+    assert errors.size > 100
+    assert np.median(errors) < 0.015 and errors.max() < 0.03

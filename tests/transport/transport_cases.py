@@ -48,3 +48,20 @@ def exponential_earth() -> OpticalProfile:
         scattering_per_density=scattering, phases=(RayleighPhase(), HenyeyGreensteinPhase(0.8)),
         names=("rayleigh", "mie"), ground_albedo=np.full(3, 0.1),
         toa_irradiance=np.array([1.9, 1.85, 1.5]), sun_angular_radius_rad=0.0)
+
+
+def cloud_deck(optical_depth: float, base_m: float = 1000.0, top_m: float = 1100.0,
+               thickness_m: float = 20_000.0) -> OpticalProfile:
+    """A non-absorbing, isotropically scattering deck of `optical_depth` between base_m and
+    top_m in an otherwise empty 20 km atmosphere; levels 50 m apart (the density ramps to 0
+    over one level on each side, inside the optical depth); black ground, sun of 1."""
+    altitudes = np.arange(0.0, thickness_m + 1.0, 50.0)
+    density = ((altitudes >= base_m) & (altitudes <= top_m)).astype(float)
+    extinction = optical_depth / np.trapezoid(density, altitudes)
+    return OpticalProfile(
+        wavelengths_nm=np.array([550.0]), bottom_radius_m=EARTH_RADIUS_M,
+        top_radius_m=EARTH_RADIUS_M + thickness_m, altitudes_m=altitudes,
+        density=density[None, :], extinction_per_density=np.array([[extinction]]),
+        scattering_per_density=np.array([[extinction]]), phases=(HenyeyGreensteinPhase(0.0),),
+        names=("deck",), ground_albedo=np.zeros(1), toa_irradiance=np.ones(1),
+        sun_angular_radius_rad=0.0)

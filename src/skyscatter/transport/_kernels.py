@@ -54,6 +54,35 @@ def density_at(altitude, h_step, density, out):
         out[c] = density[c, k] * (1.0 - f) + density[c, k + 1] * f
 
 
+def cumulative_columns(density: np.ndarray, h_step: float) -> np.ndarray:
+    """int_0^h_k n_c dh [density x m] of every constituent at every level k, (n_c, n_z): the
+    trapezoid rule, exact for densities linear between levels (`column_below`)."""
+    steps = 0.5 * (density[:, 1:] + density[:, :-1]) * h_step
+    return np.concatenate([np.zeros((density.shape[0], 1)), np.cumsum(steps, axis=1)], axis=1)
+
+
+@njit(cache=True)
+def column_below(altitude, h_step, density, cumulative, out):
+    """int_0^altitude n_c dh [density x m] of every constituent into out (n_c,), exact for the
+    densities of `density_at` (linear between levels, zero above the top); `cumulative` from
+    `cumulative_columns`. 0 at and below the ground."""
+    n_z = density.shape[1]
+    x = altitude / h_step
+    if x <= 0.0:
+        for c in range(density.shape[0]):
+            out[c] = 0.0
+        return
+    k = int(x)
+    if k >= n_z - 1:
+        for c in range(density.shape[0]):
+            out[c] = cumulative[c, n_z - 1]
+        return
+    f = x - k
+    for c in range(density.shape[0]):
+        out[c] = cumulative[c, k] + h_step * f * (
+            density[c, k] + 0.5 * f * (density[c, k + 1] - density[c, k]))
+
+
 @njit(cache=True)
 def split_sample_count(r, mu, t_start, t_end, n_samples):
     """(t_split, m1, m2): the segment [t_start, t_end] is split at the tangent point -r mu when

@@ -107,19 +107,21 @@ TAIL_TOLERANCE = 1e-3
 # The radius axis of the scattering table (`radius_warp`): segments of its piecewise-linear
 # warp, uniform in rho / H. Where a cell of Bruneton's axis (REFERENCE_RADIUS_CELLS uniform in
 # rho / H) would hold more than THICK_OPTICAL_DEPTH, the optically thick layers get a share of
-# the cells, up to THICK_CELL_SHARE, in proportion to their optical depth, and the quadrature
-# gets at least THICK_LAYER_QUADRATURE (`thick_layer_resolution`). Measured on `earth-overcast`
-# (a deck of optical depth 20, 500 m thick) against DISORT at 550 nm with the sun 60 deg up,
-# median of tables / DISORT - 1: Bruneton's axis with 32 / 64 / 128 radius cells +53 / -38 /
-# +7 % (the answer jumps with where the 1-4 cells inside the deck fall); the warp +19 % (32
-# cells) and +43 % (64): the column table's 64 radii (2 in the deck) then decide it; with 512
-# of them -40 % for 32 and 64 cells alike; with 128 samples per ray of the orders >= 2 too
-# +3.2 %, and with 256 for the first order -4.8 % (docs/physics/tables.md).
+# the cells, up to THICK_CELL_SHARE, in proportion to their optical depth, and the column table
+# gets at least THICK_LAYER_QUADRATURE (`thick_layer_resolution`); the table rays refine
+# themselves inside such layers (`_table_build_kernels._refined_distances`). Measured on
+# `earth-overcast` (a deck of optical depth 20, 500 m thick) against DISORT at 550 nm with the
+# sun 60 deg up, median of tables / DISORT - 1: Bruneton's axis with 32 / 64 / 128 radius cells
+# +53 / -38 / +7 % (the answer jumps with where the 1-4 cells inside the deck fall); the warp
+# +19 % (32 cells) and +43 % (64): the column table's 64 radii (2 in the deck) then decide it.
+# With the rays refined, their columns integrated along them and the sun's optical depth
+# interpolated between the column table's rows, sun 30 deg from the zenith: 512 / 1024 / 2048
+# radii -3.2 / -1.9 / -1.5 % (docs/physics/tables.md).
 RADIUS_WARP_SEGMENTS = 64
 REFERENCE_RADIUS_CELLS = 32
 THICK_OPTICAL_DEPTH = 1.0
 THICK_CELL_SHARE = 0.5
-THICK_LAYER_QUADRATURE = {"transmittance_r": 512, "ray_samples": 256, "multiple_ray_samples": 128}
+THICK_LAYER_QUADRATURE = {"transmittance_r": 1024}
 
 
 @dataclass(frozen=True)
@@ -378,7 +380,11 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
 
     columns = _kernels.column_table(res.transmittance_r, res.transmittance_mu,
                                     res.transmittance_samples, bottom, top, h_step, density)
-    transmittance = np.exp(-np.einsum("cw,crm->rmw", profile.extinction_per_density, columns))
+    depth = np.einsum("cw,crm->rmw", profile.extinction_per_density, columns)
+    transmittance = np.exp(-depth)
+    # the first order's sun: optical depths inside optically thick layers, else transmittances
+    # (`single_scattering_table`)
+    thick = not is_identity_warp(warp)
     report("transmittance")
     phase = sample_phase_functions(profile, scatterers, res.phase_angles)
     smooth_phase, peak = truncate_forward_peak(phase, res.truncation_angle_deg)
@@ -386,8 +392,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     # the orders >= 2 see the delta-M scaled medium (`phase_truncation`); without a clipped
     # peak it is the medium itself
     scaled = _scaled_optics(profile, scatterer_index, peak)
-    scaled_transmittance = (np.exp(-np.einsum("cw,crm->rmw", scaled.extinction, columns))
-                            if truncated else transmittance)
+    scaled_depth = np.einsum("cw,crm->rmw", scaled.extinction, columns) if truncated else depth
+    sun_table = depth if thick else transmittance
+    scaled_sun_table = scaled_depth if thick else np.exp(-scaled_depth)
     peak_transmittance, aureole = _peak_aureole(profile, scaled, scatterer_index, phase,
                                                 smooth_phase, peak, columns,
                                                 res.truncation_angle_deg)
@@ -418,7 +425,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     for batch in batches:
         medium = _table_build_kernels.RayMedium(
             h_step=h_step, density=density, columns=columns,
-            extinction=np.ascontiguousarray(profile.extinction_per_density[:, batch]))
+            extinction=np.ascontiguousarray(profile.extinction_per_density[:, batch]),
+            cumulative=_kernels.cumulative_columns(density, h_step))
         scaled_medium = medium._replace(
             extinction=np.ascontiguousarray(scaled.extinction[:, batch]))
         sun = np.ascontiguousarray(profile.toa_irradiance[batch], dtype=np.float64)
@@ -429,7 +437,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         label = f"wavelengths {batch.start + 1}-{batch.stop} of {n_wl}"
 
         single = _table_build_kernels.single_scattering_table(
-            grid, medium, res.ray_samples, np.ascontiguousarray(transmittance[..., batch]),
+            grid, medium, res.ray_samples, np.ascontiguousarray(sun_table[..., batch]), thick,
             scatterer_index, np.ascontiguousarray(sun[None, :] * beta_s), sun_radius)
         scattering[..., :n_s, batch] = single
         if truncated and orders > 1:
@@ -438,7 +446,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             peak_b = np.ascontiguousarray(peak[:, batch])
             scaled_single = _table_build_kernels.single_scattering_table(
                 grid, scaled_medium, res.ray_samples,
-                np.ascontiguousarray(scaled_transmittance[..., batch]), scatterer_index,
+                np.ascontiguousarray(scaled_sun_table[..., batch]), thick, scatterer_index,
                 np.ascontiguousarray(sun[None, :] * (1.0 - peak_b) * beta_s), sun_radius)
             scattering[..., n_s, batch] = _table_build_kernels.phase_weighted_difference(
                 scaled_single, single, 1.0 - peak_b, smooth_b, grid)
