@@ -174,6 +174,7 @@ class Frame:
             "u_sun_solid_angle": header["sun_solid_angle_sr"],
             "u_sun_disk": np.asarray(header["sun_disk_xyz"]).reshape(-1),
             "u_radius_warp": list(header["radius_warp"]),  # vec4 array, zero-padded (tables.js)
+            "u_radius_warp_identity": int(header.get("radius_warp_identity", False)),
         }
         return {"textures": textures, "uniforms": uniforms, "view": data["view"]}
 

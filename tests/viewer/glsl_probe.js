@@ -1,9 +1,9 @@
 // Evaluates the viewer's GLSL parameterisations (static/shaders/parameterisation.glsl) in the
 // browser's WebGL2 on a list of inputs and returns the results (test_viewer_browser.py).
 // Called by Playwright's page.evaluate with {inputs: [[r, mu, mu_s, nu], ...], radii: [R_b, R_t],
-// mu_s_min, sizes: [n_r, n_mu, n_mu_s], radius_warp: [...]}; returns {name: [values...]} per
-// output.
-async ({inputs, radii, mu_s_min, sizes, radius_warp}) => {
+// mu_s_min, sizes: [n_r, n_mu, n_mu_s], radius_warp: [...], radius_warp_identity: bool (the
+// header's flag: the shader then skips the warp)}; returns {name: [values...]} per output.
+async ({inputs, radii, mu_s_min, sizes, radius_warp, radius_warp_identity}) => {
   const canvas = document.createElement("canvas");
   const gl = canvas.getContext("webgl2");
   if (!gl.getExtension("EXT_color_buffer_float")) throw new Error("no EXT_color_buffer_float");
@@ -76,6 +76,8 @@ void main() {
     const warp = new Float32Array(4 * Math.ceil(radius_warp.length / 4));
     warp.set(radius_warp);
     gl.uniform4fv(gl.getUniformLocation(program, "u_radius_warp"), warp);
+    gl.uniform1i(gl.getUniformLocation(program, "u_radius_warp_identity"),
+                 radius_warp_identity ? 1 : 0);
     gl.viewport(0, 0, width, height);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
     const pixels = new Float32Array(width * height * 4);

@@ -164,9 +164,10 @@ def _python_mappings(inputs: np.ndarray, bottom: float, top: float, mu_s_min: fl
     return {name: np.array(values) for name, values in rows.items()}
 
 
+@pytest.mark.parametrize("layer_warp", [True, False], ids=["layer-warp", "identity-warp"])
 @pytest.mark.parametrize("radii", [(6_371_000.0, 6_471_000.0), (3_389_500.0, 3_489_500.0)],
                          ids=["earth", "mars"])
-def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii):
+def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii, layer_warp):
     """The GLSL twins in parameterisation.glsl against transport.table_parameterisation on a
     grid of rays from 10 m above the ground to the top, all directions and sun angles.
     Tolerance 3e-4 in texture coordinates (a 40th of a texel of the 128-entry mu axis):
@@ -187,13 +188,15 @@ def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii):
             rows.append([r, mu, mu_s, nu])
     inputs = np.array(rows, dtype=np.float32).astype(np.float64)
     sizes = (32, 128, 40)
-    # a radius warp with half the cells in a layer at rho / H 0.07-0.11 (a low cloud deck)
+    # a radius warp with half the cells in a layer at rho / H 0.07-0.11 (a low cloud deck), or
+    # Bruneton's axis, which the header flags so that the shader skips the warp's reads
     x = np.linspace(0.0, 1.0, RADIUS_WARP_SEGMENTS + 1)
-    warp = 0.5 * x + 0.5 * np.clip((x - 0.07) / 0.04, 0.0, 1.0)
+    warp = 0.5 * x + 0.5 * np.clip((x - 0.07) / 0.04, 0.0, 1.0) if layer_warp else x
     page.goto(viewer_url.url + "&controls=0&quality=preview&width=8&height=8")
     result = page.evaluate(PROBE, {"inputs": inputs.tolist(), "radii": list(radii),
                                    "mu_s_min": tp.COS_SUN_ZENITH_MIN, "sizes": list(sizes),
-                                   "radius_warp": warp.tolist()})
+                                   "radius_warp": warp.tolist(),
+                                   "radius_warp_identity": not layer_warp})
     expected = _python_mappings(inputs, bottom, top, tp.COS_SUN_ZENITH_MIN, sizes, warp)
     gl = {name: np.array(values).reshape(-1, 4) for name, values in result.items()}
     np.testing.assert_allclose(gl["scattering_uvwz"], expected["scattering_uvwz"], rtol=0,

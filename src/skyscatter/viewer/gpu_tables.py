@@ -49,7 +49,7 @@ from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.spectrum.colour import cmf_weights
 from skyscatter.spectrum.star import Star
-from skyscatter.transport.tables import AtmosphereTables
+from skyscatter.transport.tables import AtmosphereTables, is_identity_warp
 
 __all__ = ["FORMAT_VERSION", "GpuTables", "LAYOUT", "MAGIC", "MAX_TABLES", "PHASE_ROW",
            "SUN_DISK_SAMPLES", "decode", "encode", "gpu_tables"]
@@ -139,6 +139,8 @@ def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
         "top_radius_m": float(tables.top_radius_m),
         "mu_s_min": float(tables.min_cos_sun_zenith),
         "radius_warp": [float(v) for v in tables.radius_warp],
+        # Bruneton's axis: the shader skips the warp's reads (docs/viewer.md, GPU frame time)
+        "radius_warp_identity": is_identity_warp(tables.radius_warp),
         "orders": int(tables.orders),
         "n_wavelengths": int(profile.n_wavelengths),
         "scattering_names": list(tables.scattering_names),

@@ -80,6 +80,7 @@ export function uploadTables(gl, decoded) {
       u_top_radius: header.top_radius_m,
       u_mu_s_min: header.mu_s_min,
       u_radius_warp: paddedToVec4s(header.radius_warp),
+      u_radius_warp_identity: header.radius_warp_identity ? 1 : 0,
       u_ground_albedo: header.ground_albedo_xyz,
       u_sun_irradiance: header.sun_irradiance_xyz,
       u_sun_angular_radius: header.sun_angular_radius_rad,

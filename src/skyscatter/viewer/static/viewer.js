@@ -145,7 +145,8 @@ class Viewer {
 
   setUniforms(program, values) {
     const gl = this.gl;
-    const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows", "u_output"]);
+    const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows", "u_output",
+                          "u_radius_warp_identity"]);
     const matrices = new Set(["u_camera_basis", "u_local_to_world", "u_site_to_world"]);
     for (const [name, value] of Object.entries(values)) {
       const location = this.uniform(program, name);

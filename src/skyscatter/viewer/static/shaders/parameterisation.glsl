@@ -47,6 +47,8 @@ vec2 transmittance_x_from_r_mu(float r, float mu, float bottom_radius, float top
 // the scattering table's radius warp (AtmosphereTables.radius_warp): RADIUS_WARP_SEGMENTS + 1
 // values, four per vec4
 uniform vec4 u_radius_warp[RADIUS_WARP_VEC4S];
+// 1 where the warp is the identity (Bruneton's axis): its reads are skipped, 4 % of a frame
+uniform int u_radius_warp_identity;
 
 float radius_warp_value(int k) {
     return u_radius_warp[k / 4][k % 4];
@@ -64,7 +66,8 @@ float warped_radius(float x) {
 float scattering_u_r(float r, float bottom_radius, float top_radius, float n_r) {
     float big_h = horizon_distance(top_radius, bottom_radius);
     float rho = horizon_distance(r, bottom_radius);
-    return texture_coord_from_unit_range(warped_radius(min(rho / big_h, 1.0)), n_r);
+    float x = min(rho / big_h, 1.0);
+    return texture_coord_from_unit_range(u_radius_warp_identity == 1 ? x : warped_radius(x), n_r);
 }
 
 // twin of horizon_zenith_angle
