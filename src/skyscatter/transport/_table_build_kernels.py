@@ -135,8 +135,7 @@ def _grey_depths(r, mu, tj, hits_ground, start, grey, grid, columns, here):
     tj along the table ray (r, mu), in the grey extinction per column density `grey` (n_c,);
     start (n_c,): `columns_to_top` of the ray's start as `_ray_samples` takes it; here scratch."""
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
-    rj = min(max(math.sqrt(max(r * r + tj * tj + 2.0 * r * mu * tj, 0.0)), bottom_radius),
-             top_radius)
+    rj = _ray_radius(r, mu, tj, bottom_radius, top_radius)
     mj = min(max((r * mu + tj) / rj, -1.0), 1.0)
     columns_to_top(rj, -mj if hits_ground else mj, bottom_radius, top_radius, columns, here)
     along = 0.0
@@ -198,10 +197,10 @@ ALONG_RAY_PIECES = 4
 
 
 @njit(cache=True)
-def _ray_altitude(r, mu, t, bottom_radius, top_radius):
-    """Altitude [m] at distance t along the ray (r, mu), inside the atmosphere's bounds."""
+def _ray_radius(r, mu, t, bottom_radius, top_radius):
+    """Radius [m] at distance t along the ray (r, mu), inside the atmosphere's bounds."""
     radius = math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
-    return min(max(radius, bottom_radius), top_radius) - bottom_radius
+    return min(max(radius, bottom_radius), top_radius)
 
 
 @njit(cache=True)
@@ -228,31 +227,38 @@ def _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, d
     total = _refined_distances(r, mu, hits_ground, t, total, start, grid, medium)
     low = np.empty(n_c)
     high = np.empty(n_c)
+    level = np.empty(n_c)
+    h_a = 0.0
     for j in range(total):
         tj = t[j]
-        rj = math.sqrt(max(r * r + tj * tj + 2.0 * r * mu * tj, 0.0))
-        rj = min(max(rj, bottom_radius), top_radius)
+        rj = _ray_radius(r, mu, tj, bottom_radius, top_radius)
         radius[j] = rj
         mu_t[j] = min(max((r * mu + tj) / rj, -1.0), 1.0)
         density_at(rj - bottom_radius, h_step, density, dens[j])
         if j == 0:
             col_view[0, :] = 0.0
+            h_a = rj - bottom_radius
+            column_below(h_a, h_step, density, medium.cumulative, low)
             continue
         col_view[j, :] = col_view[j - 1, :]
         step = (tj - t[j - 1]) / ALONG_RAY_PIECES
-        h_a = _ray_altitude(r, mu, t[j - 1], bottom_radius, top_radius)
-        column_below(h_a, h_step, density, medium.cumulative, low)
+        # pieces from the previous sample (h_a, low) to this one, whose end the next interval
+        # starts from
         for piece in range(1, ALONG_RAY_PIECES + 1):
-            h_b = _ray_altitude(r, mu, t[j - 1] + piece * step, bottom_radius, top_radius)
+            if piece < ALONG_RAY_PIECES:
+                h_b = _ray_radius(r, mu, t[j - 1] + piece * step, bottom_radius,
+                                  top_radius) - bottom_radius
+            else:
+                h_b = rj - bottom_radius
             column_below(h_b, h_step, density, medium.cumulative, high)
             rise = h_b - h_a
             if abs(rise) > 1e-9 * step:
                 for c in range(n_c):
                     col_view[j, c] += max((high[c] - low[c]) * step / rise, 0.0)
             else:  # horizontal: the density at the piece's altitude
-                density_at(h_a, h_step, density, low)
+                density_at(h_a, h_step, density, level)
                 for c in range(n_c):
-                    col_view[j, c] += low[c] * step
+                    col_view[j, c] += level[c] * step
             for c in range(n_c):
                 low[c] = high[c]
             h_a = h_b

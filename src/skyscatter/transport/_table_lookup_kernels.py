@@ -473,8 +473,10 @@ def simplex_exponential(depths, n, work):
     for k in range(1, n + 1):
         least = min(least, depths[k])
     y, z = work[0], work[1]
-    for i in range(steps + 1):
-        y[i] = math.exp(-(depths[0] - least) * i * h)
+    first = math.exp(-(depths[0] - least) * h)
+    y[0] = 1.0
+    for i in range(1, steps + 1):
+        y[i] = y[i - 1] * first
     for k in range(1, n + 1):
         decay = math.exp(-(depths[k] - least) * h)
         z[0] = 0.0

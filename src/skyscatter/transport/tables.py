@@ -392,9 +392,10 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     # the orders >= 2 see the delta-M scaled medium (`phase_truncation`); without a clipped
     # peak it is the medium itself
     scaled = _scaled_optics(profile, scatterer_index, peak)
-    scaled_depth = np.einsum("cw,crm->rmw", scaled.extinction, columns) if truncated else depth
     sun_table = depth if thick else transmittance
-    scaled_sun_table = scaled_depth if thick else np.exp(-scaled_depth)
+    if truncated:  # the scaled medium's first order lights the second (below)
+        scaled_depth = np.einsum("cw,crm->rmw", scaled.extinction, columns)
+        scaled_sun_table = scaled_depth if thick else np.exp(-scaled_depth)
     peak_transmittance, aureole = _peak_aureole(profile, scaled, scatterer_index, phase,
                                                 smooth_phase, peak, columns,
                                                 res.truncation_angle_deg)
@@ -422,11 +423,12 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         radius_warp=warp)
 
     sun_radius = float(profile.sun_angular_radius_rad)
+    cumulative = _kernels.cumulative_columns(density, h_step)
     for batch in batches:
         medium = _table_build_kernels.RayMedium(
             h_step=h_step, density=density, columns=columns,
             extinction=np.ascontiguousarray(profile.extinction_per_density[:, batch]),
-            cumulative=_kernels.cumulative_columns(density, h_step))
+            cumulative=cumulative)
         scaled_medium = medium._replace(
             extinction=np.ascontiguousarray(scaled.extinction[:, batch]))
         sun = np.ascontiguousarray(profile.toa_irradiance[batch], dtype=np.float64)
@@ -605,9 +607,9 @@ def radius_warp(profile: OpticalProfile) -> np.ndarray:
     THICK_OPTICAL_DEPTH, else 0 (the identity: Bruneton's axis). The cells crowd inside
     optically thick layers (clouds, fog) in proportion to the optical depth they hold."""
     x = np.linspace(0.0, 1.0, RADIUS_WARP_SEGMENTS + 1)
-    extinction = profile.density.T @ profile.extinction_per_density  # (n_z, n_wl) [m^-1]
-    steps = np.diff(profile.altitudes_m)[:, None] * 0.5 * (extinction[1:] + extinction[:-1])
-    depth = np.concatenate([np.zeros((1, extinction.shape[1])), np.cumsum(steps, axis=0)])
+    h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
+    # (n_z, n_wl): the vertical optical depth below each level
+    depth = _kernels.cumulative_columns(profile.density, h_step).T @ profile.extinction_per_density
     bottom, top = float(profile.bottom_radius_m), float(profile.top_radius_m)
     radius = bottom + profile.altitudes_m
     level_x = np.sqrt(np.maximum(radius**2 - bottom**2, 0.0) / (top**2 - bottom**2))
