@@ -30,7 +30,9 @@ true extinction). What the scaled medium's first order has more than the exact o
 near the sun's direction to E as the scaled medium's direct sun less the true one (the TMS
 correction of Nakajima & Tanaka 1988, in table form). Optically thick media need many orders:
 once the ratio of successive orders settles, the orders beyond are a geometric series, added
-at once (`TAIL_TOLERANCE`; `AtmosphereTables.tail_share` says how much of M it is).
+at once (`TAIL_TOLERANCE`); where it settles slowly (cloud decks), the limit of the orders is
+extrapolated from the last six by reduced-rank extrapolation (`order_extrapolation`).
+`AtmosphereTables.tail_share` says how much of M either tail is.
 Paths whose last event is a ground reflection are not in the tables; the renderer adds the ground
 with albedo / pi (direct sun + E) (Bruneton 2017). The ground albedo of the profile enters the
 orders >= 2 through J.
@@ -64,6 +66,7 @@ from skyscatter.errors import InputError
 from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.aureole import PeakAureole, peak_aureole
+from skyscatter.transport.order_extrapolation import OrderExtrapolation
 from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
 from skyscatter.transport.table_parameterisation import (
@@ -94,9 +97,10 @@ MAX_TRUNCATION_ANGLE_DEG = 90.0
 # RATIO_SETTLED from one order to the next, the iteration stops as soon as the tail's
 # uncertainty, its share of the orders >= 2 times the relative change of r/(1 - r) that the
 # last change of r makes, is below TAIL_TOLERANCE; at the last order allowed the tail is added
-# anyway. A stratus deck of optical depth 20 (ratio 0.953) stops at 21 orders instead of 143,
-# its orders >= 2 within 0.1 % median and 1 % 99th percentile of the 143 (benchmarks/
-# bench_precompute_media.py, docs/physics/tables.md).
+# anyway. Before it does, from order `order_extrapolation.EXTRAPOLATION_FIRST_ORDER` on, the
+# orders' limit may be extrapolated by RRE (`order_extrapolation`): a stratus deck of optical
+# depth 20 (ratio 0.953) stops at 16 orders instead of the 30 this rule needs
+# (benchmarks/bench_precompute_media.py, docs/physics/tables.md).
 TAIL_MIN_ORDER = 4
 # Orders that grow by this factor twice in a row are refused (`_check_converging`).
 DIVERGING_RATIO = 1.0
@@ -225,9 +229,10 @@ class AtmosphereTables:
                    sun at the zenith [W m^-2 sr^-1 nm^-1]; they show how the orders converge
                    (rows beyond `orders_computed` are 0)
     orders_computed   the orders iterated (<= orders: the iteration stops once the orders
-                   beyond are a geometric series below `TAIL_TOLERANCE`)
-    tail_share     (n_wl,): the share of the orders >= 2 that is that extrapolated series
-                   (0 where none was added): how far from convergence the iteration stopped
+                   beyond are a geometric series below `TAIL_TOLERANCE`, or their limit is
+                   extrapolated, `order_extrapolation`)
+    tail_share     (n_wl,): the extrapolated rest (series or limit) over the orders >= 2
+                   iterated (0 where none was added): how far from convergence it stopped
     peak_transmittance (n_r_t, n_mu_t, n_wl) float64: exp(-x), x the peak depth (the
                    scattering the truncated peaks take out, f beta_s) from (r, mu) to the top,
                    on the transmittance table's axes [-]
@@ -472,6 +477,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         matrices = _phase_matrices(smooth_b, res)
         scaled_beta_s = scaled.scattering[scatterer_index][:, batch]
         previous, use_phase = scaled_single, True
+        extrapolation = OrderExtrapolation()
         ground = _table_build_kernels.direct_ground_irradiance(
             DIRECT_GROUND_SAMPLES, grid, scaled_medium, sun, sun_radius)
         for order in range(2, orders + 1):
@@ -498,6 +504,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             _check_converging(order_mean[:order, batch], wavelengths[batch])
             tail = _geometric_tail(order_mean[:order, batch], last=order == orders)
             orders_computed = max(orders_computed, order)
+            extrapolated = None
             if tail is not None:
                 # orders > n as the geometric series of order n (module docstring)
                 factor = (tail / (1.0 - tail)).astype(np.float32)
@@ -505,6 +512,19 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                 irradiance[..., batch] += delta_irradiance * factor
                 tail_share[batch] = (order_mean[order - 1, batch] * factor
                                      / order_mean[1:order, batch].sum(axis=0))
+            else:
+                # or the orders' limit by reduced-rank extrapolation (`order_extrapolation`)
+                extrapolated = extrapolation.add(order, scattering[..., n_s, batch], delta,
+                                                 delta_irradiance)
+                if extrapolated is not None:
+                    multiple_tail, irradiance_tail = extrapolated
+                    scattering[..., n_s, batch] += multiple_tail
+                    irradiance[..., batch] += irradiance_tail
+                    tail_mean, _ = _table_build_kernels.order_statistics(
+                        multiple_tail[..., None, :], False, phase_b, grid)
+                    tail_share[batch] = tail_mean / order_mean[1:order, batch].sum(axis=0)
+                    del multiple_tail
+            if tail is not None or extrapolated is not None:
                 step += orders - order
                 report(f"order {order} and the tail of the orders beyond, {label}")
                 break
