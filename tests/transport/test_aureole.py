@@ -6,6 +6,7 @@ to the eye (`_table_lookup_kernels.peak_aureole`): its integral over the events'
 against the divided difference of exp (Hermite-Genocchi), and, looking at the sun, the line
 of sight's closed form."""
 
+import decimal
 import math
 from dataclasses import replace
 
@@ -14,7 +15,7 @@ import pytest
 from transport_cases import SMALL, exponential_earth
 
 from skyscatter.transport._table_lookup_kernels import (
-    AUREOLE_DEPTH_STEPS,
+    SIMPLEX_WORK,
     simplex_exponential,
     transmittance_to_top,
 )
@@ -84,31 +85,36 @@ def divided_difference_of_exp(depths: list[float]) -> float:
     """int over the simplex sum g_k = 1 of exp(-sum_k d_k g_k) for distinct d_k, in closed form
     by the Hermite-Genocchi formula (de Boor 2005, "Divided differences", Surveys in
     Approximation Theory 1, 46, eq. 1.4): (-1)^n [d_0, .., d_n] exp(-d) =
-    sum_k exp(-d_k) / prod_{j != k} (d_j - d_k)."""
-    return sum(math.exp(-d) / math.prod(e - d for e in depths if e != d) for d in depths)
+    sum_k exp(-d_k) / prod_{j != k} (d_j - d_k), summed in 60-digit decimal arithmetic so that
+    nodes 1e-9 apart lose nothing to cancellation."""
+    with decimal.localcontext() as context:
+        context.prec = 60
+        nodes = [decimal.Decimal(d) for d in depths]
+        total = sum((-d).exp() / math.prod(e - d for e in nodes if e != d) for d in nodes)
+        return float(total)
 
 
-# (depths, tolerance): the exponential trapezoid rule on 64 intervals errs by O((h spread)^2),
-# measured 1.0e-4, 1.4e-4, 1.1e-4 relative for spreads of 2.5 and less (a sun 5 deg high seen 5
-# deg above it in dusty Mars), 3.0e-4 for 7 and 3.0e-3 for 25 (a horizon of optical depth 30)
-PATHS = [([4.2, 2.9, 1.75], 5e-4), ([4.2, 3.3, 2.4, 1.75], 5e-4), ([0.3, 0.2, 0.25, 0.1], 5e-4),
-         ([10.4, 7.0, 3.5], 1e-3), ([30.0, 12.0, 5.0], 5e-3)]
+# slant depths along the path from the sun to the eye: a sun 5 deg high seen 5 deg above it in
+# dusty Mars, a hazy zenith, a horizon of optical depth 30, and nodes bunched together (nearly
+# the line of sight's own direction) or bunched with one far off, where the recurrence of
+# divided differences cancels and the Taylor series takes over
+PATHS = [[4.2, 2.9, 1.75], [4.2, 3.3, 2.4, 1.75], [0.3, 0.2, 0.25, 0.1], [10.4, 7.0, 3.5],
+         [30.0, 12.0, 5.0], [2.0, 2.0 + 1e-7, 2.0 + 2e-7, 2.3], [1.0, 1.4, 1.45, 30.0],
+         [5.0, 5.6, 5.6 + 1e-9], [0.7, 0.2, 0.69, 0.71], [700.0, 3.0, 2.0]]
 
 
-@pytest.mark.parametrize(("depths", "tolerance"), PATHS)
-def test_the_path_integral_over_the_events_depths_is_the_divided_difference(depths, tolerance):
-    work = np.empty((2, AUREOLE_DEPTH_STEPS + 1))
-    value = simplex_exponential(np.array(depths), len(depths) - 1, work)
-    assert value == pytest.approx(divided_difference_of_exp(depths), rel=tolerance)
+@pytest.mark.parametrize("depths", PATHS)
+def test_the_path_integral_over_the_events_depths_is_the_divided_difference(depths):
+    value = simplex_exponential(np.array(depths), len(depths) - 1, np.empty(SIMPLEX_WORK))
+    # double precision less what the recurrence's cancellation costs (1e-15 / spans of 0.5)
+    assert value == pytest.approx(divided_difference_of_exp(depths), rel=1e-12)
 
 
-@pytest.mark.parametrize("n", [2, 3])
+@pytest.mark.parametrize("n", [1, 2, 3])
 def test_one_direction_gives_the_poisson_term_of_the_line_of_sight(n):
-    work = np.empty((2, AUREOLE_DEPTH_STEPS + 1))
-    value = simplex_exponential(np.full(n + 1, 2.5), n, work)
-    # exp(-x) / n! (all gaps crossed with the same depth); the trapezoid rule is exact for
-    # n = 2 and errs by h^2 / 2 = 1.2e-4 for n = 3
-    assert value == pytest.approx(math.exp(-2.5) / math.factorial(n), rel=5e-4)
+    value = simplex_exponential(np.full(n + 1, 2.5), n, np.empty(SIMPLEX_WORK))
+    # exp(-x) / n!: all gaps crossed with the same depth
+    assert value == pytest.approx(math.exp(-2.5) / math.factorial(n), rel=1e-14)
 
 
 @pytest.fixture(scope="module")

@@ -75,7 +75,8 @@ class LookupTables(NamedTuple):
     density: np.ndarray  # (n_c, n_z) profile densities on those levels
     scatterers: np.ndarray  # (n_s,) int64: the constituents that scatter
     single_factor: np.ndarray  # (n_s, n_wl) E_sun beta_s per density
-    peak_transmittance: np.ndarray  # (n_r_t, n_mu_t, n_wl) exp(-peak depth) to the top [-]
+    slant_depth: np.ndarray  # (n_r_t, n_mu_t, n_wl) -ln(transmittance) to the top [-]
+    peak_depth: np.ndarray  # (n_r_t, n_mu_t, n_wl) the particles' peak depth to the top [-]
     aureole_shape: np.ndarray  # (n_x, n_psi, n_wl) multiple peak scattering [sr^-1]
     aureole_x_max: float  # largest peak depth of aureole_shape [-]
     aureole_psi_max: float  # its largest angle from the sun [rad]; 0: no aureole
@@ -452,38 +453,67 @@ def view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius, t
 # Lookups for the solver
 # --------------------------------------------------------------------------------------------
 
-# Intervals of the integral over the events' depths in `simplex_exponential` (exponential
-# trapezoid rule, error O((h spread)^2)): against the closed form 1e-4 relative for the depth
-# spreads of a sun 5 deg high seen up to 10 deg above it through Mars dust, 3e-3 for a spread of
-# 25 (tests/transport/test_aureole.py).
-AUREOLE_DEPTH_STEPS = 64
+# `simplex_exponential`: a divided difference over nodes closer together than this is summed as
+# its Taylor series, to the term below 1e-17 of the first (at most SIMPLEX_SERIES_TERMS), wider
+# ones by the recurrence, whose cancellation then costs at most ~1e-16 / span^3 = 1e-12 relative
+SIMPLEX_SERIES_SPAN = 0.05
+SIMPLEX_SERIES_TERMS = 12
+SIMPLEX_MAX_NODES = 4
+SIMPLEX_WORK = 2 * SIMPLEX_MAX_NODES + SIMPLEX_SERIES_TERMS
 
 
 @njit(cache=True)
 def simplex_exponential(depths, n, work):
-    """int exp(-sum_k depths[k] g_k) over the gaps g_0 .. g_n >= 0 with sum g_k = 1 [-]: the
-    share of the vertical column between n ordered events, each gap crossed in a direction of
-    slant depth depths[k] (`peak_aureole`); exp(-x) / n! when all depths are x. Nested
-    one-dimensional integrals y_k(s) = int_0^s y_{k-1}(s') exp(-d_k (s - s')) ds' on
-    AUREOLE_DEPTH_STEPS intervals (exponential trapezoid rule), with the smallest depth taken
-    out first (exact factor exp(-d_min), the rest decays); work (2, steps + 1) is scratch."""
-    steps = AUREOLE_DEPTH_STEPS
-    h = 1.0 / steps
-    least = depths[0]
+    """int exp(-sum_k depths[k] g_k) over the gaps g_0 .. g_n >= 0 with sum g_k = 1 [-], n <= 3:
+    the share of the vertical column between n ordered events, each gap crossed in a direction
+    of slant depth depths[k] (`peak_aureole`); exp(-x) / n! when all depths are x. In closed
+    form by the Hermite-Genocchi formula, (-1)^n [d_0, .., d_n] exp(-d) (de Boor 2005,
+    "Divided differences", Surveys in Approximation Theory 1, 46, eq. 1.4). The integral is
+    symmetric in the depths, so depths[:n + 1] are sorted in place first; then Q over the
+    nodes i .. i + k by the recurrence Q_k(i) = (Q_(k-1)(i) - Q_(k-1)(i + 1)) / (d_(i+k) - d_i),
+    or, where those nodes lie within SIMPLEX_SERIES_SPAN, as
+    exp(-d_i) sum_j (-1)^j h_j(d - d_i) / (k + j)!, h_j the complete homogeneous symmetric
+    polynomials of the nodes' offsets. work: scratch of SIMPLEX_WORK."""
+    for i in range(1, n + 1):  # insertion sort
+        value = depths[i]
+        j = i - 1
+        while j >= 0 and depths[j] > value:
+            depths[j + 1] = depths[j]
+            j -= 1
+        depths[j + 1] = value
+    q = work[:SIMPLEX_MAX_NODES]
+    decay = work[SIMPLEX_MAX_NODES:2 * SIMPLEX_MAX_NODES]
+    h = work[2 * SIMPLEX_MAX_NODES:]
+    for i in range(n + 1):
+        decay[i] = math.exp(-depths[i])
+        q[i] = decay[i]
+    factorial = 1.0
     for k in range(1, n + 1):
-        least = min(least, depths[k])
-    y, z = work[0], work[1]
-    first = math.exp(-(depths[0] - least) * h)
-    y[0] = 1.0
-    for i in range(1, steps + 1):
-        y[i] = y[i - 1] * first
-    for k in range(1, n + 1):
-        decay = math.exp(-(depths[k] - least) * h)
-        z[0] = 0.0
-        for i in range(1, steps + 1):
-            z[i] = z[i - 1] * decay + 0.5 * h * (y[i - 1] * decay + y[i])
-        y, z = z, y
-    return math.exp(-least) * y[steps]
+        factorial *= k
+        for i in range(n + 1 - k):
+            span = depths[i + k] - depths[i]
+            if span > SIMPLEX_SERIES_SPAN:
+                q[i] = (q[i] - q[i + 1]) / span
+                continue
+            terms = 1  # up to the term of span^j / j! < 1e-17
+            bound = 1.0
+            while terms < SIMPLEX_SERIES_TERMS and bound > 1e-17:
+                bound *= span / terms
+                terms += 1
+            h[0] = 1.0
+            for j in range(1, terms):
+                h[j] = 0.0
+            for m in range(i + 1, i + k + 1):
+                offset = depths[m] - depths[i]
+                for j in range(1, terms):
+                    h[j] += offset * h[j - 1]
+            total = 0.0
+            term_factor = 1.0 / factorial
+            for j in range(terms):
+                total += term_factor * h[j]
+                term_factor *= -1.0 / (k + j + 1.0)
+            q[i] = decay[i] * total
+    return q[0]
 
 
 @njit(cache=True)
@@ -497,7 +527,7 @@ def _great_circle_mu(mu, mu_s, psi, u):
 
 
 @njit(cache=True)
-def peak_aureole(r, mu, mu_s, nu, tables, t_view, scratch, value):
+def peak_aureole(r, mu, mu_s, nu, tables, value):
     """value[w] += the sun's light scattered two or more times in the particles' forward peaks
     seen along (r, mu) at cos(angle from the sun) nu, for a ray that misses the ground:
     E_sun V T (exp(x) - 1 - x) G(x, psi) (`transport.aureole`) with the line of sight's
@@ -508,8 +538,7 @@ def peak_aureole(r, mu, mu_s, nu, tables, t_view, scratch, value):
     the view (`_great_circle_mu`), with slant optical depth X_k and peak depth P_k to the top
     there (plane-parallel in the column's optical depth). F_2 and F_3 fix the Poisson law
     T' x'^n / n! used for all n: x' = 3 F_3 / F_2, T' = 2 F_2 / x'^2; along the sun's own
-    direction, or beside it at its elevation, T' = T and x' = x. t_view, scratch (n_wl,)
-    scratch."""
+    direction, or beside it at its elevation, T' = T and x' = x."""
     bottom_radius, top_radius = tables.bottom_radius, tables.top_radius
     shape, x_max = tables.aureole_shape, tables.aureole_x_max
     n_x, n_psi, n_wl = shape.shape[0], shape.shape[1], value.size
@@ -524,15 +553,14 @@ def peak_aureole(r, mu, mu_s, nu, tables, t_view, scratch, value):
     peak = np.empty((5, n_wl))
     for j in range(5):
         mu_j = max(_great_circle_mu(mu, mu_s, psi, shares[j]), mu_h)
-        transmittance_to_top(r, mu_j, bottom_radius, top_radius, tables.transmittance, t_view)
-        transmittance_to_top(r, mu_j, bottom_radius, top_radius, tables.peak_transmittance,
-                             scratch)
-        for w in range(n_wl):
-            depth[j, w] = -math.log(t_view[w]) if t_view[w] > 0.0 else 700.0
-            peak[j, w] = -math.log(scratch[w]) if scratch[w] > 0.0 else x_max
+        # bilinear in the depths themselves (as the tables' sun inside thick layers): no
+        # logarithm per direction and wavelength
+        transmittance_to_top(r, mu_j, bottom_radius, top_radius, tables.slant_depth,
+                             depth[j])
+        transmittance_to_top(r, mu_j, bottom_radius, top_radius, tables.peak_depth, peak[j])
     i_p, a_p = linear_axis(psi / tables.aureole_psi_max * (n_psi - 1), n_psi)
-    work = np.empty((2, AUREOLE_DEPTH_STEPS + 1))
-    gaps = np.empty(4)
+    gaps = np.empty(SIMPLEX_MAX_NODES)
+    work = np.empty(SIMPLEX_WORK)
     for w in range(n_wl):
         gaps[0], gaps[1], gaps[2] = depth[0, w], depth[2, w], depth[4, w]
         second = peak[2, w] * peak[4, w] * simplex_exponential(gaps, 2, work)
@@ -643,7 +671,7 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                                      * exact[s, w])
             if (not hits_ground and tables.aureole_psi_max > 0.0
                     and nu > math.cos(tables.aureole_psi_max)):
-                peak_aureole(r, mu, mu_s, nu, tables, t_view, scratch, value)
+                peak_aureole(r, mu, mu_s, nu, tables, value)
             if hits_ground:
                 mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
                 transmittance_along(r, mu, d, True, bottom_radius, top_radius, transmittance,

@@ -32,6 +32,8 @@ CHUNK_RAYS = 1 << 18  # rays per kernel call, so that progress can be reported
 # Samples per sunlit piece of the rays of the per-observer single-scattering table (16 k rays,
 # so they can be twice those of a per-ray march)
 VIEW_TABLE_SAMPLES = 64
+# the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
+SLANT_DEPTH_MAX = 700.0
 
 
 class LutSolver:
@@ -90,7 +92,9 @@ class LutSolver:
             single_factor=np.ascontiguousarray(  # E_sun beta_s, (n_s, n_wl)
                 sun_irradiance[None, :] * profile.scattering_per_density[scatterers].reshape(
                     scatterers.size, profile.n_wavelengths), dtype=np.float64),
-            peak_transmittance=tables.peak_transmittance, aureole_shape=tables.aureole_shape,
+            slant_depth=_depth(tables.transmittance, SLANT_DEPTH_MAX),
+            peak_depth=_depth(tables.peak_transmittance, float(tables.aureole_limits[0])),
+            aureole_shape=tables.aureole_shape,
             aureole_x_max=float(tables.aureole_limits[0]),
             aureole_psi_max=float(tables.aureole_limits[1]))
 
@@ -222,6 +226,12 @@ class LutSolver:
                                                                          self._lookup)
         n_wl = p.n_wavelengths
         return direct.reshape(shape + (n_wl,)), diffuse.reshape(shape + (n_wl,))
+
+
+def _depth(transmittance: np.ndarray, where_zero: float) -> np.ndarray:
+    """-ln of a transmittance table (n_r_t, n_mu_t, n_wl), `where_zero` where it is 0."""
+    with np.errstate(divide="ignore"):
+        return np.where(transmittance > 0.0, -np.log(transmittance), where_zero)
 
 
 def _writable(array: np.ndarray) -> np.ndarray:
