@@ -518,7 +518,11 @@ def test_the_geometric_tail_stops_once_the_extrapolated_sum_is_within_its_tolera
         ratio = tables_module._geometric_tail(means[:n], last=False)[0]
         estimate = means[1:n, 0].sum() + means[n - 1, 0] * ratio / (1.0 - ratio)
         assert abs(estimate / exact - 1.0) < 2.0 * tables_module.TAIL_TOLERANCE
-        assert n < 40  # far fewer than the ~230 orders summed one by one would need
+        # far fewer than the ~230 orders summed one by one would need; the cap on the tail's
+        # share (TAIL_SHARE_MAX) decides here, at 50-51 orders (16-19 without it)
+        assert n < 60
+        share = means[n - 1, 0] * ratio / (1.0 - ratio) / means[1:n, 0].sum()
+        assert share <= tables_module.TAIL_SHARE_MAX
 
 
 def test_orders_that_grow_are_refused_with_a_message_naming_the_cause():
