@@ -286,6 +286,11 @@ HAZE_DENSITY = 'density = { type = "exponential", scale_height_m = 2000.0 }'
     # missing, wrong type, unknown choice
     ("[planet]\nradius_m = 6_371_000.0\nground_albedo = 0.2\n", "", "[planet]", None,
      "missing"),
+    # a required key misspelt: missing, and the file's stray key named
+    ("radius_m = 6_371_000.0", "raduis_m = 6_371_000.0", "planet.radius_m", None,
+     "is missing (a number is required: a finite number >= 1000 and <= 1e+09); the file has "
+     "'planet.raduis_m': misspelt?"),
+    ("[planet]", "[planett]", "[planet]", None, "the file has 'planett': misspelt?"),
     ("radius_m = 6_371_000.0", 'radius_m = "6371 km"', "planet.radius_m", "'6371 km'",
      "a finite number"),
     ("ground_albedo = 0.2", "ground_albedo = true", "planet.ground_albedo", "True",

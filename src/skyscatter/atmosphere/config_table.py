@@ -64,6 +64,17 @@ class ConfigTable:
         return ConfigError(f"{self._key(key)} = {shown(value)} is not allowed: {allowed}",
                            path=self.path, key=self._key(key), value=value, allowed=allowed)
 
+    def missing(self, key: str, detail: str = "", allowed: str | None = None,
+                table: bool = False) -> ConfigError:
+        """The error for a required `key` that is absent (`[key]` for a `table`), naming a key
+        of this table that nobody asked for and looks like its misspelling."""
+        name = f"[{self._key(key)}]" if table else self._key(key)
+        strays = [other for other in self.data if other not in self.asked]
+        close = difflib.get_close_matches(key, strays, n=1)
+        hint = f"; the file has {shown(self._key(close[0]))}: misspelt?" if close else ""
+        return ConfigError(f"{name} is missing{detail}{hint}", path=self.path,
+                           key=self._key(key), allowed=allowed)
+
     def has(self, key: str) -> bool:
         self.asked.add(key)
         return key in self.data
@@ -83,9 +94,8 @@ class ConfigTable:
         self.asked.add(key)
         if key not in self.data:
             if default is None:
-                raise ConfigError(f"{self._key(key)} is missing (a number is required: "
-                                  f"{bounds.allowed})", path=self.path, key=self._key(key),
-                                  allowed=bounds.allowed)
+                raise self.missing(key, f" (a number is required: {bounds.allowed})",
+                                   bounds.allowed)
             return default
         return self._checked(key, self.data.pop(key), bounds)
 
@@ -108,8 +118,7 @@ class ConfigTable:
         if key not in self.data:
             if default is None:
                 allowed = f" (one of: {', '.join(choices)})" if choices else ""
-                raise ConfigError(f"{self._key(key)} is missing{allowed}", path=self.path,
-                                  key=self._key(key))
+                raise self.missing(key, allowed)
             return default
         value = self.data.pop(key)
         if not isinstance(value, str):
@@ -134,8 +143,7 @@ class ConfigTable:
         self.asked.add(key)
         if key not in self.data:
             if required:
-                raise ConfigError(f"[{self._key(key)}] is missing", path=self.path,
-                                  key=self._key(key))
+                raise self.missing(key, table=True)
             return None
         value = self.data.pop(key)
         if not isinstance(value, dict):
@@ -179,8 +187,7 @@ class ConfigTable:
         self.asked.add(key)
         if key not in self.data:
             if default is None:
-                raise ConfigError(f"{self._key(key)} is missing", path=self.path,
-                                  key=self._key(key))
+                raise self.missing(key)
             return SpectralParameter.constant(default)
         if isinstance(self.data[key], dict) and "polynomial_nm" in self.data[key]:
             return self._polynomial(key, bounds)
