@@ -299,7 +299,8 @@ def test_precompute_says_how_many_orders_it_iterated(capsys, tmp_path):
     assert code == 0, err
     assert "precomputing 12 orders for 1 wavelengths" in err
     match = re.search(r"tables: (\d+) orders iterated, the orders beyond added as their "
-                      r"geometric series \(up to (\d+) % of the orders >= 2\)", err)
+                      r"geometric series or extrapolated limit \(up to (\d+) % of the orders "
+                      r">= 2\)", err)
     assert match is not None, err
     assert 4 <= int(match.group(1)) < 12 and int(match.group(2)) < 10
 

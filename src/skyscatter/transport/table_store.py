@@ -139,8 +139,8 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
                                min_cos_sun_zenith=min_cos_sun_zenith, progress=progress)
     if tables.orders_computed < orders:
         say(f"tables: {tables.orders_computed} orders iterated, the orders beyond added as "
-            f"their geometric series (up to {100 * float(tables.tail_share.max()):.0f} % of the "
-            "orders >= 2)")
+            "their geometric series or extrapolated limit (up to "
+            f"{100 * float(tables.tail_share.max()):.0f} % of the orders >= 2)")
     if unwritable is None:
         try:
             cache.store(key, tables_to_arrays(tables), metadata)
