@@ -569,3 +569,26 @@ def test_first_order_of_a_thin_thick_deck_matches_the_plane_parallel_closed_form
     errors = np.abs(np.array(errors))
     assert errors.size > 100
     assert np.median(errors) < 0.015 and errors.max() < 0.03
+
+
+@pytest.mark.parametrize(("n_fine", "n_coarse"), [(128, 64), (16, 8)])
+def test_the_coarse_orders_view_axis_interpolates_within_each_half_of_u_mu(n_fine, n_coarse):
+    # The orders >= COARSE_FROM_ORDER live on half the u_mu cells. A quantity linear in the
+    # unit-range coordinate x of each half (ground rays, sky rays), x from the parameterisation's
+    # own inverse, must go to the coarse cells and back exactly: linear interpolation of a
+    # linear function, never across the horizon.
+    def x_of_cells(n):
+        u = (np.arange(n) + 0.5) / n
+        ground = u < 0.5
+        coordinate = np.where(ground, 1.0 - 2.0 * u, 2.0 * u - 1.0)
+        return ground, unit_range_from_texture_coord(coordinate, n // 2)
+
+    ground_f, x_f = x_of_cells(n_fine)
+    ground_c, x_c = x_of_cells(n_coarse)
+    fine = np.where(ground_f, 3.0 - 2.0 * x_f, 10.0 + 5.0 * x_f).astype(np.float32)
+    coarse = np.where(ground_c, 3.0 - 2.0 * x_c, 10.0 + 5.0 * x_c)
+    table = np.broadcast_to(fine[None, :, None, None, None], (2, n_fine, 3, 2, 1))
+    restricted = tables_module._resampled(table, tables_module._mu_resampling(n_fine, n_coarse))
+    np.testing.assert_allclose(restricted[0, :, 0, 0, 0], coarse, rtol=1e-6)
+    back = tables_module._resampled(restricted, tables_module._mu_resampling(n_coarse, n_fine))
+    np.testing.assert_allclose(back[1, :, 2, 1, 0], fine, rtol=1e-6)
