@@ -36,7 +36,7 @@ __all__ = ["EXTRAPOLATION_DELTAS", "EXTRAPOLATION_FIRST_ORDER", "OrderExtrapolat
 # with 7 nothing is gained (benchmarks/bench_orders_slab.py --extrapolation)
 EXTRAPOLATION_DELTAS = 6
 # the first order kept: after the orders where the geometric series stops thin atmospheres
-# (Earth at 6, `mars-physical` 6, fog 9), so that they neither change nor hold the extra tables
+# (Earth and `mars-physical` at 6), so that they neither change nor hold the extra tables
 EXTRAPOLATION_FIRST_ORDER = 7
 # the estimate's error left, from the changes of the last three estimates |s_n / s_(n-1) - 1|
 # (`OrderExtrapolation.add`): median and 95th percentile over the cells
