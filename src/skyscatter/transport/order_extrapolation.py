@@ -16,11 +16,12 @@ k + 1 orders as
 
 per wavelength (each wavelength is its own iteration); s_n is exact once the orders lie in a
 space of k modes. The sky light on the ground, a linear function of the same orders, is
-extrapolated with the same gamma. The iteration stops once two successive estimates agree
-(median and 95th percentile of |s_n / s_(n-1) - 1| over the cells).
+extrapolated with the same gamma. The iteration stops once the estimates have converged: the
+change |s_n / s_(n-1) - 1| (median and 95th percentile over the cells) times rho / (1 - rho),
+rho the ratio of successive changes, is below ERROR_MEDIAN and ERROR_P95.
 
 Measured on `earth-overcast` at 550 nm against 70 orders plus their geometric tail: stopped at
-16 orders, |e| of the orders >= 2 median / 95th / 99th percentile 0.06 / 0.94 / 2.8 %, where
+16 orders, |e| of the orders >= 2 median / 95th / 99th percentile 0.07 / 1.06 / 3.0 %, where
 the geometric series needs 30 orders for 0.13 / 2.2 / 3.4 % (docs/physics/tables.md).
 """
 
