@@ -33,8 +33,8 @@ import numpy as np
 
 __all__ = ["EXTRAPOLATION_DELTAS", "EXTRAPOLATION_FIRST_ORDER", "OrderExtrapolation"]
 
-# k + 1 = 6 orders per estimate: with 4 (k = 3) the 95th percentile above needs 2 orders more,
-# with 7 nothing is gained (benchmarks/bench_orders_slab.py --extrapolation)
+# k + 1 = 6 orders per estimate: with 4 the 95th percentile above needs 2 orders more, with 7
+# little is gained (benchmarks/bench_order_extrapolation.py)
 EXTRAPOLATION_DELTAS = 6
 # the first order kept: after the orders where the geometric series stops thin atmospheres
 # (Earth and `mars-physical` at 6), so that they neither change nor hold the extra tables
@@ -88,11 +88,11 @@ class OrderExtrapolation:
         if previous is None:
             return None
         estimate = _sample(partial) + tail_sample
-        # s_(n-1) = x_n - Delta S_n + tail_(n-1)
         lit = estimate > 0.0
         if not np.any(lit):
             return None
         lit &= estimate > DARK_CELL * np.median(estimate[lit])
+        # s_n - s_(n-1), with s_(n-1) = x_n - Delta S_n + tail_(n-1)
         change = np.abs(tail_sample - previous + self._samples[-1])[lit] / estimate[lit]
         self._changes.append(np.array([np.median(change), np.percentile(change, 95)]))
         if len(self._changes) < self._changes.maxlen:

@@ -491,7 +491,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         extrapolation = OrderExtrapolation()
         ground = _table_build_kernels.direct_ground_irradiance(
             DIRECT_GROUND_SAMPLES, grid, scaled_medium, sun, sun_radius)
-        order_res, order_grid, coarse = res, grid, None
+        order_res, order_grid = res, grid
         for order in range(2, orders + 1):
             if order == COARSE_FROM_ORDER and (coarse := _coarse_grid(res, grid)) is not None:
                 order_res, order_grid, restrict, prolong = coarse
