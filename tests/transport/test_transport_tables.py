@@ -572,11 +572,12 @@ def test_first_order_of_a_thin_thick_deck_matches_the_plane_parallel_closed_form
 
 
 @pytest.mark.parametrize(("n_fine", "n_coarse"), [(128, 64), (16, 8)])
-def test_the_coarse_orders_view_axis_interpolates_within_each_half_of_u_mu(n_fine, n_coarse):
-    # The orders >= COARSE_FROM_ORDER live on half the u_mu cells. A quantity linear in the
-    # unit-range coordinate x of each half (ground rays, sky rays), x from the parameterisation's
-    # own inverse, must go to the coarse cells and back exactly: linear interpolation of a
-    # linear function, never across the horizon.
+def test_the_coarse_orders_view_axes_interpolate_within_each_half_of_u_mu_and_in_azimuth(
+        n_fine, n_coarse):
+    # The orders >= COARSE_FROM_ORDER live on half the u_mu cells and fewer view-sun slices. A
+    # quantity linear in the unit-range coordinate x of each half (ground rays, sky rays), x
+    # from the parameterisation's own inverse, must go to the coarse cells and back exactly:
+    # linear interpolation of a linear function, never across the horizon.
     def x_of_cells(n):
         u = (np.arange(n) + 0.5) / n
         ground = u < 0.5
@@ -587,8 +588,21 @@ def test_the_coarse_orders_view_axis_interpolates_within_each_half_of_u_mu(n_fin
     ground_c, x_c = x_of_cells(n_coarse)
     fine = np.where(ground_f, 3.0 - 2.0 * x_f, 10.0 + 5.0 * x_f).astype(np.float32)
     coarse = np.where(ground_c, 3.0 - 2.0 * x_c, 10.0 + 5.0 * x_c)
-    table = np.broadcast_to(fine[None, :, None, None, None], (2, n_fine, 3, 2, 1))
-    restricted = tables_module._resampled(table, tables_module._mu_resampling(n_fine, n_coarse))
-    np.testing.assert_allclose(restricted[0, :, 0, 0, 0], coarse, rtol=1e-6)
-    back = tables_module._resampled(restricted, tables_module._mu_resampling(n_coarse, n_fine))
-    np.testing.assert_allclose(back[1, :, 2, 1, 0], fine, rtol=1e-6)
+    # and a quantity linear in the slices' azimuth from the sun, phi = pi u_nu
+    n_nu_fine, n_nu_coarse = 8, tables_module.COARSE_NU_SLICES
+    phi_f = np.pi * np.arange(n_nu_fine) / (n_nu_fine - 1)
+    phi_c = np.pi * np.arange(n_nu_coarse) / (n_nu_coarse - 1)
+    table = (fine[None, :, None, None, None]
+             * (1.0 + phi_f[None, None, None, :, None]).astype(np.float32)
+             * np.ones((2, 1, 3, 1, 1), dtype=np.float32))
+    restriction = tables_module._Resampling(tables_module._mu_resampling(n_fine, n_coarse),
+                                            tables_module._linear_resampling(n_nu_fine,
+                                                                             n_nu_coarse))
+    prolongation = tables_module._Resampling(tables_module._mu_resampling(n_coarse, n_fine),
+                                             tables_module._linear_resampling(n_nu_coarse,
+                                                                              n_nu_fine))
+    restricted = tables_module._resampled(table, restriction)
+    np.testing.assert_allclose(restricted[0, :, 0, :, 0], coarse[:, None] * (1.0 + phi_c),
+                               rtol=1e-6)
+    back = tables_module._resampled(restricted, prolongation)
+    np.testing.assert_allclose(back[1, :, 2, :, 0], fine[:, None] * (1.0 + phi_f), rtol=1e-6)
