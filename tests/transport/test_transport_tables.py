@@ -12,6 +12,7 @@ from transport_cases import EARTH_RADIUS_M, SMALL, cloud_deck, homogeneous_shell
 
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.errors import InputError
+from skyscatter.optics.phase import HenyeyGreensteinPhase
 from skyscatter.transport import tables as tables_module
 from skyscatter.transport.geometry import horizon_cos_zenith, local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
@@ -153,6 +154,31 @@ def test_the_radius_axis_is_bruneton_s_unless_a_cell_would_hold_a_thick_layer():
     identity = np.array([scattering_r_from_u((k + 0.5) / 32, bottom, top, 32, IDENTITY_WARP)
                          for k in range(32)]) - bottom
     assert np.count_nonzero((identity > 500.0) & (identity < 1200.0)) <= 2
+
+
+@pytest.mark.parametrize(("g", "optical_depth", "slices"),
+                         [(0.65, 0.5, 16), (0.65, 0.1, 8), (0.3, 0.5, 8), (0.55, 0.35, 16)])
+def test_forward_scattering_particles_of_some_optical_depth_get_more_view_sun_slices(
+        g, optical_depth, slices):
+    # A shell 10 km thick of HG particles: their asymmetry parameter is g (the phase function's
+    # closed form) and their vertical optical depth beta_e x 10 km. The rule of
+    # tables.forward_scattering_resolution: 16 slices from g >= 0.5 and optical depth >= 0.3.
+    shell = dataclasses.replace(homogeneous_shell(optical_depth / 10_000.0),
+                                phases=(HenyeyGreensteinPhase(g),))
+    resolution = tables_module.forward_scattering_resolution(
+        TableResolution(), shell, tables_module.radius_warp(shell))
+    assert resolution.scattering_nu == slices
+
+
+def test_earth_keeps_8_view_sun_slices_and_dusty_mars_gets_16_but_not_a_cloud_deck():
+    # Earth's aerosol (optical depth 0.05-0.13) and the stratus deck (optically thick: its
+    # multiple scattering smooths the azimuth) keep Bruneton's 8 slices; Mars's Mie dust
+    # (g 0.7-0.9, optical depth 0.27-0.48 over the bands) gets 16.
+    for name, slices in (("earth", 8), ("earth-overcast", 8), ("mars-physical", 16)):
+        profile = load_atmosphere(name).optical_profile(np.linspace(380.0, 780.0, 8))
+        resolution = tables_module.forward_scattering_resolution(
+            TableResolution(), profile, tables_module.radius_warp(profile))
+        assert resolution.scattering_nu == slices, name
 
 
 def test_the_warp_and_its_inverse_agree():
