@@ -51,7 +51,7 @@ def test_disort_fluxes_reproduce_the_published_slab(optical_depth):
 @pytest.mark.parametrize("optical_depth", [
     1.0,
     pytest.param(8.0, marks=pytest.mark.xfail(strict=True, reason=(
-        "issue 17: at tau 8 the tables lose light over the ~85 orders (each order's small "
+        "issue 17: at tau 8 the tables lose light over their ~30 orders (each order's small "
         "deficit adds up): these tables R -12.1 % / T_d -3.1 %, Bruneton's default sizes "
         "R -5.6 % / T_d -2.0 % (R + T_d + T_0 = 0.962)"))),
 ])

@@ -333,13 +333,17 @@ def _sphere_grids(resolution: TableResolution) -> tuple[np.ndarray, ...]:
 
 
 def _phase_matrices(phase: np.ndarray, resolution: TableResolution) -> np.ndarray:
-    """Discrete sphere integral of each phase function, (n_s, n_wl, n_out, n_in) float32:
-    P[o, i] = (p(w_o . w_i) + p(w_o . w_i')) dOmega_i with w_i' the mirror image of w_i about
-    the sun's vertical plane, each row scaled to sum to 1 (the phase function's normalisation);
-    p from the sampled phase functions `phase` (n_s, n_angle, n_wl)."""
+    """Discrete sphere integral of each phase function, laid out for `_source_function`:
+    (n_wl, n_out, n_s n_in) float32, the constituents side by side, P_s[o, i] = (p_s(w_o . w_i)
+    + p_s(w_o . w_i')) dOmega_i with w_i' the mirror image of w_i about the sun's vertical
+    plane, each row scaled to sum to 1 (the phase function's normalisation); p from the sampled
+    phase functions `phase` (n_s, n_angle, n_wl)."""
     _, _, solid, out, incoming, mirrored = _sphere_grids(resolution)
-    return _table_build_kernels.phase_matrices(phase, np.ascontiguousarray(out @ incoming.T),
-                                               np.ascontiguousarray(out @ mirrored.T), solid)
+    matrices = _table_build_kernels.phase_matrices(  # (n_s, n_wl, n_out, n_in)
+        phase, np.ascontiguousarray(out @ incoming.T), np.ascontiguousarray(out @ mirrored.T),
+        solid)
+    n_s, n_wl, n_out, n_in = matrices.shape
+    return np.ascontiguousarray(matrices.transpose(1, 2, 0, 3)).reshape(n_wl, n_out, n_s * n_in)
 
 
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
@@ -506,7 +510,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                      _read_only(irradiance))
         if orders == 1 or n_s == 0:  # nothing scatters: no higher orders
             continue
-        matrices = _phase_matrices(smooth_b, res)
+        phases = _phase_matrices(smooth_b, res)
         scaled_beta_s = scaled.scattering[scatterer_index][:, batch]
         previous, use_phase = scaled_single, True
         extrapolation = OrderExtrapolation()
@@ -525,7 +529,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             incoming = _table_build_kernels.incoming_radiance(
                 order_grid, scaled_medium, theta_in, phi_in, lit, ground,
                 albedo).astype(np.float32)
-            source = _source_function(matrices, incoming, scaled_beta_s, node_density,
+            source = _source_function(phases, incoming, scaled_beta_s, node_density,
                                       order_res)
             del incoming
             delta_irradiance = _table_build_kernels.indirect_irradiance(
@@ -772,31 +776,34 @@ class _OrderSums:
 
     def __init__(self, tables: np.ndarray) -> None:
         self.partial = tables
-        self.coarse = False
         self._tables = tables
-        self._coarse_orders = np.zeros(0, dtype=np.float32)
+        self._coarse_orders: np.ndarray | None = None  # the orders since `coarsen`
         self._prolong: _Resampling | None = None
+
+    @property
+    def coarse(self) -> bool:
+        return self._coarse_orders is not None
 
     def coarsen(self, restrict: _Resampling, prolong: _Resampling) -> None:
         self.partial = _resampled(self._tables, restrict)
         self._coarse_orders = np.zeros_like(self.partial)
-        self._prolong, self.coarse = prolong, True
+        self._prolong = prolong
 
     def add(self, delta: np.ndarray) -> None:
         self.partial += delta
-        if self.coarse:
+        if self._coarse_orders is not None:
             self._coarse_orders += delta
 
     def on_tables_grid(self) -> np.ndarray:
         """The sum so far on the tables' grid."""
-        if not self.coarse:
+        if self._coarse_orders is None:
             return self._tables
         return self._tables + _resampled(self._coarse_orders, self._prolong)
 
     def finish(self) -> None:
-        if self.coarse:
+        if self._coarse_orders is not None:
             self._tables += _resampled(self._coarse_orders, self._prolong)
-            self.coarse = False
+            self._coarse_orders = None
 
 
 class _Resampling(NamedTuple):
@@ -827,7 +834,7 @@ def _resampled(table: np.ndarray, resampling: _Resampling) -> np.ndarray:
     """A table (n_r, n_mu, n_mu_s, n_nu, n_b) on other mu and nu axes (`_Resampling`)."""
     for axis, (low, weight) in ((1, resampling.mu), (3, resampling.nu)):
         if low.size == table.shape[axis]:
-            continue  # the same axis
+            continue  # same size: the identity
         shape = [1] * table.ndim
         shape[axis] = low.size
         weight = weight.reshape(shape)
@@ -844,7 +851,7 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return view
 
 
-def _source_function(matrices: np.ndarray, incoming: np.ndarray, beta_s: np.ndarray,
+def _source_function(phases: np.ndarray, incoming: np.ndarray, beta_s: np.ndarray,
                      node_density: np.ndarray, res: TableResolution) -> np.ndarray:
     """Source function S = J / beta_s on the scattering-density grid, laid out for
     `multiple_scattering_table`: (n_r, n_theta, n_mu_s * n_phi * n_b) float32 (axes r, theta,
@@ -854,8 +861,10 @@ def _source_function(matrices: np.ndarray, incoming: np.ndarray, beta_s: np.ndar
     `node_density` (n_s, n_r)), so S is the phase-weighted mean incoming radiance, smooth in r;
     the kernel multiplies it by the exact scattering coefficient along each ray. Where no
     constituent scatters (above the profile), the constituents are weighted by beta_s alone.
-    incoming: (n_b, n_in, n_r n_mu_s); beta_s: (n_s, n_b)."""
-    n_s, n_b, n_out, n_in = matrices.shape
+    phases: (n_b, n_out, n_s n_in) (`_phase_matrices`); incoming: (n_b, n_in, n_r n_mu_s);
+    beta_s: (n_s, n_b)."""
+    n_s, n_b = beta_s.shape
+    n_in = incoming.shape[1]
     n_r, n_mu_s = res.scattering_r, res.scattering_mu_s
     weights = node_density[:, :, None] * beta_s[:, None, :]  # (n_s, n_r, n_b)
     empty = weights.sum(axis=0) <= 0.0
@@ -866,8 +875,8 @@ def _source_function(matrices: np.ndarray, incoming: np.ndarray, beta_s: np.ndar
     for b in range(n_b):
         # one product for all constituents: [P_1 .. P_s] @ [w_1 L; ..; w_s L], the weights
         # per r applied to the incoming radiance (the smaller operand)
-        phases = matrices[:, b].transpose(1, 0, 2).reshape(n_out, n_s * n_in)
         weighted = (weights[:, None, :, b, None] * incoming[b][None]).reshape(n_s * n_in, -1)
-        product = (phases @ weighted).reshape(res.density_theta, res.density_phi, n_r, n_mu_s)
+        product = (phases[b] @ weighted).reshape(res.density_theta, res.density_phi, n_r,
+                                                  n_mu_s)
         source[..., b] = product.transpose(2, 0, 3, 1)  # (r, theta, mu_s, phi)
     return source.reshape(res.scattering_r, res.density_theta, -1)
