@@ -37,10 +37,7 @@ from bench_forward_peak import atmosphere as benchmark_atmosphere
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
-from skyscatter.transport.table_parameterisation import (
-    COS_SUN_ZENITH_MIN_EARTH,
-    scattering_mu_s_from_u,
-)
+from skyscatter.transport.table_parameterisation import scattering_mu_s_from_u
 from skyscatter.transport.tables import TableResolution, precompute_tables
 from skyscatter.validate.disort import (
     DisortComparison,
@@ -321,7 +318,8 @@ def main() -> None:
     n_mu_s = tables.resolution.scattering_mu_s
     nodes = [np.degrees(np.arccos(scattering_mu_s_from_u(
         (k + 0.5) / n_mu_s, profile.bottom_radius_m, profile.top_radius_m,
-        COS_SUN_ZENITH_MIN_EARTH, n_mu_s))) for k in range(n_mu_s - 1, n_mu_s - 6, -1)]
+        tables.min_cos_sun_zenith, tables.sun_angle_share, n_mu_s)))
+        for k in range(n_mu_s - 1, n_mu_s - 6, -1)]
     print("sun-zenith nodes of the scattering tables nearest the zenith [deg]: "
           + ", ".join(f"{z:.1f}" for z in nodes))
 

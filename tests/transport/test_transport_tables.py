@@ -14,11 +14,13 @@ from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.errors import InputError
 from skyscatter.optics.phase import HenyeyGreensteinPhase
 from skyscatter.transport import tables as tables_module
+from skyscatter.transport._table_build_kernels import radius_taps
 from skyscatter.transport.geometry import horizon_cos_zenith, local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
 from skyscatter.transport.solvers import SolverOptions, make_solver
 from skyscatter.transport.table_parameterisation import (
+    COS_SUN_ZENITH_MIN,
     COS_SUN_ZENITH_MIN_EARTH,
     ray_intersects_ground,
     scattering_mu_from_u,
@@ -35,7 +37,13 @@ from skyscatter.transport.table_parameterisation import (
     unwarped,
     warped,
 )
-from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
+from skyscatter.transport.tables import (
+    THICK_SUN_ANGLE_SHARE,
+    AtmosphereTables,
+    TableResolution,
+    precompute_tables,
+)
+from skyscatter.validate.slab import slab_profile
 
 PERCENT = 0.01
 TOP_RADIUS_M = EARTH_RADIUS_M + 60e3  # exponential_earth()
@@ -94,9 +102,13 @@ IDENTITY_WARP = np.linspace(0.0, 1.0, tables_module.RADIUS_WARP_SEGMENTS + 1)
 LAYER_WARP = 0.5 * IDENTITY_WARP + 0.5 * np.clip((IDENTITY_WARP - 0.07) / 0.04, 0.0, 1.0)
 
 
-@pytest.mark.parametrize("warp", [IDENTITY_WARP, LAYER_WARP], ids=["identity", "layer"])
+@pytest.mark.parametrize(("warp", "share"), [(IDENTITY_WARP, 0.0),
+                                             (LAYER_WARP, THICK_SUN_ANGLE_SHARE)],
+                         ids=["identity", "layer"])
 @pytest.mark.parametrize("altitude_m", [0.0, 1000.0, 20_000.0, 60_000.0])
-def test_scattering_mapping_round_trips_on_both_halves_of_the_mu_axis(altitude_m, warp):
+def test_scattering_mapping_round_trips_on_both_halves_of_the_mu_axis(altitude_m, warp, share):
+    # a layer's tables also take the mu_s axis's share uniform in sun zenith angle, whose
+    # inverse is a bisection
     bottom, top = EARTH_RADIUS_M, TOP_RADIUS_M
     r = bottom + altitude_m
     mu_h = horizon_cos_zenith(r, bottom)
@@ -108,12 +120,12 @@ def test_scattering_mapping_round_trips_on_both_halves_of_the_mu_axis(altitude_m
             spread = np.sqrt((1 - mu**2) * (1 - mu_s**2))
             nu = mu * mu_s + 0.3 * spread
             uvwz = scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, hits, bottom, top,
-                                                     COS_SUN_ZENITH_MIN_EARTH, 32, 128, 32,
-                                                     warp)
+                                                     COS_SUN_ZENITH_MIN_EARTH, share, 32, 128,
+                                                     32, warp)
             assert (uvwz[1] < 0.5) == hits  # the explicit flag picks the half
             back = scattering_r_mu_mu_s_nu_from_uvwz(*uvwz, bottom, top,
-                                                     COS_SUN_ZENITH_MIN_EARTH, 32, 128, 32,
-                                                     warp)
+                                                     COS_SUN_ZENITH_MIN_EARTH, share, 32, 128,
+                                                     32, warp)
             assert back[:4] == pytest.approx((r, mu, mu_s, nu), rel=1e-7, abs=1e-7)
             assert back[4] == hits
 
@@ -179,6 +191,45 @@ def test_earth_keeps_8_view_sun_slices_and_dusty_mars_gets_16_but_not_a_cloud_de
         resolution = tables_module.forward_scattering_resolution(
             TableResolution(), profile, tables_module.radius_warp(profile))
         assert resolution.scattering_nu == slices, name
+
+
+def test_radius_taps_reproduce_quadratics_and_sum_to_one():
+    # Catmull-Rom (Keys 1981, a = -1/2) is exact for polynomials of degree <= 2 (it is third
+    # order); the quadratic of the end cells is exact for degree <= 2 as well, and every set of
+    # weights sums to 1.
+    n = 9
+    nodes = np.arange(n, dtype=float)
+    quadratic = 2.0 + 3.0 * nodes - 0.5 * nodes**2
+    for k in range(n - 1):
+        for a in (0.0, 0.25, 0.5, 0.9):
+            first, *weights = radius_taps(k, a, n)
+            assert sum(weights) == pytest.approx(1.0, abs=1e-14)
+            taps = np.clip(first + np.arange(4), 0, n - 1)
+            x = k + a
+            assert np.dot(weights, quadratic[taps]) == pytest.approx(
+                2.0 + 3.0 * x - 0.5 * x**2, abs=1e-12)
+
+
+def test_thick_cells_get_the_cubic_source_and_a_thick_layer_the_sun_angle_share():
+    # tables.cubic_source: where a cell of Bruneton's 32 radii holds > 0.25 optical depths. The
+    # slab of van de Hulst at tau = 8 (uniform over 1 km: its top cell on that axis holds
+    # 1 - (31/32)^2 of 8 = 0.49) does, at tau = 1 (0.06) not; Earth's air (0.05) does not.
+    # Only a layer that warps the radius axis (the stratus) gets the mu_s share, which puts
+    # cells near the zenith: 10 of 40 within 50 deg of it, 6 deg apart (Bruneton's axis: 3,
+    # at 47.9, 36.2 and 0 deg).
+    assert tables_module.cubic_source(slab_profile(8.0))
+    assert not tables_module.cubic_source(slab_profile(1.0))
+    earth = load_atmosphere("earth").optical_profile(np.array([375.0, 550.0]))
+    assert not tables_module.cubic_source(earth)
+    assert tables_module.sun_angle_share(tables_module.radius_warp(earth)) == 0.0
+    overcast = load_atmosphere("earth-overcast").optical_profile(np.array([550.0]))
+    share = tables_module.sun_angle_share(tables_module.radius_warp(overcast))
+    assert share == tables_module.THICK_SUN_ANGLE_SHARE
+    bottom, top = overcast.bottom_radius_m, overcast.top_radius_m
+    for s, cells in ((0.0, 3), (share, 10)):
+        zeniths = np.degrees(np.arccos([scattering_mu_s_from_u(
+            (i + 0.5) / 40, bottom, top, COS_SUN_ZENITH_MIN, s, 40) for i in range(40)]))
+        assert np.count_nonzero(zeniths < 50.0) == cells
 
 
 def test_the_warp_and_its_inverse_agree():
@@ -585,7 +636,8 @@ def test_first_order_of_a_thin_thick_deck_matches_the_plane_parallel_closed_form
                                          res.scattering_mu)
             for i_s in range(res.scattering_mu_s):
                 mu_s = scattering_mu_s_from_u((i_s + 0.5) / res.scattering_mu_s, bottom, top,
-                                              tables.min_cos_sun_zenith, res.scattering_mu_s)
+                                              tables.min_cos_sun_zenith,
+                                              tables.sun_angle_share, res.scattering_mu_s)
                 if min(-mu, mu_s) < 0.3:
                     continue
                 c = 1.0 / -mu + 1.0 / mu_s

@@ -1,9 +1,10 @@
 // Evaluates the viewer's GLSL parameterisations (static/shaders/parameterisation.glsl) in the
 // browser's WebGL2 on a list of inputs and returns the results (test_viewer_browser.py).
 // Called by Playwright's page.evaluate with {inputs: [[r, mu, mu_s, nu], ...], radii: [R_b, R_t],
-// mu_s_min, sizes: [n_r, n_mu, n_mu_s], radius_warp: [...], radius_warp_identity: bool (the
-// header's flag: the shader then skips the warp)}; returns {name: [values...]} per output.
-async ({inputs, radii, mu_s_min, sizes, radius_warp, radius_warp_identity}) => {
+// mu_s_min, sun_angle_share, sizes: [n_r, n_mu, n_mu_s], radius_warp: [...],
+// radius_warp_identity: bool (the header's flag: the shader then skips the warp)}; returns
+// {name: [values...]} per output.
+async ({inputs, radii, mu_s_min, sun_angle_share, sizes, radius_warp, radius_warp_identity}) => {
   const canvas = document.createElement("canvas");
   const gl = canvas.getContext("webgl2");
   if (!gl.getExtension("EXT_color_buffer_float")) throw new Error("no EXT_color_buffer_float");
@@ -22,7 +23,7 @@ async ({inputs, radii, mu_s_min, sizes, radius_warp, radius_warp_identity}) => {
   const outputs = {
     scattering_uvwz: `vec4(scattering_u_r(r, R_b, R_t, N_R),
         scattering_u_mu(r, mu, ray_intersects_ground(r, mu, R_b), R_b, R_t, N_MU),
-        scattering_u_mu_s(mu_s, R_b, R_t, MU_S_MIN, N_MU_S), scattering_u_nu(nu, mu, mu_s))`,
+        scattering_u_mu_s(mu_s, R_b, R_t, MU_S_MIN, SUN_ANGLE_SHARE, N_MU_S), scattering_u_nu(nu, mu, mu_s))`,
     transmittance_irradiance: `vec4(transmittance_x_from_r_mu(r, mu, R_b, R_t),
         irradiance_x_from_r_mu_s(r, mu_s, R_b, R_t))`,
     distances: `vec4(distance_to_top_boundary(r, mu, R_t),
@@ -49,6 +50,7 @@ ${library}
 uniform sampler2D inputs;
 const float R_b = ${radii[0].toFixed(3)}; const float R_t = ${radii[1].toFixed(3)};
 const float MU_S_MIN = ${mu_s_min.toFixed(9)};
+const float SUN_ANGLE_SHARE = ${sun_angle_share.toFixed(9)};
 const float N_R = ${sizes[0].toFixed(1)}; const float N_MU = ${sizes[1].toFixed(1)};
 const float N_MU_S = ${sizes[2].toFixed(1)};
 out vec4 result;

@@ -18,7 +18,7 @@ from skyscatter.render.sky_at_time import render_sky_at
 from skyscatter.render.tonemap import night_adapted_exposure
 from skyscatter.transport import table_parameterisation as tp
 from skyscatter.transport.lut_solver import LutSolver
-from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS
+from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS, sun_angle_share
 from skyscatter.viewer import codegen
 
 PROBE = (Path(__file__).parent / "glsl_probe.js").read_text()
@@ -144,15 +144,16 @@ def test_bad_address_parameter_is_shown_in_the_page(page, viewer_url):
 
 
 def _python_mappings(inputs: np.ndarray, bottom: float, top: float, mu_s_min: float,
-                     sizes: tuple[int, int, int], radius_warp: np.ndarray
-                     ) -> dict[str, np.ndarray]:
+                     sun_angle_share: float, sizes: tuple[int, int, int],
+                     radius_warp: np.ndarray) -> dict[str, np.ndarray]:
     n_r, n_mu, n_mu_s = sizes
     rows = {"scattering_uvwz": [], "transmittance_irradiance": [], "distances": []}
     for r, mu, mu_s, nu in inputs:
         ground = tp.ray_intersects_ground(r, mu, bottom)
         rows["scattering_uvwz"].append(
             tp.scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, ground, bottom, top, mu_s_min,
-                                                 n_r, n_mu, n_mu_s, radius_warp))
+                                                 sun_angle_share, n_r, n_mu, n_mu_s,
+                                                 radius_warp))
         rows["transmittance_irradiance"].append(
             tp.transmittance_x_from_r_mu(r, mu, bottom, top)
             + tp.irradiance_x_from_r_mu_s(r, mu_s, bottom, top))
@@ -192,12 +193,16 @@ def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii, layer
     # Bruneton's axis, which the header flags so that the shader skips the warp's reads
     x = np.linspace(0.0, 1.0, RADIUS_WARP_SEGMENTS + 1)
     warp = 0.5 * x + 0.5 * np.clip((x - 0.07) / 0.04, 0.0, 1.0) if layer_warp else x
+    # such a layer also takes the mu_s axis's share uniform in the sun's zenith angle
+    share = sun_angle_share(warp)
     page.goto(viewer_url.url + "&controls=0&quality=preview&width=8&height=8")
     result = page.evaluate(PROBE, {"inputs": inputs.tolist(), "radii": list(radii),
-                                   "mu_s_min": tp.COS_SUN_ZENITH_MIN, "sizes": list(sizes),
+                                   "mu_s_min": tp.COS_SUN_ZENITH_MIN,
+                                   "sun_angle_share": share, "sizes": list(sizes),
                                    "radius_warp": warp.tolist(),
                                    "radius_warp_identity": not layer_warp})
-    expected = _python_mappings(inputs, bottom, top, tp.COS_SUN_ZENITH_MIN, sizes, warp)
+    expected = _python_mappings(inputs, bottom, top, tp.COS_SUN_ZENITH_MIN, share, sizes,
+                                warp)
     gl = {name: np.array(values).reshape(-1, 4) for name, values in result.items()}
     np.testing.assert_allclose(gl["scattering_uvwz"], expected["scattering_uvwz"], rtol=0,
                                atol=3e-4)

@@ -70,7 +70,9 @@ class TableGrid(NamedTuple):
     bottom_radius: float  # R_b [m]
     top_radius: float  # R_t [m]
     mu_s_min: float  # smallest cos(sun zenith) tabulated [-]
+    sun_angle_share: float  # of the mu_s axis (table_parameterisation.scattering_u_mu_s)
     radius_warp: np.ndarray  # the u_r axis's warp (table_parameterisation.scattering_u_r)
+    cubic_source: bool  # the source function interpolated cubically in radius (`radius_taps`)
 
 
 class RayMedium(NamedTuple):
@@ -379,6 +381,33 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
     return r, mu, total, t, radius, mu_t, dens, view, view_depth
 
 
+@njit(cache=True)
+def mu_s_nodes(grid):
+    """cos(sun zenith) [-] of the n_mu_s nodes of `grid` (a `TableGrid`)."""
+    nodes = np.empty(grid.n_mu_s)
+    for i_s in range(grid.n_mu_s):
+        nodes[i_s] = scattering_mu_s_from_u((i_s + 0.5) / grid.n_mu_s, grid.bottom_radius,
+                                            grid.top_radius, grid.mu_s_min,
+                                            grid.sun_angle_share, grid.n_mu_s)
+    return nodes
+
+
+@njit(cache=True)
+def radius_taps(k, a, n):
+    """(first node, 4 weights) interpolating at fractional index k + a on an axis of n >= 4
+    nodes: Catmull-Rom's cubic through nodes k-1..k+2 (Catmull & Rom 1974; Keys 1981, IEEE
+    Trans. ASSP 29(6), 1153, doi:10.1109/TASSP.1981.1163711, with a = -1/2), at the two end
+    cells the quadratic through the three nearest nodes (the fourth weight 0)."""
+    if k == 0:
+        return 0, 0.5 * (a - 1.0) * (a - 2.0), -a * (a - 2.0), 0.5 * a * (a - 1.0), 0.0
+    if k + 2 > n - 1:
+        return k - 1, 0.5 * a * (a - 1.0), 1.0 - a * a, 0.5 * a * (a + 1.0), 0.0
+    a2 = a * a
+    a3 = a2 * a
+    return (k - 1, 0.5 * (-a3 + 2.0 * a2 - a), 0.5 * (3.0 * a3 - 5.0 * a2 + 2.0),
+            0.5 * (-3.0 * a3 + 4.0 * a2 + a), 0.5 * (a3 - a2))
+
+
 @njit(parallel=True, cache=True)
 def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_depth, scatterers,
                             factor, sun_angular_radius):
@@ -394,7 +423,7 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
     `ComputeSingleScattering`; V = visible part of the sun disk. `grid`: a `TableGrid`,
     `medium`: a `RayMedium`."""
     n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
-    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
     extinction = medium.extinction
     n_s = scatterers.size
     n_wl = extinction.shape[1]
@@ -407,6 +436,7 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
     selection = np.zeros((n_s, extinction.shape[0], n_wl))
     for s in range(n_s):
         selection[s, scatterers[s], :] = 1.0
+    nodes = mu_s_nodes(grid)
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
@@ -428,8 +458,7 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
         sun = np.empty(n_wl)
         acc = np.empty((n_s, n_wl))
         for i_s in range(n_mu_s):
-            mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
-                                          mu_s_min, n_mu_s)
+            mu_s = nodes[i_s]
             for i_nu in range(n_nu):
                 nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 acc[:, :] = 0.0
@@ -522,8 +551,9 @@ def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
     a hair in either direction (measured: 33 of 131 072 cells of a small table, down to
     -0.8 % of its largest value), which is clipped to 0."""
     n_r, n_mu, n_mu_s, n_nu, n_s, n_wl = single.shape
-    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
     out = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
+    nodes = mu_s_nodes(grid)
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
@@ -532,8 +562,7 @@ def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
         mu, _ = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius, n_mu)
         phase = np.empty(n_s * n_wl)
         for i_s in range(n_mu_s):
-            mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
-                                          mu_s_min, n_mu_s)
+            mu_s = nodes[i_s]
             for i_nu in range(n_nu):
                 nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 phase_values(smooth_phase, nu, phase)
@@ -615,13 +644,13 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
     n_a = theta_in.size
     n_p = phi_in.size
     radiance = np.zeros((n_wl, n_a * n_p, n_r * n_mu_s))
+    nodes = mu_s_nodes(grid)
     for kl in prange(n_r * n_mu_s):
         k = kl // n_mu_s
         l = kl % n_mu_s
         r = scattering_r_from_u((k + 0.5) / n_r, bottom_radius, top_radius, n_r,
                                 grid.radius_warp)
-        mu_s = scattering_mu_s_from_u((l + 0.5) / n_mu_s, bottom_radius, top_radius, mu_s_min,
-                                      n_mu_s)
+        mu_s = nodes[l]
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
         value = np.empty(n_wl)
@@ -638,7 +667,7 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
                 value[:] = 0.0
                 i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
                     r, mu_in, mu_s, nu_in, hits_ground, bottom_radius, top_radius, mu_s_min,
-                    n_r, n_mu, n_mu_s, n_nu, grid.radius_warp)
+                    grid.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, grid.radius_warp)
                 scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 if hits_ground:
@@ -685,13 +714,33 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
                     phase_values(phase_table, nu_in, weights)
                 value[:] = 0.0
                 i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
-                    r, mu_in, mu_s, nu_in, False, bottom_radius, top_radius, mu_s_min, n_r,
-                    n_mu, n_mu_s, n_nu, grid.radius_warp)
+                    r, mu_in, mu_s, nu_in, False, bottom_radius, top_radius, mu_s_min,
+                    grid.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, grid.radius_warp)
                 scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 for w in range(n_wl):
                     out[i, j, w] += value[w] * solid
     return out
+
+
+@njit(cache=True)
+def _cubic_slab(source, k, a_r, o, a_th, slab):
+    """slab[:] = the source (n_r, n_theta, n_block) at fractional radius index k + a_r
+    (`radius_taps`) and view zenith index o + a_th (linear), clipped at 0 (a cubic can undershoot
+    where the source falls steeply, at a cloud's edge)."""
+    k0, w0, w1, w2, w3 = radius_taps(k, a_r, source.shape[0])
+    slab[:] = 0.0
+    for tap, weight in ((k0, w0), (k0 + 1, w1), (k0 + 2, w2), (k0 + 3, w3)):
+        if weight == 0.0:
+            continue
+        low = source[tap, o]
+        high = source[tap, o + 1]
+        c_low = np.float32(weight * (1.0 - a_th))
+        c_high = np.float32(weight * a_th)
+        for q in range(slab.size):
+            slab[q] += c_low * low[q] + c_high * high[q]
+    for q in range(slab.size):
+        slab[q] = max(slab[q], np.float32(0.0))
 
 
 @njit(parallel=True, cache=True)
@@ -712,10 +761,8 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
     n_theta = source.shape[1]
     n_block = source.shape[2]
     table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
-    mu_s_nodes = np.empty(n_mu_s)
-    for i_s in range(n_mu_s):
-        mu_s_nodes[i_s] = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius,
-                                                 top_radius, mu_s_min, n_mu_s)
+    nodes = mu_s_nodes(grid)
+    share = grid.sun_angle_share
     d_min, d_max, big_a = mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min)
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
@@ -726,7 +773,7 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
             continue
         nu_cells = np.empty((n_mu_s, n_nu))
         for i_s in range(n_mu_s):
-            mu_s = mu_s_nodes[i_s]
+            mu_s = nodes[i_s]
             for i_nu in range(n_nu):
                 nu_cells[i_s, i_nu] = cell_nu(mu, mu_s, i_nu, n_nu)
         acc = np.zeros((n_mu_s, n_nu, n_wl))
@@ -735,17 +782,20 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
             k, a_r = linear_axis(texel_index(scattering_u_r(radius[j], bottom_radius, top_radius,
                                                       n_r, grid.radius_warp), n_r), n_r)
             o, a_th = linear_axis(math.acos(mu_t[j]) / math.pi * (n_theta - 1), n_theta)
-            c00 = np.float32((1.0 - a_r) * (1.0 - a_th))
-            c01 = np.float32((1.0 - a_r) * a_th)
-            c10 = np.float32(a_r * (1.0 - a_th))
-            c11 = np.float32(a_r * a_th)
-            block00 = source[k, o]
-            block01 = source[k, o + 1]
-            block10 = source[k + 1, o]
-            block11 = source[k + 1, o + 1]
-            for q in range(n_block):
-                slab[q] = (c00 * block00[q] + c01 * block01[q] + c10 * block10[q]
-                           + c11 * block11[q])
+            if grid.cubic_source:
+                _cubic_slab(source, k, a_r, o, a_th, slab)
+            else:
+                c00 = np.float32((1.0 - a_r) * (1.0 - a_th))
+                c01 = np.float32((1.0 - a_r) * a_th)
+                c10 = np.float32(a_r * (1.0 - a_th))
+                c11 = np.float32(a_r * a_th)
+                block00 = source[k, o]
+                block01 = source[k, o + 1]
+                block10 = source[k + 1, o]
+                block11 = source[k + 1, o + 1]
+                for q in range(n_block):
+                    slab[q] = (c00 * block00[q] + c01 * block01[q] + c10 * block10[q]
+                               + c11 * block11[q])
             sin_t = math.sqrt(max(1.0 - mu_t[j] * mu_t[j], 0.0))
             view_j = view[0, j]
             rj = radius[j]
@@ -753,10 +803,10 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
             for i_s in range(n_mu_s):
                 for i_nu in range(n_nu):
                     nu = nu_cells[i_s, i_nu]
-                    mu_s_j = min(max((r * mu_s_nodes[i_s] + tj * nu) / rj, -1.0), 1.0)
+                    mu_s_j = min(max((r * nodes[i_s] + tj * nu) / rj, -1.0), 1.0)
                     l, a_l = linear_axis(texel_index(scattering_u_mu_s_from_constants(
-                        mu_s_j, bottom_radius, top_radius, d_min, d_max, big_a, n_mu_s),
-                        n_mu_s), n_mu_s)
+                        mu_s_j, bottom_radius, top_radius, mu_s_min, d_min, d_max, big_a,
+                        share, n_mu_s), n_mu_s), n_mu_s)
                     denominator = sin_t * math.sqrt(max(1.0 - mu_s_j * mu_s_j, 0.0))
                     cos_phi = 1.0
                     if denominator > 1e-12:
@@ -793,9 +843,10 @@ def order_statistics(tables, use_phase, phase_table, grid):
     the radiance of one order [W m^-2 sr^-1 nm^-1], each (n_wl,), from interleaved tables
     (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl) on `grid` (a `TableGrid`); with phase functions
     applied (`use_phase`) for the single-scattering tables."""
-    bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
+    bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
     n_r, n_mu, n_mu_s, n_nu, n_t, n_wl = tables.shape
     partial = np.zeros((n_r, n_wl))
+    nodes = mu_s_nodes(grid)
     for i_r in range(n_r):
         r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r,
                                 grid.radius_warp)
@@ -804,8 +855,7 @@ def order_statistics(tables, use_phase, phase_table, grid):
             mu, _ = scattering_mu_from_u((i_mu + 0.5) / n_mu, r, bottom_radius, top_radius,
                                          n_mu)
             for i_s in range(n_mu_s):
-                mu_s = scattering_mu_s_from_u((i_s + 0.5) / n_mu_s, bottom_radius, top_radius,
-                                              mu_s_min, n_mu_s)
+                mu_s = nodes[i_s]
                 for i_nu in range(n_nu):
                     nu = cell_nu(mu, mu_s, i_nu, n_nu)
                     if use_phase:

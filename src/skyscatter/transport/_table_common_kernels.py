@@ -85,8 +85,8 @@ def mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu):
 
 
 @njit(cache=True)
-def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r,
-                       n_mu, n_mu_s, n_nu, radius_warp):
+def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
+                       sun_angle_share, n_r, n_mu, n_mu_s, n_nu, radius_warp):
     """Lower entries and weights (i_r, a_r, i_mu, a_mu, i_mu_s, a_mu_s, i_nu, a_nu) of the
     quadrilinear lookup of (r, mu, mu_s, nu) in a scattering table. The mu interpolation stays
     inside the half chosen by `hits_ground`."""
@@ -94,7 +94,8 @@ def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, 
                                                       radius_warp), n_r), n_r)
     i_mu, a_mu = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
     i_s, a_s = linear_axis(texel_index(
-        scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s), n_mu_s), n_mu_s)
+        scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, sun_angle_share, n_mu_s),
+        n_mu_s), n_mu_s)
     i_nu, a_nu = linear_axis(scattering_u_nu(nu, mu, mu_s) * (n_nu - 1), n_nu)
     return i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu
 

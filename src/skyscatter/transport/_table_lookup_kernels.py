@@ -60,6 +60,7 @@ class LookupTables(NamedTuple):
     bottom_radius: float  # R_b [m]
     top_radius: float  # R_t [m]
     mu_s_min: float  # smallest cos(sun zenith) tabulated [-]
+    sun_angle_share: float  # of the mu_s axis (table_parameterisation.scattering_u_mu_s)
     scattering: np.ndarray  # the interleaved scattering tables, 1-D (`flat_tables`)
     n_r: int  # the sizes (n_r, n_mu, n_mu_s, n_nu) of the scattering tables
     n_mu: int
@@ -643,8 +644,8 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                 weights[k] *= 1.0 - marched
             value[:] = 0.0
             i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
-                r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
-                n_mu_s, n_nu, tables.radius_warp)
+                r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
+                tables.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, tables.radius_warp)
             scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s,
                               a_s, i_nu, a_nu, pair_weights, pair_values, value)
             if marched > 0.0:
@@ -761,16 +762,16 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_w
             weights[k] *= 1.0 - marched
     at_point[:] = 0.0
     i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
-        r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu, n_mu_s,
-        n_nu, tables.radius_warp)
+        r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
+        tables.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, tables.radius_warp)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
                       i_nu, a_nu, pair_weights, pair_values, inscatter_out)
     if marched > 0.0:
         geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, marched, slices, inscatter_out)
     i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
-        r_p, mu_p, mu_s_p, nu, hits_ground, bottom_radius, top_radius, mu_s_min, n_r, n_mu,
-        n_mu_s, n_nu, tables.radius_warp)
+        r_p, mu_p, mu_s_p, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
+        tables.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, tables.radius_warp)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
                       i_nu, a_nu, pair_weights, pair_values, at_point)
     if marched > 0.0:

@@ -79,7 +79,8 @@ class LutSolver:
         # (`_table_lookup_kernels.lit_single_scattering`) the profile
         self._lookup = _table_lookup_kernels.LookupTables(
             bottom_radius=tables.bottom_radius_m, top_radius=tables.top_radius_m,
-            mu_s_min=tables.min_cos_sun_zenith, scattering=flat_tables(tables.scattering),
+            mu_s_min=tables.min_cos_sun_zenith, sun_angle_share=tables.sun_angle_share,
+            scattering=flat_tables(tables.scattering),
             n_r=int(tables.scattering.shape[0]), n_mu=int(tables.scattering.shape[1]),
             n_mu_s=int(tables.scattering.shape[2]), n_nu=int(tables.scattering.shape[3]),
             radius_warp=tables.radius_warp, phase_table=tables.phase,

@@ -42,10 +42,16 @@ Scattering table (r, mu, mu_s, nu), 4-D with axes (u_r, u_mu, u_mu_s, u_nu):
   a forward-peaked radiance changes most (docs/physics/tables.md);
   the half is chosen by the caller's `ray_hits_ground` flag, never recomputed, so rays at the
   horizon stay on their side;
-  u_mu_s = tc(max(1 - a / A, 0) / (1 + a), n_mu_s), a = (d_s - d_min) / (d_max - d_min) with
-    d_s the distance to the top from the ground along mu_s, d_min = R_t - R_b, d_max = H, and A
-    the same for mu_s = mu_s_min (the smallest sun cosine tabulated; below it the first texel
-    is used). Samples crowd near the horizon;
+  u_mu_s = tc((1 - s) x_B + s x_theta, n_mu_s), with Bruneton's
+    x_B = max(1 - a / A, 0) / (1 + a), a = (d_s - d_min) / (d_max - d_min), d_s the distance
+    to the top from the ground along mu_s, d_min = R_t - R_b, d_max = H, and A the same for
+    mu_s = mu_s_min (the smallest sun cosine tabulated; below it the first texel is used),
+    whose samples crowd near the horizon and leave the daytime sky few (with 40 cells the
+    last three at sun zenith 47.9, 36.2 and 0 deg); and x_theta = 1 - theta_s / theta_min,
+    uniform in the sun's zenith angle theta_s = acos(mu_s) down to theta_min = acos(mu_s_min).
+    The share s (`sun_angle_share`) is 0 (Bruneton's axis) except below optically thick layers,
+    where the light under the layer changes with exp(-tau / mu_s) across the daytime cells
+    (`tables.sun_angle_share`); the inverse is found by bisection;
   u_nu = 1 - phi / pi, phi in [0, pi] the view's azimuth about the local zenith from the
     sun's, cos phi = (nu - mu mu_s) / sqrt((1 - mu^2)(1 - mu_s^2)), with the n_nu slices at
     the exact ends (index f = u_nu (n_nu - 1)): every slice lies inside the view-sun angles
@@ -309,6 +315,11 @@ def scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu):
     return math.cos(a * theta_h), False
 
 
+# Bisection steps of the inverse mu_s mapping where it has no closed form (`sun_angle_share` >
+# 0): 2^-52 of the interval, float64's resolution.
+MU_S_BISECTION_STEPS = 52
+
+
 @njit(cache=True)
 def mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min):
     """(d_min, d_max, A) of the mu_s mapping (module docstring): d_min = R_t - R_b, d_max = H,
@@ -322,27 +333,45 @@ def mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min):
 
 
 @njit(cache=True)
-def scattering_u_mu_s_from_constants(mu_s, bottom_radius, top_radius, d_min, d_max, big_a,
-                                     n_mu_s):
+def scattering_u_mu_s_from_constants(mu_s, bottom_radius, top_radius, mu_s_min, d_min, d_max,
+                                     big_a, sun_angle_share, n_mu_s):
     """`scattering_u_mu_s` with the constants of `mu_s_mapping_constants` given."""
     d = distance_to_top_boundary(bottom_radius, mu_s, top_radius)
     a = (d - d_min) / (d_max - d_min)
-    return texture_coord_from_unit_range(max(1.0 - a / big_a, 0.0) / (1.0 + a), n_mu_s)
+    x = max(1.0 - a / big_a, 0.0) / (1.0 + a)
+    if sun_angle_share > 0.0:
+        x_theta = 1.0 - math.acos(min(max(mu_s, -1.0), 1.0)) / math.acos(mu_s_min)
+        x = (1.0 - sun_angle_share) * x + sun_angle_share * max(x_theta, 0.0)
+    return texture_coord_from_unit_range(x, n_mu_s)
 
 
 @njit(cache=True)
-def scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s):
-    """u_mu_s = tc(max(1 - a / A, 0) / (1 + a), n_mu_s); module docstring (Bruneton 2017)."""
+def scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, sun_angle_share, n_mu_s):
+    """u_mu_s = tc((1 - s) x_B + s x_theta, n_mu_s), s = `sun_angle_share`; module docstring
+    (x_B: Bruneton 2017)."""
     d_min, d_max, big_a = mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min)
-    return scattering_u_mu_s_from_constants(mu_s, bottom_radius, top_radius, d_min, d_max,
-                                            big_a, n_mu_s)
+    return scattering_u_mu_s_from_constants(mu_s, bottom_radius, top_radius, mu_s_min, d_min,
+                                            d_max, big_a, sun_angle_share, n_mu_s)
 
 
 @njit(cache=True)
-def scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s):
-    """Inverse of `scattering_u_mu_s`: a = A (1 - x) / (1 + x A), d = d_min + min(a, A)
-    (d_max - d_min), mu_s = (H^2 - d^2) / (2 R_b d) [-]."""
+def scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, sun_angle_share,
+                           n_mu_s):
+    """Inverse of `scattering_u_mu_s` [-]. Bruneton's axis (`sun_angle_share` 0) in closed form:
+    a = A (1 - x) / (1 + x A), d = d_min + min(a, A) (d_max - d_min), mu_s = (H^2 - d^2) /
+    (2 R_b d); a share > 0 by bisection in mu_s over [mu_s_min, 1]."""
     d_min, d_max, big_a = mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min)
+    if sun_angle_share > 0.0:
+        low, high = mu_s_min, 1.0
+        for _ in range(MU_S_BISECTION_STEPS):
+            middle = 0.5 * (low + high)
+            if scattering_u_mu_s_from_constants(middle, bottom_radius, top_radius, mu_s_min,
+                                                d_min, d_max, big_a, sun_angle_share,
+                                                n_mu_s) < u_mu_s:
+                low = middle
+            else:
+                high = middle
+        return 0.5 * (low + high)
     x = unit_range_from_texture_coord(u_mu_s, n_mu_s)
     a = (big_a - x * big_a) / (1.0 + x * big_a)
     d = d_min + min(a, big_a) * (d_max - d_min)
@@ -385,19 +414,22 @@ def scattering_nu_from_u(u_nu, mu, mu_s):
 
 @njit(cache=True)
 def scattering_uvwz_from_r_mu_mu_s_nu(r, mu, mu_s, nu, ray_hits_ground, bottom_radius,
-                                      top_radius, mu_s_min, n_r, n_mu, n_mu_s, radius_warp):
+                                      top_radius, mu_s_min, sun_angle_share, n_r, n_mu, n_mu_s,
+                                      radius_warp):
     """(r, mu, mu_s, nu, ray_hits_ground) -> (u_r, u_mu, u_mu_s, u_nu), the table axis order
     (n_r, n_mu, n_mu_s, n_nu); module docstring. Bruneton 2017,
     `GetScatteringTextureUvwzFromRMuMuSNu` (which returns them as (u_nu, u_mu_s, u_mu, u_r))."""
     return (scattering_u_r(r, bottom_radius, top_radius, n_r, radius_warp),
             scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu),
-            scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s),
+            scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, sun_angle_share,
+                              n_mu_s),
             scattering_u_nu(nu, mu, mu_s))
 
 
 @njit(cache=True)
 def scattering_r_mu_mu_s_nu_from_uvwz(u_r, u_mu, u_mu_s, u_nu, bottom_radius, top_radius,
-                                      mu_s_min, n_r, n_mu, n_mu_s, radius_warp):
+                                      mu_s_min, sun_angle_share, n_r, n_mu, n_mu_s,
+                                      radius_warp):
     """Inverse of `scattering_uvwz_from_r_mu_mu_s_nu`: (r, mu, mu_s, nu, ray_hits_ground).
 
     nu lies within the values possible for (mu, mu_s), mu mu_s -+ sqrt((1 - mu^2)(1 - mu_s^2)),
@@ -405,7 +437,8 @@ def scattering_r_mu_mu_s_nu_from_uvwz(u_r, u_mu, u_mu_s, u_nu, bottom_radius, to
     `GetRMuMuSNuFromScatteringTextureFragCoord`, clamps it there."""
     r = scattering_r_from_u(u_r, bottom_radius, top_radius, n_r, radius_warp)
     mu, hits_ground = scattering_mu_from_u(u_mu, r, bottom_radius, top_radius, n_mu)
-    mu_s = scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, n_mu_s)
+    mu_s = scattering_mu_s_from_u(u_mu_s, bottom_radius, top_radius, mu_s_min, sun_angle_share,
+                                  n_mu_s)
     nu = scattering_nu_from_u(u_nu, mu, mu_s)
     return r, mu, mu_s, nu, hits_ground
 

@@ -141,6 +141,21 @@ REFERENCE_RADIUS_CELLS = 32
 THICK_OPTICAL_DEPTH = 1.0
 THICK_CELL_SHARE = 0.5
 THICK_LAYER_QUADRATURE = {"transmittance_r": 1024}
+# Below an optically thick layer the light changes with exp(-tau / mu_s) across the daytime sun
+# zenith angles, where Bruneton's mu_s axis has its last three of 40 cells at 47.9, 36.2 and
+# 0 deg: `earth-fog` at 550 nm against DISORT (sun 30 deg from the zenith) -13 % towards the
+# sun and +13 % away from it, already at one order. Tables with such a layer spend
+# THICK_SUN_ANGLE_SHARE of the mu_s axis uniformly in the sun's zenith angle
+# (`sun_angle_share`; with 40 cells, 10 within 50 deg of the zenith, 6 deg apart there, and
+# 1.3 deg instead of 0.8 deg at the horizon).
+THICK_SUN_ANGLE_SHARE = 0.5
+# Where a cell of Bruneton's radius axis holds more than this optical depth, the source function
+# is interpolated in radius by a cubic, not linearly (`cubic_source`): across such cells it
+# curves, and the linear interpolation loses light at every order (the tau = 8 slab of van de
+# Hulst, 0.49 per cell, R + T = 0.961 instead of 1). Earth (0.05), `mars-physical` (0.04) and
+# `exo-hazy` (0.17) keep the linear interpolation; the dust storm (0.43), the fog and the
+# stratus take the cubic. Measured in docs/physics/tables.md, "Thick layers".
+CUBIC_SOURCE_OPTICAL_DEPTH = 0.25
 
 # Forward-scattering particles of some optical depth give the orders >= 2 an azimuthal
 # structure that 8 view-sun slices (25.7 deg apart) interpolate away: where the particles whose
@@ -272,6 +287,8 @@ class AtmosphereTables:
     aureole_limits (x_max, psi_max [rad]) of that table; psi_max = 0 where nothing is clipped
     radius_warp    (RADIUS_WARP_SEGMENTS + 1,) float64: the scattering table's radius axis
                    (`radius_warp`, `table_parameterisation.scattering_u_r`)
+    sun_angle_share  (property) the share of the mu_s axis uniform in the sun's zenith angle
+                   (`sun_angle_share`, `table_parameterisation.scattering_u_mu_s`)
     """
 
     wavelengths_nm: np.ndarray
@@ -294,6 +311,11 @@ class AtmosphereTables:
     aureole_shape: np.ndarray
     aureole_limits: np.ndarray
     radius_warp: np.ndarray
+
+    @property
+    def sun_angle_share(self) -> float:
+        """The mu_s axis's share uniform in sun zenith angle (`sun_angle_share`)."""
+        return sun_angle_share(self.radius_warp)
 
     @property
     def single_scattering(self) -> np.ndarray:
@@ -461,7 +483,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     grid = _table_build_kernels.TableGrid(
         n_r=res.scattering_r, n_mu=res.scattering_mu, n_mu_s=res.scattering_mu_s,
         n_nu=res.scattering_nu, bottom_radius=bottom, top_radius=top, mu_s_min=mu_s_min,
-        radius_warp=warp)
+        sun_angle_share=sun_angle_share(warp), radius_warp=warp,
+        cubic_source=cubic_source(profile))
 
     sun_radius = float(profile.sun_angular_radius_rad)
     cumulative = _kernels.cumulative_columns(density, h_step)
@@ -675,14 +698,7 @@ def radius_warp(profile: OpticalProfile) -> np.ndarray:
     THICK_OPTICAL_DEPTH, else 0 (the identity: Bruneton's axis). The cells crowd inside
     optically thick layers (clouds, fog) in proportion to the optical depth they hold."""
     x = np.linspace(0.0, 1.0, RADIUS_WARP_SEGMENTS + 1)
-    h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
-    # (n_z, n_wl): the vertical optical depth below each level
-    depth = _kernels.cumulative_columns(profile.density, h_step).T @ profile.extinction_per_density
-    bottom, top = float(profile.bottom_radius_m), float(profile.top_radius_m)
-    radius = bottom + profile.altitudes_m
-    level_x = np.sqrt(np.maximum(radius**2 - bottom**2, 0.0) / (top**2 - bottom**2))
-    cells = np.linspace(0.0, 1.0, REFERENCE_RADIUS_CELLS + 1)
-    cell_depth = np.diff(np.array([np.interp(cells, level_x, d) for d in depth.T]), axis=1)
+    level_x, depth, cell_depth = _reference_cells(profile)
     thickest = int(np.argmax(cell_depth.max(axis=1)))
     tau_max = float(cell_depth[thickest].max())
     if not tau_max > THICK_OPTICAL_DEPTH:
@@ -694,9 +710,37 @@ def radius_warp(profile: OpticalProfile) -> np.ndarray:
     return warp
 
 
+def _reference_cells(profile: OpticalProfile) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x = rho / H of the profile's levels (n_z,), the vertical optical depth below each level
+    (n_z, n_wl), the optical depth each cell of Bruneton's radius axis holds (n_wl,
+    REFERENCE_RADIUS_CELLS))."""
+    h_step = float(profile.altitudes_m[1] - profile.altitudes_m[0])
+    depth = _kernels.cumulative_columns(profile.density, h_step).T @ profile.extinction_per_density
+    bottom, top = float(profile.bottom_radius_m), float(profile.top_radius_m)
+    radius = bottom + profile.altitudes_m
+    level_x = np.sqrt(np.maximum(radius**2 - bottom**2, 0.0) / (top**2 - bottom**2))
+    cells = np.linspace(0.0, 1.0, REFERENCE_RADIUS_CELLS + 1)
+    cell_depth = np.diff(np.array([np.interp(cells, level_x, d) for d in depth.T]), axis=1)
+    return level_x, depth, cell_depth
+
+
+def cubic_source(profile: OpticalProfile) -> bool:
+    """Whether the tables of `profile` interpolate the source function cubically in radius
+    (`_table_build_kernels.radius_taps`): where a cell of Bruneton's radius axis holds more
+    than CUBIC_SOURCE_OPTICAL_DEPTH at some wavelength."""
+    return bool(_reference_cells(profile)[2].max() > CUBIC_SOURCE_OPTICAL_DEPTH)
+
+
 def is_identity_warp(warp: np.ndarray) -> bool:
     """Whether `warp` is Bruneton's radius axis (no optically thick layer)."""
     return bool(np.array_equal(warp, np.linspace(0.0, 1.0, warp.size)))
+
+
+def sun_angle_share(warp: np.ndarray) -> float:
+    """The share of the mu_s axis uniform in the sun's zenith angle
+    (`table_parameterisation.scattering_u_mu_s`): THICK_SUN_ANGLE_SHARE where `warp`
+    (`radius_warp`) has an optically thick layer, else 0 (Bruneton's axis)."""
+    return 0.0 if is_identity_warp(warp) else THICK_SUN_ANGLE_SHARE
 
 
 def thick_layer_resolution(resolution: TableResolution, warp: np.ndarray) -> TableResolution:

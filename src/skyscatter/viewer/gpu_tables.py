@@ -138,6 +138,7 @@ def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
         "bottom_radius_m": float(tables.bottom_radius_m),
         "top_radius_m": float(tables.top_radius_m),
         "mu_s_min": float(tables.min_cos_sun_zenith),
+        "sun_angle_share": float(tables.sun_angle_share),
         "radius_warp": [float(v) for v in tables.radius_warp],
         # Bruneton's axis: the shader skips the warp's reads (docs/viewer.md, GPU frame time)
         "radius_warp_identity": is_identity_warp(tables.radius_warp),

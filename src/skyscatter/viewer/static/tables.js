@@ -79,6 +79,7 @@ export function uploadTables(gl, decoded) {
       u_bottom_radius: header.bottom_radius_m,
       u_top_radius: header.top_radius_m,
       u_mu_s_min: header.mu_s_min,
+      u_sun_angle_share: header.sun_angle_share,
       u_radius_warp: paddedToVec4s(header.radius_warp),
       u_radius_warp_identity: header.radius_warp_identity ? 1 : 0,
       u_ground_albedo: header.ground_albedo_xyz,

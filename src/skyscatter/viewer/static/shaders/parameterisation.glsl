@@ -97,14 +97,19 @@ float scattering_u_mu(float r, float mu, bool ray_hits_ground, float bottom_radi
 
 // twin of scattering_u_mu_s (with mu_s_mapping_constants inlined)
 float scattering_u_mu_s(float mu_s, float bottom_radius, float top_radius, float mu_s_min,
-                        float n_mu_s) {
+                        float sun_angle_share, float n_mu_s) {
     float d_min = top_radius - bottom_radius;
     float d_max = horizon_distance(top_radius, bottom_radius);
     float big_a = (distance_to_top_boundary(bottom_radius, mu_s_min, top_radius) - d_min)
                   / (d_max - d_min);
     float d = distance_to_top_boundary(bottom_radius, mu_s, top_radius);
     float a = (d - d_min) / (d_max - d_min);
-    return texture_coord_from_unit_range(max(1.0 - a / big_a, 0.0) / (1.0 + a), n_mu_s);
+    float x = max(1.0 - a / big_a, 0.0) / (1.0 + a);
+    if (sun_angle_share > 0.0) {
+        float x_theta = 1.0 - acos(clamp(mu_s, -1.0, 1.0)) / acos(mu_s_min);
+        x = (1.0 - sun_angle_share) * x + sun_angle_share * max(x_theta, 0.0);
+    }
+    return texture_coord_from_unit_range(x, n_mu_s);
 }
 
 // twin of scattering_u_nu: 1 - phi / pi, phi the view's azimuth from the sun's

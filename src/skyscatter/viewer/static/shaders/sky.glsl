@@ -21,6 +21,7 @@ uniform float u_scattering_scales[MAX_TABLES];
 uniform float u_bottom_radius;       // [m]
 uniform float u_top_radius;          // [m]
 uniform float u_mu_s_min;
+uniform float u_sun_angle_share;  // of the mu_s axis (AtmosphereTables.sun_angle_share)
 uniform vec3 u_ground_albedo;        // solar-weighted XYZ albedo
 uniform vec3 u_sun_irradiance;       // XYZ of the star's irradiance at the top
 uniform float u_sun_angular_radius;  // [rad]
@@ -121,7 +122,7 @@ vec3 sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir) {
     float u_r = scattering_u_r(r, u_bottom_radius, u_top_radius, u_scattering_shape.x);
     float u_mu = scattering_u_mu(r, mu, hits_ground, u_bottom_radius, u_top_radius,
                                  u_scattering_shape.y);
-    float u_mu_s = scattering_u_mu_s(mu_s, u_bottom_radius, u_top_radius, u_mu_s_min,
+    float u_mu_s = scattering_u_mu_s(mu_s, u_bottom_radius, u_top_radius, u_mu_s_min, u_sun_angle_share,
                                      u_scattering_shape.z);
     float f_nu = clamp(scattering_u_nu(nu, mu, mu_s) * (u_scattering_shape.w - 1.0), 0.0,
                        u_scattering_shape.w - 1.0);
