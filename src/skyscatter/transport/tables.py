@@ -135,8 +135,18 @@ TAIL_TOLERANCE = 1e-3
 # +19 % (32 cells) and +43 % (64): the column table's 64 radii (2 in the deck) then decide it.
 # With the rays refined, their columns integrated along them and the sun's optical depth
 # interpolated between the column table's rows, sun 30 deg from the zenith: 512 / 1024 / 2048
-# radii -3.2 / -1.9 / -1.5 % (docs/physics/tables.md).
-RADIUS_WARP_SEGMENTS = 64
+# radii -3.2 / -1.9 / -1.5 % (docs/physics/tables.md). Inside a layer the cells crowd at its
+# edges, where the light changes within about one optical depth (the diffusion regime inside
+# varies slowly): the cells' density in optical depth falls as 1 / (1 + d / EDGE_OPTICAL_DEPTH),
+# d the optical distance to the nearer end of the column. The stratus at 550 nm, sun 30 deg
+# from the zenith, median / 95th percentile of |tables / DISORT - 1|: 1.77 / 7.0 % with the
+# cells uniform in optical depth (64 segments), 2.20 / 3.9 % (512), crowded at the edges with
+# 128 / 256 / 512 segments 1.23 / 1.7, 0.37 / 0.74, 0.62 / 1.0 %; EDGE_OPTICAL_DEPTH 0.5 / 2
+# (512 segments) 1.09 / 1.7, 1.72 / 2.2 %. The deck spans 7-8 of the 256 segments.
+RADIUS_WARP_SEGMENTS = 256
+EDGE_OPTICAL_DEPTH = 1.0
+# the fine grid of rho / H on which the warp's optical depths are integrated
+RADIUS_WARP_FINE = 16384
 REFERENCE_RADIUS_CELLS = 32
 THICK_OPTICAL_DEPTH = 1.0
 THICK_CELL_SHARE = 0.5
@@ -691,12 +701,13 @@ def _geometric_tail(order_mean: np.ndarray, last: bool) -> np.ndarray | None:
 
 def radius_warp(profile: OpticalProfile) -> np.ndarray:
     """The scattering table's radius warp W (RADIUS_WARP_SEGMENTS + 1,) at x = rho / H
-    uniform in [0, 1] (`table_parameterisation.scattering_u_r`): W(x) = (1 - s) x + s tau(x) /
-    tau_top, tau(x) the vertical optical depth from the ground up to x at the wavelength where
-    a cell of Bruneton's axis (32 cells uniform in x) holds the most, tau_max, tau_top its
-    column; s = THICK_CELL_SHARE (1 - THICK_OPTICAL_DEPTH / tau_max) where tau_max exceeds
-    THICK_OPTICAL_DEPTH, else 0 (the identity: Bruneton's axis). The cells crowd inside
-    optically thick layers (clouds, fog) in proportion to the optical depth they hold."""
+    uniform in [0, 1] (`table_parameterisation.scattering_u_r`): W(x) = (1 - s) x + s G(x) /
+    G(1), G(x) = int_0^tau(x) dt / (1 + d(t) / EDGE_OPTICAL_DEPTH), tau(x) the vertical optical
+    depth from the ground up to x at the wavelength where a cell of Bruneton's axis (32 cells
+    uniform in x) holds the most, tau_max, and d(t) = min(t, tau_top - t) the optical distance
+    to the nearer end of the column; s = THICK_CELL_SHARE (1 - THICK_OPTICAL_DEPTH / tau_max)
+    where tau_max exceeds THICK_OPTICAL_DEPTH, else 0 (the identity: Bruneton's axis). The
+    cells crowd inside optically thick layers (clouds, fog), most at their edges."""
     x = np.linspace(0.0, 1.0, RADIUS_WARP_SEGMENTS + 1)
     level_x, depth, cell_depth = _reference_cells(profile)
     thickest = int(np.argmax(cell_depth.max(axis=1)))
@@ -704,8 +715,12 @@ def radius_warp(profile: OpticalProfile) -> np.ndarray:
     if not tau_max > THICK_OPTICAL_DEPTH:
         return x
     share = THICK_CELL_SHARE * (1.0 - THICK_OPTICAL_DEPTH / tau_max)
-    tau = np.interp(x, level_x, depth[:, thickest])
-    warp = (1.0 - share) * x + share * tau / tau[-1]
+    fine = np.linspace(0.0, 1.0, RADIUS_WARP_FINE + 1)
+    tau = np.interp(fine, level_x, depth[:, thickest])
+    density = 1.0 / (1.0 + np.minimum(tau, tau[-1] - tau) / EDGE_OPTICAL_DEPTH)
+    crowded = np.concatenate([[0.0], np.cumsum(0.5 * (density[1:] + density[:-1])
+                                               * np.diff(tau))])
+    warp = (1.0 - share) * x + share * np.interp(x, fine, crowded) / crowded[-1]
     warp[-1] = 1.0
     return warp
 
