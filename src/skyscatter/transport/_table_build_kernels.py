@@ -729,18 +729,17 @@ def _cubic_slab(source, k, a_r, o, a_th, slab):
     (`radius_taps`) and view zenith index o + a_th (linear), clipped at 0 (a cubic can undershoot
     where the source falls steeply, at a cloud's edge)."""
     k0, w0, w1, w2, w3 = radius_taps(k, a_r, source.shape[0])
-    slab[:] = 0.0
-    for tap, weight in ((k0, w0), (k0 + 1, w1), (k0 + 2, w2), (k0 + 3, w3)):
-        if weight == 0.0:
-            continue
-        low = source[tap, o]
-        high = source[tap, o + 1]
-        c_low = np.float32(weight * (1.0 - a_th))
-        c_high = np.float32(weight * a_th)
-        for q in range(slab.size):
-            slab[q] += c_low * low[q] + c_high * high[q]
+    k3 = min(k0 + 3, source.shape[0] - 1)  # weight 0 at the end cells
+    low, high = np.float32(1.0 - a_th), np.float32(a_th)
+    c0, c1, c2, c3 = np.float32(w0), np.float32(w1), np.float32(w2), np.float32(w3)
+    s0l, s0h = source[k0, o], source[k0, o + 1]
+    s1l, s1h = source[k0 + 1, o], source[k0 + 1, o + 1]
+    s2l, s2h = source[k0 + 2, o], source[k0 + 2, o + 1]
+    s3l, s3h = source[k3, o], source[k3, o + 1]
     for q in range(slab.size):
-        slab[q] = max(slab[q], np.float32(0.0))
+        value = (c0 * (low * s0l[q] + high * s0h[q]) + c1 * (low * s1l[q] + high * s1h[q])
+                 + c2 * (low * s2l[q] + high * s2h[q]) + c3 * (low * s3l[q] + high * s3h[q]))
+        slab[q] = max(value, np.float32(0.0))
 
 
 @njit(parallel=True, cache=True)

@@ -47,8 +47,11 @@ Scattering table (r, mu, mu_s, nu), 4-D with axes (u_r, u_mu, u_mu_s, u_nu):
     to the top from the ground along mu_s, d_min = R_t - R_b, d_max = H, and A the same for
     mu_s = mu_s_min (the smallest sun cosine tabulated; below it the first texel is used),
     whose samples crowd near the horizon and leave the daytime sky few (with 40 cells the
-    last three at sun zenith 47.9, 36.2 and 0 deg); and x_theta = 1 - theta_s / theta_min,
-    uniform in the sun's zenith angle theta_s = acos(mu_s) down to theta_min = acos(mu_s_min).
+    last three at sun zenith 47.9, 36.2 and 0 deg); and x_theta = 1 - sin(theta_s / 2) /
+    sin(theta_min / 2) = 1 - sqrt((1 - mu_s) / (1 - mu_s_min)), uniform in the chord of the sun's
+    zenith angle theta_s down to theta_min = acos(mu_s_min): nearly uniform in the angle (cells
+    1 / cos(theta_s / 2) times as wide as at the zenith, 1.4 x at the horizon), and a square
+    root instead of an arc cosine in the tables' innermost loop.
     The share s (`sun_angle_share`) is 0 (Bruneton's axis) except below optically thick layers,
     where the light under the layer changes with exp(-tau / mu_s) across the daytime cells
     (`tables.sun_angle_share`); the inverse is found by bisection;
@@ -340,7 +343,7 @@ def scattering_u_mu_s_from_constants(mu_s, bottom_radius, top_radius, mu_s_min, 
     a = (d - d_min) / (d_max - d_min)
     x = max(1.0 - a / big_a, 0.0) / (1.0 + a)
     if sun_angle_share > 0.0:
-        x_theta = 1.0 - math.acos(min(max(mu_s, -1.0), 1.0)) / math.acos(mu_s_min)
+        x_theta = 1.0 - math.sqrt(max(1.0 - mu_s, 0.0) / (1.0 - mu_s_min))
         x = (1.0 - sun_angle_share) * x + sun_angle_share * max(x_theta, 0.0)
     return texture_coord_from_unit_range(x, n_mu_s)
 

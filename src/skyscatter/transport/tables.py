@@ -155,8 +155,8 @@ THICK_LAYER_QUADRATURE = {"transmittance_r": 1024}
 # zenith angles, where Bruneton's mu_s axis has its last three of 40 cells at 47.9, 36.2 and
 # 0 deg: `earth-fog` at 550 nm against DISORT (sun 30 deg from the zenith) -13 % towards the
 # sun and +13 % away from it, already at one order. Tables with such a layer spend
-# THICK_SUN_ANGLE_SHARE of the mu_s axis uniformly in the sun's zenith angle
-# (`sun_angle_share`; with 40 cells, 10 within 50 deg of the zenith, 6 deg apart there, and
+# THICK_SUN_ANGLE_SHARE of the mu_s axis uniformly in the chord of the sun's zenith angle
+# (`sun_angle_share`; with 40 cells, 11 within 50 deg of the zenith, 5 deg apart there, and
 # 1.3 deg instead of 0.8 deg at the horizon).
 THICK_SUN_ANGLE_SHARE = 0.5
 # Where a cell of Bruneton's radius axis holds more than this optical depth, the source function
@@ -297,7 +297,7 @@ class AtmosphereTables:
     aureole_limits (x_max, psi_max [rad]) of that table; psi_max = 0 where nothing is clipped
     radius_warp    (RADIUS_WARP_SEGMENTS + 1,) float64: the scattering table's radius axis
                    (`radius_warp`, `table_parameterisation.scattering_u_r`)
-    sun_angle_share  (property) the share of the mu_s axis uniform in the sun's zenith angle
+    sun_angle_share  (property) the share of the mu_s axis uniform in sin(sun zenith / 2)
                    (`sun_angle_share`, `table_parameterisation.scattering_u_mu_s`)
     """
 
@@ -324,7 +324,7 @@ class AtmosphereTables:
 
     @property
     def sun_angle_share(self) -> float:
-        """The mu_s axis's share uniform in sun zenith angle (`sun_angle_share`)."""
+        """The mu_s axis's share uniform in sin(sun zenith / 2) (`sun_angle_share`)."""
         return sun_angle_share(self.radius_warp)
 
     @property
@@ -752,7 +752,7 @@ def is_identity_warp(warp: np.ndarray) -> bool:
 
 
 def sun_angle_share(warp: np.ndarray) -> float:
-    """The share of the mu_s axis uniform in the sun's zenith angle
+    """The share of the mu_s axis uniform in sin(sun zenith / 2), nearly in the angle
     (`table_parameterisation.scattering_u_mu_s`): THICK_SUN_ANGLE_SHARE where `warp`
     (`radius_warp`) has an optically thick layer, else 0 (Bruneton's axis)."""
     return 0.0 if is_identity_warp(warp) else THICK_SUN_ANGLE_SHARE

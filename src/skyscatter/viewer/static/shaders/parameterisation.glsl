@@ -106,7 +106,7 @@ float scattering_u_mu_s(float mu_s, float bottom_radius, float top_radius, float
     float a = (d - d_min) / (d_max - d_min);
     float x = max(1.0 - a / big_a, 0.0) / (1.0 + a);
     if (sun_angle_share > 0.0) {
-        float x_theta = 1.0 - acos(clamp(mu_s, -1.0, 1.0)) / acos(mu_s_min);
+        float x_theta = 1.0 - sqrt(max(1.0 - mu_s, 0.0) / (1.0 - mu_s_min));
         x = (1.0 - sun_angle_share) * x + sun_angle_share * max(x_theta, 0.0);
     }
     return texture_coord_from_unit_range(x, n_mu_s);
