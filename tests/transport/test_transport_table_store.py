@@ -11,9 +11,10 @@ import zipfile
 
 import numpy as np
 import pytest
-from transport_cases import SMALL, exponential_earth
+from transport_cases import SMALL, exponential_earth, homogeneous_shell
 
 from skyscatter.errors import InputError
+from skyscatter.optics.phase import HenyeyGreensteinPhase
 from skyscatter.transport import table_store
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.table_store import cached_tables
@@ -60,6 +61,18 @@ def test_second_call_loads_the_stored_tables_bit_for_bit(cache):
     assert second.resolution == first.resolution and second.orders == first.orders
     assert second.scattering_names == first.scattering_names
     assert len(list(cache.directory.glob("*.npz"))) == 1
+
+
+def test_a_stored_entry_reports_the_resolution_its_tables_were_computed_at(cache):
+    # HG particles of g 0.65 and optical depth 0.5 get 16 view-sun slices
+    # (tables.forward_scattering_resolution); the entry read back says so too
+    shell = dataclasses.replace(homogeneous_shell(0.5 / 10_000.0),
+                                phases=(HenyeyGreensteinPhase(0.65),))
+    first, _ = _tables(shell, cache)
+    second, message = _tables(shell, cache)
+    assert "using" in message
+    assert first.resolution.scattering_nu == second.resolution.scattering_nu == 16
+    assert second.resolution == first.resolution
 
 
 @pytest.mark.parametrize("change", ["orders", "resolution", "albedo", "wavelengths"])

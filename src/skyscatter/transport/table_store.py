@@ -86,8 +86,12 @@ def tables_from_arrays(arrays: dict[str, np.ndarray],
     return AtmosphereTables(
         bottom_radius_m=bottom, top_radius_m=top,
         min_cos_sun_zenith=float(metadata["min_cos_sun_zenith"]),
-        resolution=thick_layer_resolution(TableResolution(**metadata["resolution"]),
-                                          arrays["radius_warp"]),
+        # as `precompute_tables` widened it: the thick layer's quadrature, and the view-sun
+        # slices (`forward_scattering_resolution`) that the table's shape holds
+        resolution=dataclasses.replace(
+            thick_layer_resolution(TableResolution(**metadata["resolution"]),
+                                   arrays["radius_warp"]),
+            scattering_nu=int(arrays["scattering"].shape[3])),
         orders=int(metadata["orders"]),
         scattering_names=tuple(str(n) for n in arrays["scattering_names"]),
         scattering_constituents=tuple(int(c) for c in arrays["scattering_constituents"]),
