@@ -208,6 +208,12 @@ def test_radius_taps_reproduce_quadratics_and_sum_to_one():
             x = k + a
             assert np.dot(weights, quadratic[taps]) == pytest.approx(
                 2.0 + 3.0 * x - 0.5 * x**2, abs=1e-12)
+    # an axis of 2 radii (TableResolution allows it) has no third node: the line, with no
+    # weight beyond the axis
+    for a in (0.0, 0.3, 1.0):
+        first, *weights = radius_taps(0, a, 2)
+        assert first == 0 and weights[2:] == [0.0, 0.0]
+        assert np.dot(weights[:2], [5.0, 7.0]) == pytest.approx(5.0 + 2.0 * a, abs=1e-14)
 
 
 def test_thick_cells_get_the_cubic_source_and_a_thick_layer_the_sun_angle_share():

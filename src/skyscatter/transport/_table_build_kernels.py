@@ -394,10 +394,13 @@ def mu_s_nodes(grid):
 
 @njit(cache=True)
 def radius_taps(k, a, n):
-    """(first node, 4 weights) interpolating at fractional index k + a on an axis of n >= 4
-    nodes: Catmull-Rom's cubic through nodes k-1..k+2 (Catmull & Rom 1974; Keys 1981, IEEE
-    Trans. ASSP 29(6), 1153, doi:10.1109/TASSP.1981.1163711, with a = -1/2), at the two end
-    cells the quadratic through the three nearest nodes (the fourth weight 0)."""
+    """(first node, 4 weights) interpolating at fractional index k + a on an axis of n nodes:
+    Catmull-Rom's cubic through nodes k-1..k+2 (Catmull & Rom 1974; Keys 1981, IEEE Trans. ASSP
+    29(6), 1153, doi:10.1109/TASSP.1981.1163711, with a = -1/2), at the two end cells the
+    quadratic through the three nearest nodes, on an axis of 2 nodes the line (the weights
+    beyond the axis 0)."""
+    if n < 3:
+        return k, 1.0 - a, a, 0.0, 0.0
     if k == 0:
         return 0, 0.5 * (a - 1.0) * (a - 2.0), -a * (a - 2.0), 0.5 * a * (a - 1.0), 0.0
     if k + 2 > n - 1:
@@ -724,17 +727,35 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
 
 
 @njit(cache=True)
+def _linear_slab(source, k, a_r, o, a_th, slab):
+    """slab[:] = the source (n_r, n_theta, n_block) bilinear at fractional radius index
+    k + a_r and view zenith index o + a_th."""
+    c00 = np.float32((1.0 - a_r) * (1.0 - a_th))
+    c01 = np.float32((1.0 - a_r) * a_th)
+    c10 = np.float32(a_r * (1.0 - a_th))
+    c11 = np.float32(a_r * a_th)
+    block00 = source[k, o]
+    block01 = source[k, o + 1]
+    block10 = source[k + 1, o]
+    block11 = source[k + 1, o + 1]
+    for q in range(slab.size):
+        slab[q] = c00 * block00[q] + c01 * block01[q] + c10 * block10[q] + c11 * block11[q]
+
+
+@njit(cache=True)
 def _cubic_slab(source, k, a_r, o, a_th, slab):
     """slab[:] = the source (n_r, n_theta, n_block) at fractional radius index k + a_r
     (`radius_taps`) and view zenith index o + a_th (linear), clipped at 0 (a cubic can undershoot
     where the source falls steeply, at a cloud's edge)."""
-    k0, w0, w1, w2, w3 = radius_taps(k, a_r, source.shape[0])
-    k3 = min(k0 + 3, source.shape[0] - 1)  # weight 0 at the end cells
+    last = source.shape[0] - 1
+    k0, w0, w1, w2, w3 = radius_taps(k, a_r, last + 1)
+    # the taps past the axis's end have weight 0 (`radius_taps`): any node will do
+    k2, k3 = min(k0 + 2, last), min(k0 + 3, last)
     low, high = np.float32(1.0 - a_th), np.float32(a_th)
     c0, c1, c2, c3 = np.float32(w0), np.float32(w1), np.float32(w2), np.float32(w3)
     s0l, s0h = source[k0, o], source[k0, o + 1]
     s1l, s1h = source[k0 + 1, o], source[k0 + 1, o + 1]
-    s2l, s2h = source[k0 + 2, o], source[k0 + 2, o + 1]
+    s2l, s2h = source[k2, o], source[k2, o + 1]
     s3l, s3h = source[k3, o], source[k3, o + 1]
     for q in range(slab.size):
         value = (c0 * (low * s0l[q] + high * s0h[q]) + c1 * (low * s1l[q] + high * s1h[q])
@@ -784,17 +805,7 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
             if grid.cubic_source:
                 _cubic_slab(source, k, a_r, o, a_th, slab)
             else:
-                c00 = np.float32((1.0 - a_r) * (1.0 - a_th))
-                c01 = np.float32((1.0 - a_r) * a_th)
-                c10 = np.float32(a_r * (1.0 - a_th))
-                c11 = np.float32(a_r * a_th)
-                block00 = source[k, o]
-                block01 = source[k, o + 1]
-                block10 = source[k + 1, o]
-                block11 = source[k + 1, o + 1]
-                for q in range(n_block):
-                    slab[q] = (c00 * block00[q] + c01 * block01[q] + c10 * block10[q]
-                               + c11 * block11[q])
+                _linear_slab(source, k, a_r, o, a_th, slab)
             sin_t = math.sqrt(max(1.0 - mu_t[j] * mu_t[j], 0.0))
             view_j = view[0, j]
             rj = radius[j]

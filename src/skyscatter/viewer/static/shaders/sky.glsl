@@ -122,8 +122,8 @@ vec3 sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir) {
     float u_r = scattering_u_r(r, u_bottom_radius, u_top_radius, u_scattering_shape.x);
     float u_mu = scattering_u_mu(r, mu, hits_ground, u_bottom_radius, u_top_radius,
                                  u_scattering_shape.y);
-    float u_mu_s = scattering_u_mu_s(mu_s, u_bottom_radius, u_top_radius, u_mu_s_min, u_sun_angle_share,
-                                     u_scattering_shape.z);
+    float u_mu_s = scattering_u_mu_s(mu_s, u_bottom_radius, u_top_radius, u_mu_s_min,
+                                     u_sun_angle_share, u_scattering_shape.z);
     float f_nu = clamp(scattering_u_nu(nu, mu, mu_s) * (u_scattering_shape.w - 1.0), 0.0,
                        u_scattering_shape.w - 1.0);
     int i_nu = min(int(f_nu), int(u_scattering_shape.w) - 2);
