@@ -183,10 +183,12 @@ def test_forward_scattering_particles_of_some_optical_depth_get_more_view_sun_sl
 
 
 def test_earth_keeps_8_view_sun_slices_and_dusty_mars_gets_16_but_not_a_cloud_deck():
-    # Earth's aerosol (optical depth 0.05-0.13) and the stratus deck (optically thick: its
-    # multiple scattering smooths the azimuth) keep Bruneton's 8 slices; Mars's Mie dust
-    # (g 0.7-0.9, optical depth 0.27-0.48 over the bands) gets 16.
-    for name, slices in (("earth", 8), ("earth-overcast", 8), ("mars-physical", 16)):
+    # Earth's aerosol (optical depth 0.05-0.13) and the stratus deck 0.6-1.1 km above the ground
+    # (optically thick: its multiple scattering smooths the azimuth below it) keep Bruneton's 8
+    # slices; Mars's Mie dust (g 0.7-0.9, optical depth 0.27-0.48 over the bands) gets 16, and
+    # so does the fog (droplets, g ~0.85, densest at the ground, where its observers stand).
+    for name, slices in (("earth", 8), ("earth-overcast", 8), ("mars-physical", 16),
+                         ("earth-fog", 16)):
         profile = load_atmosphere(name).optical_profile(np.linspace(380.0, 780.0, 8))
         resolution = tables_module.forward_scattering_resolution(
             TableResolution(), profile, tables_module.radius_warp(profile))

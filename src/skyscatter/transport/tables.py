@@ -176,12 +176,19 @@ CUBIC_SOURCE_OPTICAL_DEPTH = 0.25
 # 8 bands, median / 95th percentile / aureole): `mars-hg-dust` (HG g 0.65, optical depth 0.5)
 # with the sun 85 deg from the zenith 2.19 / 5.8 / 4.1 % with 8 slices, 1.58 / 3.7 / 2.6 % with
 # 16; `mars-physical` at 60 deg 1.07 / 4.1 / 4.6 -> 0.68 / 2.7 / 2.5 %; `mars-dust-storm` at
-# 30 deg aureole 20.7 -> 5.9 %. Earth's aerosol (optical depth 0.1) stays at 8; so do
-# optically thick layers (cloud decks, fog), whose multiple scattering smooths the azimuth
-# (their orders >= 7 use 4 slices within 0.2 point of DISORT).
+# 30 deg aureole 20.7 -> 5.9 %. Earth's aerosol (optical depth 0.1) stays at 8; so does an
+# optically thick layer above the ground (a cloud deck): below it the light has lost its
+# forward structure to many scatterings, and 16 slices would take the stratus's tables from
+# 2.9 to ~5 x Earth's CPU time (issue 17 allows 3). A thick layer at the ground (fog: its
+# extinction at the ground at least GROUND_LAYER_SHARE of its largest) gets 16: the ground's
+# observers look out from inside it, where the orders >= 2 keep an aureole. `earth-fog` against
+# DISORT at 550 nm (benchmarks/compare_disort.py nodes, median / 95th percentile): sun 30 deg
+# from the zenith 1.20 / 2.4 -> 0.63 / 1.9 %, 60 deg 2.04 / 3.8 -> 1.05 / 2.8 %, 0 deg 0.59 /
+# 2.0 % either way; its CPU time 82 -> 129 s.
 FORWARD_ASYMMETRY = 0.5
 FORWARD_OPTICAL_DEPTH = 0.3
 FORWARD_NU_SLICES = 16
+GROUND_LAYER_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -772,8 +779,10 @@ def forward_scattering_resolution(resolution: TableResolution, profile: OpticalP
                                   warp: np.ndarray) -> TableResolution:
     """`resolution` with at least FORWARD_NU_SLICES view-sun slices where forward-scattering
     particles of `profile` are optically significant and `warp` (`radius_warp`) has no thick
-    layer (module constants); unchanged otherwise."""
-    if not is_identity_warp(warp) or resolution.scattering_nu >= FORWARD_NU_SLICES:
+    layer, or one at the ground (module constants); unchanged otherwise."""
+    if resolution.scattering_nu >= FORWARD_NU_SLICES:
+        return resolution
+    if not is_identity_warp(warp) and not _ground_in_thick_layer(profile):
         return resolution
     scatterers = list(scattering_constituents(profile))
     if not scatterers:
@@ -787,6 +796,15 @@ def forward_scattering_resolution(resolution: TableResolution, profile: OpticalP
     if not np.any(forward >= FORWARD_OPTICAL_DEPTH):
         return resolution
     return replace(resolution, scattering_nu=FORWARD_NU_SLICES)
+
+
+def _ground_in_thick_layer(profile: OpticalProfile) -> bool:
+    """Whether the extinction at the ground is at least GROUND_LAYER_SHARE of the column's
+    largest, at the wavelength of the largest vertical optical depth (fog, not a cloud deck)."""
+    extinction = profile.density.T @ profile.extinction_per_density  # (n_z, n_wl)
+    thickest = int(np.argmax(extinction.sum(axis=0)))
+    column = extinction[:, thickest]
+    return bool(column[0] >= GROUND_LAYER_SHARE * column.max())
 
 
 @dataclass(frozen=True)
