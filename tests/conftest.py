@@ -22,3 +22,15 @@ def table_cache_directory(tmp_path_factory):
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("SKYSCATTER_CACHE_DIR", str(directory))
         yield directory
+
+
+@pytest.fixture(scope="session", autouse=True)
+def kernels_compiled_marker(tmp_path_factory):
+    """The tests run with compiled kernels: the command line's first-run note would be an
+    extra stderr line in the tests that read stderr (tests/test_compile_ahead.py checks it)."""
+    from skyscatter import compile_ahead
+    marker = tmp_path_factory.mktemp("numba") / "compiled"
+    marker.touch()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(compile_ahead, "marker_path", lambda: marker)
+        yield marker

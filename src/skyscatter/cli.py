@@ -572,7 +572,20 @@ def build_parser() -> argparse.ArgumentParser:
                        help="the cache (default: $SKYSCATTER_CACHE_DIR, else "
                        "$XDG_CACHE_HOME/skyscatter or ~/.cache/skyscatter)")
     cache.set_defaults(run=_cache)
+
+    compile_command = commands.add_parser(
+        "compile", help="compile the numerical kernels now, so that no later run waits for it",
+        description="Compile the numerical kernels (numba) into their cache on this machine by "
+        "running the usual commands at a tiny size: about a minute of CPU, once. Without it "
+        "the first render or radiance pays that minute. `make` runs it at install time.")
+    compile_command.set_defaults(run=_compile)
     return parser
+
+
+def _compile(args: argparse.Namespace) -> None:
+    from skyscatter.compile_ahead import compile_kernels
+    seconds = compile_kernels(main, lambda line: print(line, flush=True))
+    print(f"compiled in {seconds:.0f} s; later runs load the kernels from the cache")
 
 
 def _presets(args: argparse.Namespace) -> None:
@@ -955,12 +968,22 @@ def _validate(args: argparse.Namespace) -> int:
     return 0 if outcome.passed else 3
 
 
+# the commands whose first run compiles kernels (`compile_ahead`)
+COMPILING_COMMANDS = frozenset({"render", "timelapse", "radiance", "precompute", "view",
+                                "validate"})
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `skyscatter` command; returns the exit code."""
     from skyscatter.errors import SkyscatterError
     from skyscatter.output_files import Terminated, sigterm_as_interrupt
 
     args = build_parser().parse_args(argv)
+    computing = args.command in COMPILING_COMMANDS
+    if computing:
+        from skyscatter import compile_ahead
+        if not compile_ahead.kernels_compiled():
+            print(compile_ahead.FIRST_RUN_NOTE, file=sys.stderr, flush=True)
     try:
         with sigterm_as_interrupt():  # SIGTERM cleans up like Ctrl-C
             code = args.run(args)
@@ -984,6 +1007,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"skyscatter: internal error: {type(error).__name__}: {error} "
               "(run with --debug for the traceback and please report it)", file=sys.stderr)
         return 1
+    if computing and not code:
+        compile_ahead.mark_compiled()
     return code or 0
 
 

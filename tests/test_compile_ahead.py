@@ -1,0 +1,68 @@
+"""`skyscatter compile` and the first-run note (skyscatter.compile_ahead)."""
+
+import pytest
+
+from cli_runner import run_cli
+from skyscatter import compile_ahead
+from skyscatter.cli import build_parser
+
+
+@pytest.fixture
+def fresh_marker(tmp_path, monkeypatch):
+    """A machine whose kernels were never compiled: no marker yet."""
+    marker = tmp_path / "numba" / "compiled"
+    monkeypatch.setattr(compile_ahead, "marker_path", lambda: marker)
+    return marker
+
+
+def test_the_first_run_announces_the_compilation_and_later_runs_do_not(capsys, fresh_marker):
+    arguments = ["radiance", "earth", "--sun-zenith", "30", "--wavelengths", "550"]
+    code, out, err = run_cli(capsys, arguments)
+    assert code == 0 and out
+    assert err.splitlines()[0] == compile_ahead.FIRST_RUN_NOTE
+    assert fresh_marker.is_file()
+    code, _, err = run_cli(capsys, arguments)
+    assert code == 0 and compile_ahead.FIRST_RUN_NOTE not in err
+
+
+def test_a_failed_run_leaves_the_note_for_the_next_one(capsys, fresh_marker):
+    code, _, err = run_cli(capsys, ["radiance", "no-such-preset", "--sun-zenith", "30"])
+    assert code == 2 and compile_ahead.FIRST_RUN_NOTE in err
+    assert not fresh_marker.exists()
+
+
+def test_commands_that_compile_nothing_say_nothing(capsys, fresh_marker):
+    code, _, err = run_cli(capsys, ["presets"])
+    assert code == 0 and err == "" and not fresh_marker.exists()
+
+
+def test_every_warm_up_command_is_a_valid_command_line():
+    parser = build_parser()
+    for _, arguments in compile_ahead.WARM_UP_COMMANDS:
+        output = ["-o", "x.png"] if arguments[0] == "render" else []
+        args = parser.parse_args([*arguments, *output, "--cache-dir", "x"])
+        assert args.command in {"render", "radiance"}
+
+
+def test_compile_runs_the_warm_up_and_writes_the_marker(capsys, fresh_marker, monkeypatch):
+    # two of the commands (the rest are the same command line with other cameras and presets;
+    # all of them run in `make`'s install step, whose failure stops the build)
+    monkeypatch.setattr(compile_ahead, "WARM_UP_COMMANDS", compile_ahead.WARM_UP_COMMANDS[::6])
+    code, out, err = run_cli(capsys, ["compile"])
+    assert code == 0, err
+    lines = out.splitlines()
+    assert lines[0].startswith("compiled 1/2: tables and the fisheye (")
+    assert lines[1].startswith("compiled 2/2: radiance (")
+    assert lines[2].startswith("compiled in ") and err == ""
+    assert fresh_marker.is_file()
+
+
+def test_a_failing_warm_up_command_is_reported_with_its_message(capsys, fresh_marker,
+                                                                 monkeypatch):
+    monkeypatch.setattr(compile_ahead, "WARM_UP_COMMANDS",
+                        (("a typo", ("render", "no-such-preset", "--size", "16")),))
+    code, _, err = run_cli(capsys, ["compile"])
+    assert code == 2
+    assert "compiling the kernels failed in `skyscatter render no-such-preset --size 16`" in err
+    assert "no-such-preset" in err.split("(exit code 2):")[1]
+    assert not fresh_marker.exists()
