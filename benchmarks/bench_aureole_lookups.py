@@ -1,5 +1,5 @@
 """Benchmark: table lookups near the sun, where the aureole of multiple forward-peak scattering
-follows the sun's path (`_table_lookup_kernels.peak_aureole`).
+follows the sun's path (`_table_lookup_kernels.aureole_path`).
 
 `mars-physical` (16 bands, its own orders) is precomputed once; 200 000 rays from the ground,
 view zenith 0-85 deg, within 40 deg of azimuth of the sun, are looked up (best of one after a

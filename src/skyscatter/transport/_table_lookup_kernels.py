@@ -382,6 +382,12 @@ VIEW_TABLE_PHI = 64
 # 95th percentile 5 % at sun zenith 96 deg linear, see tests). Values below the floor
 # [density m] are 0 for any purpose (an air column of 1e-300 molecules m^-2).
 VIEW_TABLE_FLOOR = 1e-300
+# `aureole_view_table`: angles from the sun x angles about it; the Poisson law of the peak
+# events along the path changes on the scale of degrees (the path's depths), the aureole's shape
+# G(x, psi) on the peak's own width, which stays per pixel
+AUREOLE_VIEW_PSI = 96
+AUREOLE_VIEW_CHI = 65
+AUREOLE_LOG_FLOOR = -700.0  # log T' where the path is dark (exp gives 0)
 
 
 @njit(parallel=True, cache=True)
@@ -467,7 +473,7 @@ SIMPLEX_WORK = 2 * SIMPLEX_MAX_NODES + SIMPLEX_SERIES_TERMS
 def simplex_exponential(depths, n, work):
     """int exp(-sum_k depths[k] g_k) over the gaps g_0 .. g_n >= 0 with sum g_k = 1 [-], n <= 3:
     the share of the vertical column between n ordered events, each gap crossed in a direction
-    of slant depth depths[k] (`peak_aureole`); exp(-x) / n! when all depths are x. In closed
+    of slant depth depths[k] (`aureole_path`); exp(-x) / n! when all depths are x. In closed
     form by the Hermite-Genocchi formula, (-1)^n [d_0, .., d_n] exp(-d) (de Boor 2005,
     "Divided differences", Surveys in Approximation Theory 1, 46, eq. 1.4). The integral is
     symmetric in the depths, so depths[:n + 1] are sorted in place first; then Q over the
@@ -528,12 +534,14 @@ def _great_circle_mu(mu, mu_s, psi, u):
 
 
 @njit(cache=True)
-def peak_aureole(r, mu, mu_s, nu, tables, value):
-    """value[w] += the sun's light scattered two or more times in the particles' forward peaks
-    seen along (r, mu) at cos(angle from the sun) nu, for a ray that misses the ground:
-    E_sun V T (exp(x) - 1 - x) G(x, psi) (`transport.aureole`) with the line of sight's
-    transmittance T and peak depth x replaced by those of the path from the sun to the eye:
-    T x^n / n! becomes F_n = prod_{k=1..n} P_k int exp(-sum_k X_k g_k) dg
+def aureole_path(r, mu, mu_s, nu, tables, out):
+    """For the sun's light scattered two or more times in the particles' forward peaks, seen
+    along (r, mu) at cos(angle from the sun) nu by a ray that misses the ground
+    (E_sun V T (exp(x) - 1 - x) G(x, psi), `transport.aureole`, with the line of sight's
+    transmittance T and peak depth x replaced by those of the path from the sun to the eye):
+    the Poisson law of the peak events on the path from the sun to the eye along (r, mu) at
+    cos(angle from the sun) nu: out[0, w] = x' (0: no aureole) and out[1, w] = log T', from
+    T x^n / n! replaced by F_n = prod_{k=1..n} P_k int exp(-sum_k X_k g_k) dg
     (`simplex_exponential`), n events at increasing depth, the gap g_k between them (a share
     of the vertical column) crossed along the direction u = k / n of the way from the sun to
     the view (`_great_circle_mu`), with slant optical depth X_k and peak depth P_k to the top
@@ -541,11 +549,7 @@ def peak_aureole(r, mu, mu_s, nu, tables, value):
     T' x'^n / n! used for all n: x' = 3 F_3 / F_2, T' = 2 F_2 / x'^2; along the sun's own
     direction, or beside it at its elevation, T' = T and x' = x."""
     bottom_radius, top_radius = tables.bottom_radius, tables.top_radius
-    shape, x_max = tables.aureole_shape, tables.aureole_x_max
-    n_x, n_psi, n_wl = shape.shape[0], shape.shape[1], value.size
-    visible = sun_visible_fraction(r, mu_s, bottom_radius, tables.sun_angular_radius)
-    if visible <= 0.0:
-        return
+    n_wl = out.shape[1]
     psi = math.acos(min(max(nu, -1.0), 1.0))
     mu_h = horizon_cos_zenith(r, bottom_radius)
     # slant and peak depths along the directions u = 0, 1/3, 1/2, 2/3, 1 of the path
@@ -559,10 +563,10 @@ def peak_aureole(r, mu, mu_s, nu, tables, value):
         transmittance_to_top(r, mu_j, bottom_radius, top_radius, tables.slant_depth,
                              depth[j])
         transmittance_to_top(r, mu_j, bottom_radius, top_radius, tables.peak_depth, peak[j])
-    i_p, a_p = linear_axis(psi / tables.aureole_psi_max * (n_psi - 1), n_psi)
     gaps = np.empty(SIMPLEX_MAX_NODES)
     work = np.empty(SIMPLEX_WORK)
     for w in range(n_wl):
+        out[0, w], out[1, w] = 0.0, AUREOLE_LOG_FLOOR
         gaps[0], gaps[1], gaps[2] = depth[0, w], depth[2, w], depth[4, w]
         second = peak[2, w] * peak[4, w] * simplex_exponential(gaps, 2, work)
         gaps[0], gaps[1], gaps[2], gaps[3] = depth[0, w], depth[1, w], depth[3, w], depth[4, w]
@@ -570,16 +574,79 @@ def peak_aureole(r, mu, mu_s, nu, tables, value):
                  * simplex_exponential(gaps, 3, work))
         if not (second > 0.0 and third > 0.0):
             continue
-        x = min(3.0 * third / second, x_max)
-        through = 2.0 * second / (x * x)
+        x = min(3.0 * third / second, tables.aureole_x_max)
+        out[0, w] = x
+        out[1, w] = max(math.log(2.0 * second / (x * x)), AUREOLE_LOG_FLOOR)
+
+
+@njit(cache=True)
+def add_aureole(r, mu_s, nu, path, tables, value):
+    """value[w] += E_sun V T' (exp(x') - 1 - x') G(x', psi) for the Poisson law `path`
+    (`aureole_path`) of a view at cos(angle from the sun) nu from radius r."""
+    bottom_radius, shape, x_max = tables.bottom_radius, tables.aureole_shape, tables.aureole_x_max
+    n_x, n_psi = shape.shape[0], shape.shape[1]
+    visible = sun_visible_fraction(r, mu_s, bottom_radius, tables.sun_angular_radius)
+    if visible <= 0.0:
+        return
+    psi = math.acos(min(max(nu, -1.0), 1.0))
+    i_p, a_p = linear_axis(psi / tables.aureole_psi_max * (n_psi - 1), n_psi)
+    for w in range(value.size):
+        x = path[0, w]
+        if not x > 0.0:
+            continue
         i_x, a_x = linear_axis(math.log1p(x) / math.log1p(x_max) * (n_x - 1), n_x)
         g = ((1.0 - a_x) * ((1.0 - a_p) * shape[i_x, i_p, w] + a_p * shape[i_x, i_p + 1, w])
              + a_x * ((1.0 - a_p) * shape[i_x + 1, i_p, w] + a_p * shape[i_x + 1, i_p + 1, w]))
-        value[w] += tables.sun_irradiance[w] * visible * through * (math.expm1(x) - x) * g
+        value[w] += (tables.sun_irradiance[w] * visible * math.exp(path[1, w])
+                     * (math.expm1(x) - x) * g)
 
 
 @njit(parallel=True, cache=True)
-def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo, view_table, out):
+def aureole_view_table(r, mu_s, tables):
+    """`aureole_path` for the views of one observer at radius r [m] inside the atmosphere with
+    the sun at zenith cosine mu_s, within the aureole's reach psi_max of the sun:
+    (AUREOLE_VIEW_PSI, AUREOLE_VIEW_CHI, 2, n_wl) on angles from the sun
+    psi = psi_max i / (AUREOLE_VIEW_PSI - 1) x angles about the sun from its vertical plane
+    chi = pi k / (AUREOLE_VIEW_CHI - 1) (0 on the zenith's side). For one observer and sun the
+    path's Poisson law depends on (psi, chi) only and smoothly, so a frame evaluates it on
+    this grid instead of for every pixel near the sun (`aureole_view_lookup`); the sharp
+    angular shape G(x', psi) stays per pixel (`add_aureole`)."""
+    n_wl = tables.sun_irradiance.size
+    table = np.zeros((AUREOLE_VIEW_PSI, AUREOLE_VIEW_CHI, 2, n_wl))
+    sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+    for i in prange(AUREOLE_VIEW_PSI):
+        psi = tables.aureole_psi_max * i / (AUREOLE_VIEW_PSI - 1)
+        nu = math.cos(psi)
+        for k in range(AUREOLE_VIEW_CHI):
+            chi = math.pi * k / (AUREOLE_VIEW_CHI - 1)
+            mu = min(max(nu * mu_s + math.sin(psi) * sin_s * math.cos(chi), -1.0), 1.0)
+            aureole_path(r, mu, mu_s, nu, tables, table[i, k])
+    return table
+
+
+@njit(cache=True)
+def aureole_view_lookup(table, mu, mu_s, nu, psi_max, out):
+    """`aureole_view_table` interpolated bilinearly (x' and log T') for the view (mu, nu) of
+    its observer, into out (2, n_wl); x' = 0 (no aureole) where a corner has none."""
+    n_psi, n_chi = table.shape[0], table.shape[1]
+    psi = math.acos(min(max(nu, -1.0), 1.0))
+    i, a = linear_axis(psi / psi_max * (n_psi - 1), n_psi)
+    k, b = linear_axis(view_sun_azimuth(mu, nu, mu_s) / math.pi * (n_chi - 1), n_chi)
+    for w in range(out.shape[1]):
+        corners = (table[i, k, 0, w], table[i, k + 1, 0, w], table[i + 1, k, 0, w],
+                   table[i + 1, k + 1, 0, w])
+        if not min(corners) > 0.0:
+            out[0, w] = 0.0
+            continue
+        for q in range(2):
+            out[q, w] = ((1.0 - a) * ((1.0 - b) * table[i, k, q, w] + b * table[i, k + 1, q, w])
+                         + a * ((1.0 - b) * table[i + 1, k, q, w]
+                                + b * table[i + 1, k + 1, q, w]))
+
+
+@njit(parallel=True, cache=True)
+def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo, view_table,
+                      aureole_table, out):
     """Radiance from the tables into out (n_ray, n_wl) [W m^-2 sr^-1 nm^-1]:
     sum_s p_s(nu) S_s + M (`scattering` = the interleaved (S_1..S_n_s, M) from `flat_tables`;
     sizes n_r, n_mu, n_mu_s, n_nu), plus for rays that hit the ground the Lambertian ground
@@ -594,7 +661,9 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
     once the sun at the ray's start nears the horizon, blended by `exact_single_weight`;
     for one origin inside the atmosphere it is read from `view_table`
     (`single_scattering_view_table` of that origin and sun), otherwise (view_table of size 0)
-    marched along each ray.
+    marched along each ray. The aureole of the peaks' multiple events (`add_aureole`) takes
+    its path's Poisson law from `aureole_table` (`aureole_view_table` of that origin and
+    sun) where it has entries, else computes it per ray.
     `tables`: the `LookupTables` record of the tables and the profile."""
     bottom_radius, top_radius, mu_s_min = tables.bottom_radius, tables.top_radius, tables.mu_s_min
     scattering, phase_table = tables.scattering, tables.phase_table
@@ -619,6 +688,7 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
         dens = np.empty(density.shape[0])
         exact = np.empty((n_s, n_wl))
         slices = np.empty((2, n_wl))
+        path = np.empty((2, n_wl))
         for i in range(block * RAYS_PER_BLOCK, min(n_ray, (block + 1) * RAYS_PER_BLOCK)):
             for w in range(n_wl):
                 out[i, w] = 0.0
@@ -672,7 +742,12 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                                      * exact[s, w])
             if (not hits_ground and tables.aureole_psi_max > 0.0
                     and nu > math.cos(tables.aureole_psi_max)):
-                peak_aureole(r, mu, mu_s, nu, tables, value)
+                if aureole_table.shape[0] > 0:
+                    aureole_view_lookup(aureole_table, mu, mu_s, nu, tables.aureole_psi_max,
+                                        path)
+                else:
+                    aureole_path(r, mu, mu_s, nu, tables, path)
+                add_aureole(r, mu_s, nu, path, tables, value)
             if hits_ground:
                 mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
                 transmittance_along(r, mu, d, True, bottom_radius, top_radius, transmittance,

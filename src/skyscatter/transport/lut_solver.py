@@ -117,12 +117,13 @@ class LutSolver:
         p = self.profile
         result = np.empty((directions.shape[0], p.n_wavelengths))
         view_table = self._view_table(origins, sun)
+        aureole_table = self._aureole_table(origins, sun)
         for start in range(0, directions.shape[0], CHUNK_RAYS):
             stop = min(start + CHUNK_RAYS, directions.shape[0])
             _table_lookup_kernels.sky_radiance_rays(
                 origins if origins.shape[0] == 1 else origins[start:stop],
                 directions[start:stop], sun, self._lookup, self._albedo, view_table,
-                result[start:stop])
+                aureole_table, result[start:stop])
             if progress is not None:
                 progress(stop - start)
         return result.reshape(shape + (p.n_wavelengths,))
@@ -143,6 +144,20 @@ class LutSolver:
             return empty
         return _table_lookup_kernels.single_scattering_view_table(
             max(r, t.bottom_radius_m), mu_s, VIEW_TABLE_SAMPLES, self._lookup)
+
+    def _aureole_table(self, origins: np.ndarray, sun: np.ndarray) -> np.ndarray:
+        """The Poisson law of the aureole's peak events for every view near the sun of the one
+        observer in `origins` (1, 3) inside the atmosphere
+        (`_table_lookup_kernels.aureole_view_table`), when the tables have an aureole;
+        otherwise an empty table, and the kernel computes it per ray."""
+        lookup = self._lookup
+        empty = np.zeros((0, 0, 2, self.profile.n_wavelengths))
+        if origins.shape[0] != 1 or not lookup.aureole_psi_max > 0.0:
+            return empty
+        r = float(np.linalg.norm(origins[0]))
+        if not lookup.bottom_radius <= r <= lookup.top_radius:
+            return empty
+        return _table_lookup_kernels.aureole_view_table(r, float(origins[0] @ sun) / r, lookup)
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
                       distance_m: ArrayLike = np.inf) -> np.ndarray:
