@@ -1,5 +1,7 @@
-"""Measurement for issue 18: how well would a per-frame sky-view grid stand in for per-pixel
-table lookups? (A proposal, not code of the package.)
+"""Measurement for issue 18: how well does a per-frame sky-view grid stand in for per-pixel
+table lookups? (The measurement that chose the sizes of `LutSolver`'s grid, SKY_GRID_*; it
+interpolates across the horizon, which the package's grid does not, and has no rays looked up
+one by one next to the sun. tests/transport/test_sky_view_grid.py checks the package's grid.)
 
 For one observer the sky's radiance depends on the view's zenith cosine mu and its azimuth
 from the sun only. This script looks the tables up on a grid of N_MU x N_PHI views (mu on the

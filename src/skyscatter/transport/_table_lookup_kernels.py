@@ -456,6 +456,62 @@ def view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius, t
                 out[s, w] = math.exp(log_value)
 
 
+@njit(cache=True)
+def sky_view_grid_nodes(r, n_mu, n_phi, bottom_radius, top_radius):
+    """The view directions of a sky-view grid for an observer at radius r [m], in the
+    observer's frame (x towards the sun's azimuth, z up):
+    (n_mu, n_phi, 3), view zenith cosines on the scattering table's mapping
+    (`scattering_mu_from_u`, each node moved 1e-12 into its side of the horizon so that the
+    lookups take the same side) x azimuths phi = pi k / (n_phi - 1) from the sun's."""
+    nodes = np.empty((n_mu, n_phi, 3))
+    mu_h = horizon_cos_zenith(r, bottom_radius)
+    for i in range(n_mu):
+        mu, hits_ground = scattering_mu_from_u((i + 0.5) / n_mu, r, bottom_radius, top_radius,
+                                               n_mu)
+        mu = min(mu, mu_h - 1e-12) if hits_ground else max(mu, mu_h + 1e-12)
+        mu = min(max(mu, -1.0), 1.0)
+        sin_v = math.sqrt(max(1.0 - mu * mu, 0.0))
+        for k in range(n_phi):
+            phi = math.pi * k / (n_phi - 1)
+            nodes[i, k, 0] = sin_v * math.cos(phi)
+            nodes[i, k, 1] = sin_v * math.sin(phi)
+            nodes[i, k, 2] = mu
+    return nodes
+
+
+@njit(parallel=True, cache=True)
+def sky_view_grid_lookup(log_grid, up, sun_direction, cos_exact, bottom_radius, top_radius,
+                         r, directions, out, exact):
+    """The radiance along `directions` (n_ray, 3) of one observer at radius r [m] (unit
+    vertical `up`), interpolated in `log_grid` (n_mu, n_phi, n_wl), the logarithm of the
+    radiance at `sky_view_grid_nodes`: bilinear on the table's mu axis (each side of the
+    horizon kept to its half, `mu_axis`) and in the azimuth from the sun, into out
+    (n_ray, n_wl). Rays whose cos(angle from the sun) exceeds cos_exact are left to the
+    caller: exact[j] = True, out[j] untouched."""
+    n_mu, n_phi, n_wl = log_grid.shape
+    mu_s = up[0] * sun_direction[0] + up[1] * sun_direction[1] + up[2] * sun_direction[2]
+    for j in prange(directions.shape[0]):
+        dx, dy, dz = directions[j, 0], directions[j, 1], directions[j, 2]
+        norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if not norm > 0.0:  # no direction: no light, as `sky_radiance_rays`
+            exact[j] = False
+            out[j, :] = 0.0
+            continue
+        nu = (dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]) / norm
+        exact[j] = nu > cos_exact
+        if exact[j]:
+            continue
+        mu = (dx * up[0] + dy * up[1] + dz * up[2]) / norm
+        hits_ground = ray_intersects_ground(r, mu, bottom_radius)
+        i, a = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
+        k, b = linear_axis(view_sun_azimuth(nu, mu, mu_s) / math.pi * (n_phi - 1), n_phi)
+        for w in range(n_wl):
+            out[j, w] = math.exp((1.0 - a) * ((1.0 - b) * log_grid[i, k, w]
+                                              + b * log_grid[i, k + 1, w])
+                                 + a * ((1.0 - b) * log_grid[i + 1, k, w]
+                                        + b * log_grid[i + 1, k + 1, w]))
+
+
 # --------------------------------------------------------------------------------------------
 # Lookups for the solver
 # --------------------------------------------------------------------------------------------

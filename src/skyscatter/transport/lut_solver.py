@@ -32,6 +32,18 @@ CHUNK_RAYS = 1 << 18  # rays per kernel call, so that progress can be reported
 # Samples per sunlit piece of the rays of the per-observer single-scattering table (16 k rays,
 # so they can be twice those of a per-ray march)
 VIEW_TABLE_SAMPLES = 64
+# One observer's frames of at least SKY_GRID_MIN_RAYS rays look the tables up on a sky-view grid
+# of SKY_GRID_MU view-zenith cells (the tables' mu mapping, crowded at the horizon) x
+# SKY_GRID_PHI azimuths from the sun and interpolate it per pixel in the logarithm (Hillaire
+# 2020, "A scalable and production ready sky and atmosphere rendering technique", Comput.
+# Graph. Forum 39(4), doi:10.1111/cgf.14050, its sky-view table); the rays within
+# SKY_GRID_EXACT_DEG of the sun, where the particles' phase functions peak, are looked up one
+# by one (benchmarks/bench_sky_view_grid.py, docs/performance.md).
+SKY_GRID_MIN_RAYS = 1 << 17
+SKY_GRID_MU = 256
+SKY_GRID_PHI = 128
+SKY_GRID_EXACT_DEG = 20.0
+VIEW_TABLE_FLOOR = 1e-300  # radiance below it is 0 in the grid's logarithm
 # the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
 SLANT_DEPTH_MAX = 700.0
 
@@ -114,19 +126,71 @@ class LutSolver:
         cosine leaks light into the planet's shadow in twilight (docs/physics/tables.md)."""
         origins, directions, shape = _rays(position, view_directions)
         sun = _sun(sun_direction)
-        p = self.profile
-        result = np.empty((directions.shape[0], p.n_wavelengths))
+        result = np.empty((directions.shape[0], self.profile.n_wavelengths))
         view_table = self._view_table(origins, sun)
         aureole_table = self._aureole_table(origins, sun)
+        if self._uses_sky_view_grid(origins, directions.shape[0]):
+            self._sky_from_view_grid(origins[0], directions, sun, view_table, aureole_table,
+                                     result, progress)
+        else:
+            self._sky_per_ray(origins, directions, sun, view_table, aureole_table, result,
+                              progress)
+        return result.reshape(shape + (self.profile.n_wavelengths,))
+
+    def _sky_per_ray(self, origins: np.ndarray, directions: np.ndarray, sun: np.ndarray,
+                     view_table: np.ndarray, aureole_table: np.ndarray, out: np.ndarray,
+                     progress: Callable[[int], None] | None) -> None:
+        """`sky_radiance` looked up for every ray, in chunks, into out (n_ray, n_wl)."""
         for start in range(0, directions.shape[0], CHUNK_RAYS):
             stop = min(start + CHUNK_RAYS, directions.shape[0])
             _table_lookup_kernels.sky_radiance_rays(
                 origins if origins.shape[0] == 1 else origins[start:stop],
                 directions[start:stop], sun, self._lookup, self._albedo, view_table,
-                aureole_table, result[start:stop])
+                aureole_table, out[start:stop])
             if progress is not None:
                 progress(stop - start)
-        return result.reshape(shape + (p.n_wavelengths,))
+
+    def _uses_sky_view_grid(self, origins: np.ndarray, n_rays: int) -> bool:
+        """Whether `sky_radiance` interpolates a sky-view grid (module constants): one
+        observer inside the atmosphere and at least SKY_GRID_MIN_RAYS rays."""
+        if origins.shape[0] != 1 or n_rays < SKY_GRID_MIN_RAYS:
+            return False
+        r = float(np.linalg.norm(origins[0]))
+        return self.tables.bottom_radius_m <= r <= self.tables.top_radius_m
+
+    def _sky_from_view_grid(self, origin: np.ndarray, directions: np.ndarray, sun: np.ndarray,
+                            view_table: np.ndarray, aureole_table: np.ndarray, out: np.ndarray,
+                            progress: Callable[[int], None] | None) -> None:
+        """`sky_radiance` of one observer from a sky-view grid (module constants): the rays
+        within SKY_GRID_EXACT_DEG of the sun looked up one by one, the others interpolated."""
+        t = self.tables
+        r = float(np.linalg.norm(origin))
+        up = origin / r
+        mu_s = float(up @ sun)
+        toward_sun = sun - mu_s * up
+        if np.linalg.norm(toward_sun) < 1e-9:  # the sun at the zenith or nadir: any azimuth
+            toward_sun = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
+        x_axis = toward_sun / np.linalg.norm(toward_sun)
+        frame = np.stack([x_axis, np.cross(up, x_axis), up])  # rows: local x, y, z
+        nodes = _table_lookup_kernels.sky_view_grid_nodes(
+            r, SKY_GRID_MU, SKY_GRID_PHI, t.bottom_radius_m, t.top_radius_m)
+        grid = np.empty((SKY_GRID_MU * SKY_GRID_PHI, self.profile.n_wavelengths))
+        self._sky_per_ray(origin[None], np.ascontiguousarray(nodes.reshape(-1, 3) @ frame),
+                          sun, view_table, aureole_table, grid, None)
+        log_grid = np.log(np.maximum(grid, VIEW_TABLE_FLOOR)).reshape(
+            SKY_GRID_MU, SKY_GRID_PHI, -1)
+        exact = np.empty(directions.shape[0], dtype=np.bool_)
+        _table_lookup_kernels.sky_view_grid_lookup(
+            log_grid, up, sun, float(np.cos(np.radians(SKY_GRID_EXACT_DEG))), t.bottom_radius_m,
+            t.top_radius_m, r, directions, out, exact)
+        near_sun = np.flatnonzero(exact)
+        if near_sun.size:
+            values = np.empty((near_sun.size, self.profile.n_wavelengths))
+            self._sky_per_ray(origin[None], np.ascontiguousarray(directions[near_sun]), sun,
+                              view_table, aureole_table, values, None)
+            out[near_sun] = values
+        if progress is not None:
+            progress(directions.shape[0])
 
     def _view_table(self, origins: np.ndarray, sun: np.ndarray) -> np.ndarray:
         """Single scattering of every view direction of the one observer in `origins` (1, 3)
