@@ -979,10 +979,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from skyscatter.output_files import Terminated, sigterm_as_interrupt
 
     args = build_parser().parse_args(argv)
-    computing = args.command in COMPILING_COMMANDS
-    if computing:
+    first_run = False
+    if args.command in COMPILING_COMMANDS:
         from skyscatter import compile_ahead
-        if not compile_ahead.kernels_compiled():
+        first_run = not compile_ahead.kernels_compiled()
+        if first_run:
             print(compile_ahead.FIRST_RUN_NOTE, file=sys.stderr, flush=True)
     try:
         with sigterm_as_interrupt():  # SIGTERM cleans up like Ctrl-C
@@ -1007,7 +1008,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"skyscatter: internal error: {type(error).__name__}: {error} "
               "(run with --debug for the traceback and please report it)", file=sys.stderr)
         return 1
-    if computing and not code:
+    if first_run and not code:
         compile_ahead.mark_compiled()
     return code or 0
 

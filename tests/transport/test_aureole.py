@@ -15,6 +15,8 @@ import pytest
 from transport_cases import SMALL, exponential_earth
 
 from skyscatter.transport._table_lookup_kernels import (
+    AUREOLE_VIEW_CHI,
+    AUREOLE_VIEW_PSI,
     SIMPLEX_WORK,
     simplex_exponential,
     transmittance_to_top,
@@ -171,14 +173,16 @@ def test_one_observers_aureole_from_its_view_table_matches_the_path_of_each_ray(
     for sun_zenith_deg in (0.0, 30.0, 60.0, 80.0):
         theta_s = np.radians(sun_zenith_deg)
         sun = np.array([np.sin(theta_s), 0.0, np.cos(theta_s)])
-        psi = psi_max * np.sqrt(rng.uniform(0.0, 1.0, 400))
-        chi = rng.uniform(0.0, 2.0 * np.pi, 400)
+        psi = psi_max * np.sqrt(rng.uniform(0.0, 1.0, 16_000))
+        chi = rng.uniform(0.0, 2.0 * np.pi, 16_000)
         e1 = np.cross(sun, [0.0, 1.0, 0.0]) if sun_zenith_deg else np.array([1.0, 0.0, 0.0])
         e1 /= np.linalg.norm(e1)
         e2 = np.cross(sun, e1)
         views = (np.cos(psi)[:, None] * sun + np.sin(psi)[:, None]
                  * (np.cos(chi)[:, None] * e1 + np.sin(chi)[:, None] * e2))
         views = views[views[:, 2] > 0.02]  # the aureole is for rays that miss the ground
+        # a call with fewer rays than the table's nodes computes the path per ray
+        assert len(views) >= AUREOLE_VIEW_PSI * AUREOLE_VIEW_CHI
         table = aureole_alone(hazy_lut, views, sun)
         per_ray = aureole_alone(hazy_lut, views, sun, np.repeat(origin[None], len(views), 0))
         sky = hazy_lut.sky_radiance(origin, views, sun)

@@ -591,13 +591,12 @@ def _great_circle_mu(mu, mu_s, psi, u):
 
 @njit(cache=True)
 def aureole_path(r, mu, mu_s, nu, tables, out):
-    """For the sun's light scattered two or more times in the particles' forward peaks, seen
-    along (r, mu) at cos(angle from the sun) nu by a ray that misses the ground
-    (E_sun V T (exp(x) - 1 - x) G(x, psi), `transport.aureole`, with the line of sight's
-    transmittance T and peak depth x replaced by those of the path from the sun to the eye):
-    the Poisson law of the peak events on the path from the sun to the eye along (r, mu) at
-    cos(angle from the sun) nu: out[0, w] = x' (0: no aureole) and out[1, w] = log T', from
-    T x^n / n! replaced by F_n = prod_{k=1..n} P_k int exp(-sum_k X_k g_k) dg
+    """The Poisson law of the peak events on the path from the sun to the eye, for the sun's
+    light scattered two or more times in the particles' forward peaks and seen along (r, mu)
+    at cos(angle from the sun) nu by a ray that misses the ground (E_sun V T (exp(x) - 1 - x)
+    G(x, psi), `transport.aureole`, with the line of sight's transmittance T and peak depth x
+    replaced by those of that path): out[0, w] = x' (0: no aureole) and out[1, w] = log T',
+    from T x^n / n! replaced by F_n = prod_{k=1..n} P_k int exp(-sum_k X_k g_k) dg
     (`simplex_exponential`), n events at increasing depth, the gap g_k between them (a share
     of the vertical column) crossed along the direction u = k / n of the way from the sun to
     the view (`_great_circle_mu`), with slant optical depth X_k and peak depth P_k to the top

@@ -23,6 +23,7 @@ __all__ = [
     "distance_to_sphere",
     "ground_distances",
     "horizon_cos_zenith",
+    "horizontal_towards",
     "local_frame_directions",
     "sun_visible_fraction",
     "towards_visible_sun",
@@ -139,13 +140,18 @@ def towards_visible_sun(position: np.ndarray, sun_direction: np.ndarray,
     mu_h = horizon_cos_zenith(r, bottom_radius)
     if mu_s >= mu_h:
         return sun
-    horizontal = sun - mu_s * up
-    norm = float(np.linalg.norm(horizontal))
-    if norm == 0.0:  # the sun at the nadir: any azimuth
-        horizontal = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
-        norm = float(np.linalg.norm(horizontal))
     elevation = math.asin(max(-1.0, min(1.0, mu_h))) + 1e-9  # above the horizontal [rad]
-    return math.sin(elevation) * up + math.cos(elevation) * horizontal / norm
+    return math.sin(elevation) * up + math.cos(elevation) * horizontal_towards(up, sun)
+
+
+def horizontal_towards(up: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """The unit vector (3,) perpendicular to the unit vertical `up` at the azimuth of
+    `direction` (3,); any such vector where `direction` is vertical (a sun at the zenith or
+    the nadir has every azimuth)."""
+    horizontal = direction - float(up @ direction) * up
+    if float(np.linalg.norm(horizontal)) == 0.0:
+        horizontal = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
+    return horizontal / np.linalg.norm(horizontal)
 
 
 def local_frame_directions(zenith_rad: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfil
 from skyscatter.errors import InputError
 from skyscatter.transport import _table_lookup_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
+from skyscatter.transport.geometry import horizontal_towards
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
@@ -43,7 +44,6 @@ SKY_GRID_MIN_RAYS = 1 << 17
 SKY_GRID_MU = 256
 SKY_GRID_PHI = 128
 SKY_GRID_EXACT_DEG = 20.0
-VIEW_TABLE_FLOOR = 1e-300  # radiance below it is 0 in the grid's logarithm
 # the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
 SLANT_DEPTH_MAX = 700.0
 
@@ -128,7 +128,7 @@ class LutSolver:
         sun = _sun(sun_direction)
         result = np.empty((directions.shape[0], self.profile.n_wavelengths))
         view_table = self._view_table(origins, sun)
-        aureole_table = self._aureole_table(origins, sun)
+        aureole_table = self._aureole_table(origins, sun, directions.shape[0])
         if self._uses_sky_view_grid(origins, directions.shape[0]):
             self._sky_from_view_grid(origins[0], directions, sun, view_table, aureole_table,
                                      result, progress)
@@ -153,7 +153,11 @@ class LutSolver:
     def _uses_sky_view_grid(self, origins: np.ndarray, n_rays: int) -> bool:
         """Whether `sky_radiance` interpolates a sky-view grid (module constants): one
         observer inside the atmosphere and at least SKY_GRID_MIN_RAYS rays."""
-        if origins.shape[0] != 1 or n_rays < SKY_GRID_MIN_RAYS:
+        return n_rays >= SKY_GRID_MIN_RAYS and self._one_observer_inside(origins)
+
+    def _one_observer_inside(self, origins: np.ndarray) -> bool:
+        """Whether `origins` is one observer (1, 3) inside the atmosphere (ground included)."""
+        if origins.shape[0] != 1:
             return False
         r = float(np.linalg.norm(origins[0]))
         return self.tables.bottom_radius_m <= r <= self.tables.top_radius_m
@@ -166,18 +170,14 @@ class LutSolver:
         t = self.tables
         r = float(np.linalg.norm(origin))
         up = origin / r
-        mu_s = float(up @ sun)
-        toward_sun = sun - mu_s * up
-        if np.linalg.norm(toward_sun) < 1e-9:  # the sun at the zenith or nadir: any azimuth
-            toward_sun = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
-        x_axis = toward_sun / np.linalg.norm(toward_sun)
+        x_axis = horizontal_towards(up, sun)
         frame = np.stack([x_axis, np.cross(up, x_axis), up])  # rows: local x, y, z
         nodes = _table_lookup_kernels.sky_view_grid_nodes(
             r, SKY_GRID_MU, SKY_GRID_PHI, t.bottom_radius_m, t.top_radius_m)
         grid = np.empty((SKY_GRID_MU * SKY_GRID_PHI, self.profile.n_wavelengths))
         self._sky_per_ray(origin[None], np.ascontiguousarray(nodes.reshape(-1, 3) @ frame),
                           sun, view_table, aureole_table, grid, None)
-        log_grid = np.log(np.maximum(grid, VIEW_TABLE_FLOOR)).reshape(
+        log_grid = np.log(np.maximum(grid, _table_lookup_kernels.VIEW_TABLE_FLOOR)).reshape(
             SKY_GRID_MU, SKY_GRID_PHI, -1)
         exact = np.empty(directions.shape[0], dtype=np.bool_)
         _table_lookup_kernels.sky_view_grid_lookup(
@@ -209,18 +209,18 @@ class LutSolver:
         return _table_lookup_kernels.single_scattering_view_table(
             max(r, t.bottom_radius_m), mu_s, VIEW_TABLE_SAMPLES, self._lookup)
 
-    def _aureole_table(self, origins: np.ndarray, sun: np.ndarray) -> np.ndarray:
+    def _aureole_table(self, origins: np.ndarray, sun: np.ndarray, n_rays: int) -> np.ndarray:
         """The Poisson law of the aureole's peak events for every view near the sun of the one
         observer in `origins` (1, 3) inside the atmosphere
-        (`_table_lookup_kernels.aureole_view_table`), when the tables have an aureole;
-        otherwise an empty table, and the kernel computes it per ray."""
+        (`_table_lookup_kernels.aureole_view_table`), when the tables have an aureole and the
+        call has at least as many rays as the table has nodes (fewer rays compute it faster
+        one by one); otherwise an empty table, and the kernel computes it per ray."""
         lookup = self._lookup
-        empty = np.zeros((0, 0, 2, self.profile.n_wavelengths))
-        if origins.shape[0] != 1 or not lookup.aureole_psi_max > 0.0:
-            return empty
+        nodes = _table_lookup_kernels.AUREOLE_VIEW_PSI * _table_lookup_kernels.AUREOLE_VIEW_CHI
+        if (n_rays < nodes or not lookup.aureole_psi_max > 0.0
+                or not self._one_observer_inside(origins)):
+            return np.zeros((0, 0, 2, self.profile.n_wavelengths))
         r = float(np.linalg.norm(origins[0]))
-        if not lookup.bottom_radius <= r <= lookup.top_radius:
-            return empty
         return _table_lookup_kernels.aureole_view_table(r, float(origins[0] @ sun) / r, lookup)
 
     def transmittance(self, position: ArrayLike, directions: ArrayLike,
