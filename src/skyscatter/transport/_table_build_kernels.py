@@ -34,8 +34,11 @@ from skyscatter.transport._kernels import column_below, density_at
 from skyscatter.transport._table_common_kernels import (
     linear_axis,
     lookup_scratch,
+    mu_axis,
+    mu_s_corner,
+    nu_corner,
     phase_values,
-    scattering_corners,
+    radius_corner,
     scattering_lookup,
     table_ray_distances,
     transmittance_in_row,
@@ -411,7 +414,20 @@ def radius_taps(k, a, n):
             0.5 * (-3.0 * a3 + 4.0 * a2 + a), 0.5 * (a3 - a2))
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True, error_model="numpy")
+def _sun_at_samples(r_mu_s, nu, t, radius, mu_h, d_min, d_max, top_radius, mu_s_j, x_mu):
+    """For the samples (t, radius (total,)) of a ray whose cell has r mu_s = `r_mu_s` and nu:
+    the sun's zenith cosine at each, mu_s_j = (r mu_s + t nu) / r_j, and the transmittance
+    table's x_mu towards it (`transmittance_x_mu`, the sun held at the horizon mu_h where
+    below it; d_min, d_max per sample from `transmittance_x_r`), into mu_s_j and x_mu. A loop
+    of its own, without exceptions, so that it vectorises."""
+    for j in range(mu_s_j.size):
+        mu_s_j[j] = min(max((r_mu_s + t[j] * nu) / radius[j], -1.0), 1.0)
+        x_mu[j] = transmittance_x_mu(radius[j], max(mu_s_j[j], mu_h[j]), top_radius,
+                                     d_min[j], d_max[j])
+
+
+@njit(parallel=True, cache=True, error_model="numpy")
 def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_depth, scatterers,
                             factor, sun_angular_radius):
     """Single scattering without phase function, per scattering constituent:
@@ -460,23 +476,23 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
             row_i[j], row_a[j] = linear_axis(x_r * (n_r_t - 1), n_r_t)
         sun = np.empty(n_wl)
         acc = np.empty((n_s, n_wl))
+        mu_s_j = np.empty(total)
+        x_mu = np.empty(total)
         for i_s in range(n_mu_s):
             mu_s = nodes[i_s]
             for i_nu in range(n_nu):
                 nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 acc[:, :] = 0.0
+                _sun_at_samples(r * mu_s, nu, t, radius, mu_h, row_d_min, row_d_max, top_radius,
+                                mu_s_j, x_mu)
                 for j in range(total):
-                    rj = radius[j]
-                    mu_s_j = min(max((r * mu_s + t[j] * nu) / rj, -1.0), 1.0)
                     visible = 1.0
-                    if mu_s_j < mu_h[j] + sun_clear:  # else the whole disk is up
-                        visible = sun_visible_fraction(rj, mu_s_j, bottom_radius,
+                    if mu_s_j[j] < mu_h[j] + sun_clear:  # else the whole disk is up
+                        visible = sun_visible_fraction(radius[j], mu_s_j[j], bottom_radius,
                                                        sun_angular_radius)
                         if visible <= 0.0:
                             continue
-                    x_mu = transmittance_x_mu(rj, max(mu_s_j, mu_h[j]), top_radius,
-                                              row_d_min[j], row_d_max[j])
-                    transmittance_in_row(sun_table, row_i[j], row_a[j], x_mu, sun)
+                    transmittance_in_row(sun_table, row_i[j], row_a[j], x_mu[j], sun)
                     if sun_table_is_depth:
                         if sun.min() + view_depth[j] > OPAQUE_OPTICAL_DEPTH:
                             continue  # no light from there: no exponentials
@@ -485,8 +501,10 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
                         for w in range(n_wl):
                             sun[w] = math.exp(-np.float32(sun[w]))
                     for s in range(n_s):
+                        acc_s = acc[s]  # row views: see `multiple_scattering_table`
+                        view_s = view[s, j]
                         for w in range(n_wl):
-                            acc[s, w] += visible * view[s, j, w] * sun[w]
+                            acc_s[w] += visible * view_s[w] * sun[w]
                 for s in range(n_s):
                     for w in range(n_wl):
                         table[i_r, i_mu, i_s, i_nu, s, w] = acc[s, w] * factor[s, w]
@@ -606,27 +624,34 @@ def phase_matrices(phase_table, cos_direct, cos_mirror, solid_angle):
 
 
 @njit(cache=True)
-def _ground_radiance(r, mu, mu_s, nu, grid, medium, ground_irradiance, albedo, col_a, col_b,
-                     out):
-    """out[w] += radiance of the Lambertian ground seen from (r, mu) through the atmosphere:
-    T(x, g) albedo / pi E(mu_s(g)), E from `ground_irradiance` (n_g, n_wl) on mu_s = -1 + 2 i /
-    (n_g - 1). For rays that hit the ground."""
+def _ground_seen(r, mu, grid, medium, albedo, col_a, col_b, out):
+    """For a ray (r, mu) that hits the ground: the distance d to it [m], and out[w] = T(x, g)
+    albedo / pi, what the Lambertian ground's irradiance is multiplied by on the way to x."""
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
     columns, extinction = medium.columns, medium.extinction
     n_c, n_wl = extinction.shape
     d = distance_to_bottom_boundary(r, mu, bottom_radius)
     mu_g = min(max((r * mu + d) / bottom_radius, -1.0), 1.0)
-    mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
     columns_to_top(bottom_radius, -mu_g, bottom_radius, top_radius, columns, col_a)
     columns_to_top(r, -mu, bottom_radius, top_radius, columns, col_b)
-    n_g = ground_irradiance.shape[0]
-    i, a = linear_axis(0.5 * (mu_s_g + 1.0) * (n_g - 1), n_g)
     for w in range(n_wl):
         tau = 0.0
         for c in range(n_c):
             tau += extinction[c, w] * max(col_a[c] - col_b[c], 0.0)
-        irradiance = (1.0 - a) * ground_irradiance[i, w] + a * ground_irradiance[i + 1, w]
-        out[w] += math.exp(-tau) * albedo[w] / math.pi * irradiance
+        out[w] = math.exp(-tau) * albedo[w] / math.pi
+    return d
+
+
+@njit(cache=True)
+def _add_ground_radiance(r, mu_s, nu, d, seen, ground_irradiance, bottom_radius, out):
+    """out[w] += radiance of the Lambertian ground at distance d along a ray from radius r:
+    seen[w] (`_ground_seen`) times E(mu_s(g)), E from `ground_irradiance` (n_g, n_wl) on
+    mu_s = -1 + 2 i / (n_g - 1)."""
+    mu_s_g = min(max((r * mu_s + d * nu) / bottom_radius, -1.0), 1.0)
+    n_g = ground_irradiance.shape[0]
+    i, a = linear_axis(0.5 * (mu_s_g + 1.0) * (n_g - 1), n_g)
+    for w in range(out.size):
+        out[w] += seen[w] * ((1.0 - a) * ground_irradiance[i, w] + a * ground_irradiance[i + 1, w])
 
 
 @njit(parallel=True, cache=True)
@@ -655,27 +680,34 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
                                 grid.radius_warp)
         mu_s = nodes[l]
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
+        # the node's r and mu_s corners, and each direction's mu corner, serve all azimuths
+        i_r, a_r = radius_corner(r, bottom_radius, top_radius, n_r, grid.radius_warp)
+        i_s, a_s = mu_s_corner(mu_s, bottom_radius, top_radius, mu_s_min, grid.sun_angle_share,
+                               n_mu_s)
         weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
         value = np.empty(n_wl)
+        seen = np.empty(n_wl)
         col_a = np.empty(n_c)
         col_b = np.empty(n_c)
         for a in range(n_a):
             mu_in = math.cos(theta_in[a])
             sin_in = math.sin(theta_in[a])
             hits_ground = ray_intersects_ground(r, mu_in, bottom_radius)
+            i_mu, a_mu = mu_axis(r, mu_in, hits_ground, bottom_radius, top_radius, n_mu)
+            d = 0.0
+            if hits_ground:
+                d = _ground_seen(r, mu_in, grid, medium, albedo, col_a, col_b, seen)
             for p in range(n_p):
                 nu_in = min(max(mu_in * mu_s + sin_in * sin_s * math.cos(phi_in[p]), -1.0), 1.0)
                 if use_phase:
                     phase_values(phase_table, nu_in, weights)
                 value[:] = 0.0
-                i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
-                    r, mu_in, mu_s, nu_in, hits_ground, bottom_radius, top_radius, mu_s_min,
-                    grid.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, grid.radius_warp)
+                i_nu, a_nu = nu_corner(nu_in, mu_in, mu_s, n_nu)
                 scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 if hits_ground:
-                    _ground_radiance(r, mu_in, mu_s, nu_in, grid, medium, ground_irradiance,
-                                     albedo, col_a, col_b, value)
+                    _add_ground_radiance(r, mu_s, nu_in, d, seen, ground_irradiance,
+                                         bottom_radius, value)
                 for w in range(n_wl):
                     radiance[w, a * n_p + p, kl] = value[w]
     return radiance
@@ -705,20 +737,22 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
         weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
         value = np.empty(n_wl)
+        i_r, a_r = radius_corner(r, bottom_radius, top_radius, n_r, grid.radius_warp)
+        i_s, a_s = mu_s_corner(mu_s, bottom_radius, top_radius, mu_s_min, grid.sun_angle_share,
+                               n_mu_s)
         for a in range(n_theta):
             theta = (a + 0.5) * d_theta
             mu_in = math.cos(theta)
             sin_in = math.sin(theta)
             solid = 2.0 * mu_in * sin_in * d_theta * d_phi  # x 2: the mirrored half
+            i_mu, a_mu = mu_axis(r, mu_in, False, bottom_radius, top_radius, n_mu)
             for p in range(n_phi):
                 phi = (p + 0.5) * d_phi
                 nu_in = min(max(mu_in * mu_s + sin_in * sin_s * math.cos(phi), -1.0), 1.0)
                 if use_phase:
                     phase_values(phase_table, nu_in, weights)
                 value[:] = 0.0
-                i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
-                    r, mu_in, mu_s, nu_in, False, bottom_radius, top_radius, mu_s_min,
-                    grid.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, grid.radius_warp)
+                i_nu, a_nu = nu_corner(nu_in, mu_in, mu_s, n_nu)
                 scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
                 for w in range(n_wl):
@@ -763,6 +797,49 @@ def _cubic_slab(source, k, a_r, o, a_th, slab):
         slab[q] = max(value, np.float32(0.0))
 
 
+@njit(cache=True, error_model="numpy")
+def _fast_acos(x):
+    """acos(x) [rad] within 2e-8 for x in [-1, 1] (Abramowitz & Stegun 1964, eq. 4.4.46: a
+    polynomial times sqrt(1 - |x|)); branch-free, so loops over it vectorise."""
+    a = abs(x)
+    p = (1.5707963050 + a * (-0.2145988016 + a * (0.0889789874 + a * (-0.0501743046 + a * (
+        0.0308918810 + a * (-0.0170881256 + a * (0.0066700901 + a * -0.0012624911)))))))
+    angle = math.sqrt(max(1.0 - a, 0.0)) * p
+    return angle if x >= 0.0 else math.pi - angle
+
+
+@njit(cache=True, error_model="numpy")
+def _slab_corners(r_ratio, t_ratio, mu_t, cell_mu_s, cell_nu, n_mu_s, n_phi, n_wl, mapping,
+                  corner, weights):
+    """For every cell (mu_s, nu) of a ray (cell_mu_s, cell_nu (n_cells,)), where its sample
+    at r_j = r / r_ratio, t = t_ratio r_j, view zenith cosine mu_t reads the (mu_s, phi) slab
+    of `multiple_scattering_table`: the slab offset of the lower corner (corner (n_cells,))
+    and the bilinear weights of the four corners (weights (4, n_cells)). The sun's zenith
+    cosine at the sample is (r mu_s + t nu) / r_j, its azimuth from the view's vertical plane
+    phi = acos((nu - mu_t mu_s_j) / (sin_t sin_s_j)). `mapping`: (R_b, R_t, mu_s_min, d_min,
+    d_max, A, sun_angle_share) (`scattering_u_mu_s_from_constants`). A loop without calls
+    that do not inline, so that it vectorises: it is most of this kernel's work."""
+    bottom_radius, top_radius, mu_s_min = mapping[0], mapping[1], mapping[2]
+    d_min, d_max, big_a, share = mapping[3], mapping[4], mapping[5], mapping[6]
+    sin_t = math.sqrt(max(1.0 - mu_t * mu_t, 0.0))
+    size = float(n_mu_s)  # an integer's division by it would keep the loop from vectorising
+    for c in range(cell_mu_s.size):
+        nu = cell_nu[c]
+        mu_s_j = min(max(r_ratio * cell_mu_s[c] + t_ratio * nu, -1.0), 1.0)
+        l, a_l = linear_axis(texel_index(scattering_u_mu_s_from_constants(
+            mu_s_j, bottom_radius, top_radius, mu_s_min, d_min, d_max, big_a, share, size),
+            n_mu_s), n_mu_s)
+        denominator = sin_t * math.sqrt(max(1.0 - mu_s_j * mu_s_j, 0.0))
+        cos_phi = min(max((nu - mu_t * mu_s_j) / max(denominator, 1e-12), -1.0), 1.0)
+        cos_phi = cos_phi if denominator > 1e-12 else 1.0
+        m, a_m = linear_axis(_fast_acos(cos_phi) / math.pi * (n_phi - 1), n_phi)
+        corner[c] = (l * n_phi + m) * n_wl
+        weights[0, c] = (1.0 - a_l) * (1.0 - a_m)
+        weights[1, c] = (1.0 - a_l) * a_m
+        weights[2, c] = a_l * (1.0 - a_m)
+        weights[3, c] = a_l * a_m
+
+
 @njit(parallel=True, cache=True)
 def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi):
     """One order of multiple scattering: int_0^d T(x, p) J(p, v) dt for every cell, with
@@ -782,8 +859,10 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
     n_block = source.shape[2]
     table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
     nodes = mu_s_nodes(grid)
-    share = grid.sun_angle_share
+    n_cells = n_mu_s * n_nu
     d_min, d_max, big_a = mu_s_mapping_constants(bottom_radius, top_radius, mu_s_min)
+    mapping = np.array([bottom_radius, top_radius, mu_s_min, d_min, d_max, big_a,
+                        grid.sun_angle_share])
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
@@ -791,13 +870,15 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
             i_r, i_mu, n_samples, grid, medium, scattering[None])
         if total == 0:
             continue
-        nu_cells = np.empty((n_mu_s, n_nu))
-        for i_s in range(n_mu_s):
-            mu_s = nodes[i_s]
-            for i_nu in range(n_nu):
-                nu_cells[i_s, i_nu] = cell_nu(mu, mu_s, i_nu, n_nu)
-        acc = np.zeros((n_mu_s, n_nu, n_wl))
+        cell_mu_s = np.empty(n_cells)
+        cell_nu_flat = np.empty(n_cells)
+        for c in range(n_cells):
+            cell_mu_s[c] = nodes[c // n_nu]
+            cell_nu_flat[c] = cell_nu(mu, cell_mu_s[c], c % n_nu, n_nu)
+        acc = np.zeros((n_cells, n_wl))
         slab = np.empty(n_block, dtype=np.float32)
+        corner = np.empty(n_cells, dtype=np.int64)
+        weights = np.empty((4, n_cells))
         for j in range(total):
             k, a_r = linear_axis(texel_index(scattering_u_r(radius[j], bottom_radius, top_radius,
                                                       n_r, grid.radius_warp), n_r), n_r)
@@ -806,44 +887,28 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
                 _cubic_slab(source, k, a_r, o, a_th, slab)
             else:
                 _linear_slab(source, k, a_r, o, a_th, slab)
-            sin_t = math.sqrt(max(1.0 - mu_t[j] * mu_t[j], 0.0))
+            _slab_corners(r / radius[j], t[j] / radius[j], mu_t[j], cell_mu_s, cell_nu_flat,
+                          n_mu_s, n_phi, n_wl, mapping, corner, weights)
             view_j = view[0, j]
-            rj = radius[j]
-            tj = t[j]
-            for i_s in range(n_mu_s):
-                for i_nu in range(n_nu):
-                    nu = nu_cells[i_s, i_nu]
-                    mu_s_j = min(max((r * nodes[i_s] + tj * nu) / rj, -1.0), 1.0)
-                    l, a_l = linear_axis(texel_index(scattering_u_mu_s_from_constants(
-                        mu_s_j, bottom_radius, top_radius, mu_s_min, d_min, d_max, big_a,
-                        share, n_mu_s), n_mu_s), n_mu_s)
-                    denominator = sin_t * math.sqrt(max(1.0 - mu_s_j * mu_s_j, 0.0))
-                    cos_phi = 1.0
-                    if denominator > 1e-12:
-                        cos_phi = min(max((nu - mu_t[j] * mu_s_j) / denominator, -1.0), 1.0)
-                    m, a_m = linear_axis(math.acos(cos_phi) / math.pi * (n_phi - 1), n_phi)
-                    b00 = (l * n_phi + m) * n_wl
-                    b01 = b00 + n_wl
-                    b10 = b00 + n_phi * n_wl
-                    b11 = b10 + n_wl
-                    w00 = (1.0 - a_l) * (1.0 - a_m)
-                    w01 = (1.0 - a_l) * a_m
-                    w10 = a_l * (1.0 - a_m)
-                    w11 = a_l * a_m
-                    # row views: their loop over w indexes from 0, which spares numba's
-                    # negative-index checks and lets it vectorise (1.7x this kernel)
-                    s00 = slab[b00:b00 + n_wl]
-                    s01 = slab[b01:b01 + n_wl]
-                    s10 = slab[b10:b10 + n_wl]
-                    s11 = slab[b11:b11 + n_wl]
-                    acc_cell = acc[i_s, i_nu]
-                    for w in range(n_wl):
-                        acc_cell[w] += view_j[w] * (w00 * s00[w] + w01 * s01[w]
-                                                    + w10 * s10[w] + w11 * s11[w])
-        for i_s in range(n_mu_s):
-            for i_nu in range(n_nu):
+            for c in range(n_cells):
+                b00 = corner[c]
+                b01 = b00 + n_wl
+                b10 = b00 + n_phi * n_wl
+                b11 = b10 + n_wl
+                w00, w01, w10, w11 = weights[0, c], weights[1, c], weights[2, c], weights[3, c]
+                # row views: their loop over w indexes from 0, which spares numba's
+                # negative-index checks and lets it vectorise (1.7x this kernel)
+                s00 = slab[b00:b00 + n_wl]
+                s01 = slab[b01:b01 + n_wl]
+                s10 = slab[b10:b10 + n_wl]
+                s11 = slab[b11:b11 + n_wl]
+                acc_cell = acc[c]
                 for w in range(n_wl):
-                    table[i_r, i_mu, i_s, i_nu, w] = acc[i_s, i_nu, w]
+                    acc_cell[w] += view_j[w] * (w00 * s00[w] + w01 * s01[w]
+                                                + w10 * s10[w] + w11 * s11[w])
+        for c in range(n_cells):
+            for w in range(n_wl):
+                table[i_r, i_mu, c // n_nu, c % n_nu, w] = acc[c, w]
     return table
 
 

@@ -47,11 +47,12 @@ def transmittance_in_row(transmittance, i, a, x_mu, out):
     """`transmittance_to_top` with the r part (row i, weight a, from `transmittance_x_r`)
     done by the caller: bilinear at (i + a, x_mu (n_mu_t - 1)), into out (n_wl,)."""
     j, b = linear_axis(x_mu * (transmittance.shape[1] - 1), transmittance.shape[1])
-    for w in range(transmittance.shape[2]):
-        out[w] = ((1.0 - a) * ((1.0 - b) * transmittance[i, j, w]
-                               + b * transmittance[i, j + 1, w])
-                  + a * ((1.0 - b) * transmittance[i + 1, j, w]
-                         + b * transmittance[i + 1, j + 1, w]))
+    # row views, whose loop indexes from 0: numba vectorises it (no negative-index checks)
+    t00, t01 = transmittance[i, j], transmittance[i, j + 1]
+    t10, t11 = transmittance[i + 1, j], transmittance[i + 1, j + 1]
+    for w in range(out.size):
+        out[w] = ((1.0 - a) * ((1.0 - b) * t00[w] + b * t01[w])
+                  + a * ((1.0 - b) * t10[w] + b * t11[w]))
 
 
 @njit(cache=True)
@@ -85,19 +86,24 @@ def mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu):
 
 
 @njit(cache=True)
-def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
-                       sun_angle_share, n_r, n_mu, n_mu_s, n_nu, radius_warp):
-    """Lower entries and weights (i_r, a_r, i_mu, a_mu, i_mu_s, a_mu_s, i_nu, a_nu) of the
-    quadrilinear lookup of (r, mu, mu_s, nu) in a scattering table. The mu interpolation stays
-    inside the half chosen by `hits_ground`."""
-    i_r, a_r = linear_axis(texel_index(scattering_u_r(r, bottom_radius, top_radius, n_r,
-                                                      radius_warp), n_r), n_r)
-    i_mu, a_mu = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
-    i_s, a_s = linear_axis(texel_index(
+def radius_corner(r, bottom_radius, top_radius, n_r, radius_warp):
+    """(i, a): lower entry and weight of radius r on a scattering table's r axis."""
+    return linear_axis(texel_index(scattering_u_r(r, bottom_radius, top_radius, n_r,
+                                                  radius_warp), n_r), n_r)
+
+
+@njit(cache=True)
+def mu_s_corner(mu_s, bottom_radius, top_radius, mu_s_min, sun_angle_share, n_mu_s):
+    """(i, a): lower entry and weight of mu_s on a scattering table's mu_s axis."""
+    return linear_axis(texel_index(
         scattering_u_mu_s(mu_s, bottom_radius, top_radius, mu_s_min, sun_angle_share, n_mu_s),
         n_mu_s), n_mu_s)
-    i_nu, a_nu = linear_axis(scattering_u_nu(nu, mu, mu_s) * (n_nu - 1), n_nu)
-    return i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu
+
+
+@njit(cache=True)
+def nu_corner(nu, mu, mu_s, n_nu):
+    """(i, a): lower entry and weight of nu on a scattering table's nu axis."""
+    return linear_axis(scattering_u_nu(nu, mu, mu_s) * (n_nu - 1), n_nu)
 
 
 @njit(cache=True)

@@ -29,8 +29,10 @@ from skyscatter.transport._table_common_kernels import (
     linear_axis,
     lookup_scratch,
     mu_axis,
+    mu_s_corner,
+    nu_corner,
     phase_values,
-    scattering_corners,
+    radius_corner,
     scattering_lookup,
     table_ray_distances,
     transmittance_in_row,
@@ -81,6 +83,19 @@ class LookupTables(NamedTuple):
     aureole_shape: np.ndarray  # (n_x, n_psi, n_wl) multiple peak scattering [sr^-1]
     aureole_x_max: float  # largest peak depth of aureole_shape [-]
     aureole_psi_max: float  # its largest angle from the sun [rad]; 0: no aureole
+
+
+@njit(cache=True)
+def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
+                       sun_angle_share, n_r, n_mu, n_mu_s, n_nu, radius_warp):
+    """Lower entries and weights (i_r, a_r, i_mu, a_mu, i_mu_s, a_mu_s, i_nu, a_nu) of the
+    quadrilinear lookup of (r, mu, mu_s, nu) in a scattering table. The mu interpolation stays
+    inside the half chosen by `hits_ground`."""
+    i_r, a_r = radius_corner(r, bottom_radius, top_radius, n_r, radius_warp)
+    i_mu, a_mu = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
+    i_s, a_s = mu_s_corner(mu_s, bottom_radius, top_radius, mu_s_min, sun_angle_share, n_mu_s)
+    i_nu, a_nu = nu_corner(nu, mu, mu_s, n_nu)
+    return i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu
 
 
 # --------------------------------------------------------------------------------------------
