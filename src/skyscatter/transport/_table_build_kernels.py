@@ -661,7 +661,7 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
     sun's vertical plane): the scattering lookup in `previous` (a `LitOrder`; with phase
     functions when its `use_phase`, i.e. the single-scattering tables) plus the ground lit by
     `ground_irradiance` for directions that hit it (`medium`: a `RayMedium`). Returns
-    (n_wl, n_a n_p, n_r n_mu_s), the layout of the matrix product that follows.
+    (n_wl, n_a n_p, n_r n_mu_s) float32, the layout of the matrix product that follows.
     Bruneton 2017, `ComputeScatteringDensity`, the inner part."""
     n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
     bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
@@ -671,7 +671,7 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
     n_c, n_wl = extinction.shape
     n_a = theta_in.size
     n_p = phi_in.size
-    radiance = np.zeros((n_wl, n_a * n_p, n_r * n_mu_s))
+    radiance = np.zeros((n_wl, n_a * n_p, n_r * n_mu_s), dtype=np.float32)
     nodes = mu_s_nodes(grid)
     for kl in prange(n_r * n_mu_s):
         k = kl // n_mu_s

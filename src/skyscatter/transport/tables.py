@@ -544,6 +544,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             scaled_single = single
         order_mean[0, batch], order_zenith[0, batch] = _table_build_kernels.order_statistics(
             single, True, phase_b, grid)
+        del single  # in the tables now: its memory goes to the orders >= 2
         report(f"single scattering, {label}")
         if on_order is not None:
             on_order(1, batch, _read_only(scattering[..., n_s, :]),
@@ -553,6 +554,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         phases = _phase_matrices(smooth_b, res)
         scaled_beta_s = scaled.scattering[scatterer_index][:, batch]
         previous, use_phase = scaled_single, True
+        del scaled_single  # `previous` holds it until the second order has read it
         extrapolation = OrderExtrapolation()
         ground = _table_build_kernels.direct_ground_irradiance(
             DIRECT_GROUND_SAMPLES, grid, scaled_medium, sun, sun_radius)
@@ -568,7 +570,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                                                 phase_table=smooth_b)
             incoming = _table_build_kernels.incoming_radiance(
                 order_grid, scaled_medium, theta_in, phi_in, lit, ground,
-                albedo).astype(np.float32)
+                albedo)
             source = _source_function(phases, incoming, scaled_beta_s, node_density,
                                       order_res)
             del incoming
@@ -619,7 +621,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                     multiple[..., batch] = sums.on_tables_grid()
                 on_order(order, batch, _read_only(multiple), _read_only(irradiance))
         sums.finish()
-        del previous, single, scaled_single, sums
+        del previous, sums
 
     return AtmosphereTables(
         wavelengths_nm=wavelengths.copy(), bottom_radius_m=bottom, top_radius_m=top,
