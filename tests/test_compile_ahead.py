@@ -5,6 +5,7 @@ import pytest
 from cli_runner import run_cli
 from skyscatter import compile_ahead
 from skyscatter.cli import build_parser
+from skyscatter.transport.lut_solver import SKY_GRID_MIN_RAYS
 
 
 @pytest.fixture
@@ -42,6 +43,15 @@ def test_every_warm_up_command_is_a_valid_command_line():
         output = ["-o", "x.png"] if arguments[0] == "render" else []
         args = parser.parse_args([*arguments, *output, "--cache-dir", "x"])
         assert args.command in {"render", "radiance"}
+
+
+def test_the_warm_up_reaches_the_full_frame_kernels():
+    # the sky-view grid and the aureole's per-frame table compile only in frames of at least
+    # SKY_GRID_MIN_RAYS rays from one observer: the panorama's sky half must have that many
+    panorama = next(arguments for what, arguments in compile_ahead.WARM_UP_COMMANDS
+                    if "panorama" in arguments)
+    size = int(panorama[panorama.index("--size") + 1])
+    assert size * (2 * size) // 2 >= SKY_GRID_MIN_RAYS
 
 
 def test_compile_runs_the_warm_up_and_writes_the_marker(capsys, fresh_marker, monkeypatch):

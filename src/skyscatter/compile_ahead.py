@@ -38,10 +38,15 @@ FIRST_RUN_NOTE = ("skyscatter: first run on this machine: compiling the numerica
                   "(about a minute of CPU, once; `skyscatter compile` does it ahead of time)")
 
 _TINY = ("--size", "16", "--wavelengths", "1")
+# A frame of at least `lut_solver.SKY_GRID_MIN_RAYS` sky rays from one observer takes the
+# sky-view grid and the aureole's per-frame table, which the tiny frames never reach: the
+# panorama's upper half (384 x 768 pixels) does.
+_FULL_FRAME = ("--size", "384", "--wavelengths", "1")
 # (what it compiles, the command line's arguments without the output and cache options)
 WARM_UP_COMMANDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("tables and the fisheye", ("render", "earth", *_TINY)),
-    ("the panorama", ("render", "earth", "--camera", "panorama", *_TINY)),
+    ("the panorama and a full frame's sky-view grid", ("render", "earth", "--camera",
+                                                       "panorama", *_FULL_FRAME)),
     ("the perspective camera and terrain", ("render", "earth", "--camera", "perspective",
                                             "--terrain", "demo", "--altitude", "300", *_TINY)),
     ("the view from orbit", ("render", "earth", "--camera", "orbit", "--distance-km", "20000",
