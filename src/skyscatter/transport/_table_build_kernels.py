@@ -41,7 +41,7 @@ from skyscatter.transport._table_common_kernels import (
     radius_corner,
     scattering_lookup,
     table_ray_distances,
-    transmittance_in_row,
+    transmittance_bilinear,
 )
 from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fraction
 from skyscatter.transport.table_parameterisation import (
@@ -447,7 +447,7 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
     n_s = scatterers.size
     n_wl = extinction.shape[1]
     table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_s, n_wl), dtype=np.float32)
-    n_r_t = sun_table.shape[0]
+    n_r_t, n_mu_t = sun_table.shape[0], sun_table.shape[1]
     # mu_s >= mu_h + alpha + alpha^2 / 2 >= cos(theta_h - alpha): the whole sun disk is above
     # the horizon, `sun_visible_fraction` = 1 (its own fast exit costs a cos and a sin).
     sun_clear = sun_angular_radius * (1.0 + 0.5 * sun_angular_radius)
@@ -478,6 +478,8 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
         acc = np.empty((n_s, n_wl))
         mu_s_j = np.empty(total)
         x_mu = np.empty(total)
+        column_i = np.empty(total, dtype=np.int64)
+        column_a = np.empty(total)
         for i_s in range(n_mu_s):
             mu_s = nodes[i_s]
             for i_nu in range(n_nu):
@@ -486,13 +488,16 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
                 _sun_at_samples(r * mu_s, nu, t, radius, mu_h, row_d_min, row_d_max, top_radius,
                                 mu_s_j, x_mu)
                 for j in range(total):
+                    column_i[j], column_a[j] = linear_axis(x_mu[j] * (n_mu_t - 1), n_mu_t)
+                for j in range(total):
                     visible = 1.0
                     if mu_s_j[j] < mu_h[j] + sun_clear:  # else the whole disk is up
                         visible = sun_visible_fraction(radius[j], mu_s_j[j], bottom_radius,
                                                        sun_angular_radius)
                         if visible <= 0.0:
                             continue
-                    transmittance_in_row(sun_table, row_i[j], row_a[j], x_mu[j], sun)
+                    transmittance_bilinear(sun_table, row_i[j], row_a[j], column_i[j],
+                                           column_a[j], sun)
                     if sun_table_is_depth:
                         if sun.min() + view_depth[j] > OPAQUE_OPTICAL_DEPTH:
                             continue  # no light from there: no exponentials

@@ -35,7 +35,7 @@ from skyscatter.transport._table_common_kernels import (
     radius_corner,
     scattering_lookup,
     table_ray_distances,
-    transmittance_in_row,
+    transmittance_bilinear,
 )
 from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fraction
 from skyscatter.transport.table_parameterisation import (
@@ -101,6 +101,14 @@ def scattering_corners(r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, 
 # --------------------------------------------------------------------------------------------
 # Transmittance, and observers in space
 # --------------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def transmittance_in_row(transmittance, i, a, x_mu, out):
+    """`transmittance_to_top` with the r part (row i, weight a, from `transmittance_x_r`)
+    done by the caller: bilinear at (i + a, x_mu (n_mu_t - 1)), into out (n_wl,)."""
+    j, b = linear_axis(x_mu * (transmittance.shape[1] - 1), transmittance.shape[1])
+    transmittance_bilinear(transmittance, i, a, j, b, out)
+
 
 @njit(cache=True)
 def transmittance_to_top(r, mu, bottom_radius, top_radius, transmittance, out):
