@@ -415,16 +415,19 @@ def radius_taps(k, a, n):
 
 
 @njit(cache=True, error_model="numpy")
-def _sun_at_samples(r_mu_s, nu, t, radius, mu_h, d_min, d_max, top_radius, mu_s_j, x_mu):
+def _sun_at_samples(r_mu_s, nu, t, radius, mu_h, d_min, d_max, top_radius, n_mu_t, mu_s_j,
+                    column_i, column_a):
     """For the samples (t, radius (total,)) of a ray whose cell has r mu_s = `r_mu_s` and nu:
-    the sun's zenith cosine at each, mu_s_j = (r mu_s + t nu) / r_j, and the transmittance
-    table's x_mu towards it (`transmittance_x_mu`, the sun held at the horizon mu_h where
-    below it; d_min, d_max per sample from `transmittance_x_r`), into mu_s_j and x_mu. A loop
-    of its own, without exceptions, so that it vectorises."""
+    the sun's zenith cosine at each, mu_s_j = (r mu_s + t nu) / r_j, and where the sun
+    transmittance is looked up, the column (lower entry and weight) of the transmittance
+    table's x_mu axis of n_mu_t entries (`transmittance_x_mu`, the sun held at the horizon
+    mu_h where below it; d_min, d_max per sample from `transmittance_x_r`), into mu_s_j,
+    column_i and column_a. A loop of its own, without exceptions, so that it vectorises."""
     for j in range(mu_s_j.size):
         mu_s_j[j] = min(max((r_mu_s + t[j] * nu) / radius[j], -1.0), 1.0)
-        x_mu[j] = transmittance_x_mu(radius[j], max(mu_s_j[j], mu_h[j]), top_radius,
-                                     d_min[j], d_max[j])
+        x_mu = transmittance_x_mu(radius[j], max(mu_s_j[j], mu_h[j]), top_radius, d_min[j],
+                                  d_max[j])
+        column_i[j], column_a[j] = linear_axis(x_mu * (n_mu_t - 1), n_mu_t)
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
@@ -477,7 +480,6 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
         sun = np.empty(n_wl)
         acc = np.empty((n_s, n_wl))
         mu_s_j = np.empty(total)
-        x_mu = np.empty(total)
         column_i = np.empty(total, dtype=np.int64)
         column_a = np.empty(total)
         for i_s in range(n_mu_s):
@@ -486,9 +488,7 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
                 nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 acc[:, :] = 0.0
                 _sun_at_samples(r * mu_s, nu, t, radius, mu_h, row_d_min, row_d_max, top_radius,
-                                mu_s_j, x_mu)
-                for j in range(total):
-                    column_i[j], column_a[j] = linear_axis(x_mu[j] * (n_mu_t - 1), n_mu_t)
+                                n_mu_t, mu_s_j, column_i, column_a)
                 for j in range(total):
                     visible = 1.0
                     if mu_s_j[j] < mu_h[j] + sun_clear:  # else the whole disk is up
