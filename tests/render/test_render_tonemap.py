@@ -7,7 +7,7 @@ import pytest
 
 from skyscatter.errors import InputError
 from skyscatter.render import tonemap as tm
-from skyscatter.spectrum.colour import encode_srgb_transfer
+from skyscatter.spectrum.colour import decode_srgb_transfer, encode_srgb_transfer
 
 OPERATOR_NAMES = sorted(tm.OPERATORS)
 
@@ -96,6 +96,19 @@ def test_srgb8_known_codes():
     codes = tm.to_srgb8(np.array([0.0, 0.5, 1.0, 2.0, -1.0]))
     np.testing.assert_array_equal(codes, [0, 188, 255, 255, 0])
     assert codes.dtype == np.uint8
+
+
+def test_srgb8_codes_are_the_rounded_transfer_function_iec61966():
+    # Reference: round(255 V(L)) with the IEC 61966-2-1 encoding, value by value, over
+    # random values in [0, 1] (dense near 0, where the codes are closest), values 1e-9
+    # (relative) to either side of each code's midpoint (exactly at one, either code is a
+    # rounding of the same number) and values out of range.
+    rng = np.random.default_rng(7)
+    midpoints = decode_srgb_transfer((np.arange(255) + 0.5) / 255.0)
+    values = np.concatenate([rng.random(200_000) ** 4, midpoints * (1 - 1e-9),
+                             midpoints * (1 + 1e-9), [-3.0, 0.0, 1.0, 7.0]])
+    expected = np.rint(encode_srgb_transfer(np.clip(values, 0.0, 1.0)) * 255.0)
+    np.testing.assert_array_equal(tm.to_srgb8(values), expected)
 
 
 def test_srgb8_keeps_image_shape():

@@ -11,6 +11,7 @@ must cover all of `_table_build_kernels` and `_table_common_kernels` and none of
 from __future__ import annotations
 
 import ast
+import json
 
 import pytest
 from transport_cases import exponential_earth
@@ -129,3 +130,26 @@ def test_the_key_covers_the_order_of_the_kernels_record_fields():
                                    "    bottom_radius: float  # R_b [m]\n"))
     assert swapped[(BUILD, "TableGrid")] != base[(BUILD, "TableGrid")]
     assert swapped != base
+
+
+def test_the_memo_serves_the_fingerprint_until_a_source_the_walk_read_changes(tmp_path,
+                                                                              monkeypatch):
+    # Reference: the walk itself (no memo). The memo must be read (a forged entry is served
+    # while the sources are unchanged) and must give way to the walk when one changes.
+    walk = code_fingerprint.__wrapped__
+    walked = walk((ROOT,))
+    assert walk((ROOT,), tmp_path) == walked
+    memo_path = tmp_path / fingerprint_module.MEMO_FILE
+    memo = json.loads(memo_path.read_text())
+    (entry,) = memo.values()
+    assert {BUILD, COMMON} <= set(entry["modules"])
+    entry["fingerprint"] = "forged"
+    memo_path.write_text(json.dumps(memo))
+    assert walk((ROOT,), tmp_path) == "forged"
+    edit = _edited(COMMON, "i = min(int(f), n - 2)", "i = min(int(f), n - 3)")
+    monkeypatch.setattr(fingerprint_module, "_module_source", edit)
+    edited = walk((ROOT,), tmp_path)
+    assert edited not in ("forged", walked)
+    assert walk((ROOT,)) == edited
+    memo_path.write_text("{not json")  # a damaged memo is only a miss
+    assert walk((ROOT,), tmp_path) == edited

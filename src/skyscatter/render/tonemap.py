@@ -46,12 +46,14 @@ Sources:
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
 
 import numpy as np
+from numba import njit, prange
 from numpy.typing import ArrayLike
 
 from skyscatter.errors import InputError
-from skyscatter.spectrum.colour import encode_srgb_transfer
+from skyscatter.spectrum.colour import decode_srgb_transfer
 
 __all__ = [
     "OPERATORS",
@@ -238,6 +240,11 @@ def tonemap(linear_rgb: ArrayLike, operator: str = "aces", exposure: float = 1.0
     return curve(np.clip(x, 0.0, _LARGEST_INPUT))
 
 
+# Bins of the linear axis for `to_srgb8`, narrower than the closest two steps of its codes
+# (1 / (255 x 12.92) = 3.0e-4 apart, in the linear part next to 0)
+SRGB8_BINS = 1 << 14
+
+
 def to_srgb8(display_linear_rgb: ArrayLike) -> np.ndarray:
     """8-bit sRGB codes round(255 · OETF(L)) from display-linear values in [0, 1].
 
@@ -255,4 +262,32 @@ def to_srgb8(display_linear_rgb: ArrayLike) -> np.ndarray:
     if bad:
         raise InputError(f"cannot encode an image with {bad} NaN values to 8-bit sRGB",
                          key="display_linear_rgb", value=f"{bad} NaN")
-    return np.rint(encode_srgb_transfer(np.clip(lin, 0.0, 1.0)) * 255.0).astype(np.uint8)
+    base, step = _srgb8_bins()
+    codes = np.empty(lin.shape, dtype=np.uint8)
+    _srgb8_codes(lin.reshape(-1), base, step, codes.reshape(-1))
+    return codes
+
+
+@njit(parallel=True, cache=True)
+def _srgb8_codes(linear, base, step, out):
+    """out[j]: the number of steps at or below linear[j] clipped to [0, 1] (`_srgb8_bins`):
+    one bin and at most one comparison per value instead of the transfer function's power."""
+    for j in prange(linear.size):
+        value = min(max(linear[j], 0.0), 1.0)
+        i = min(int(value * SRGB8_BINS), SRGB8_BINS - 1)
+        out[j] = base[i] + (1 if value >= step[i] else 0)
+
+
+@lru_cache(maxsize=1)
+def _srgb8_bins() -> tuple[np.ndarray, np.ndarray]:
+    """(code at the start of each of SRGB8_BINS bins of [0, 1] (uint8), the step inside the
+    bin, or inf where it has none): the steps are the linear values at which round(255
+    OETF(L)) goes from k to k + 1, the sRGB decoding of (k + 1/2) / 255, k = 0 .. 254."""
+    steps = decode_srgb_transfer((np.arange(255) + 0.5) / 255.0)
+    starts = np.arange(SRGB8_BINS) / SRGB8_BINS
+    base = np.searchsorted(steps, starts, side="right")
+    following = np.append(steps, np.inf)[base]
+    step = np.where(following < starts + 1.0 / SRGB8_BINS, following, np.inf)
+    base = base.astype(np.uint8)
+    base.flags.writeable = step.flags.writeable = False
+    return base, step

@@ -15,6 +15,7 @@ import dataclasses
 import hashlib
 import json
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -44,19 +45,22 @@ _ARRAYS = ("wavelengths_nm", "transmittance", "scattering", "irradiance", "phase
 _PRECOMPUTATION = ("skyscatter.transport.tables", "precompute_tables")
 
 
-def _code_fingerprint(profile: OpticalProfile) -> str:
+def _code_fingerprint(profile: OpticalProfile, memo_folder: Path | None) -> str:
     """Fingerprint of the code `precompute_tables` runs for `profile`: its call graph, plus
     the classes of the profile's phase functions (called through the objects, so found by
-    type, not by name)."""
+    type, not by name); remembered in `memo_folder` (`code_fingerprint`)."""
     phases = sorted({(type(phase).__module__, type(phase).__name__)
                      for phase in profile.phases if phase is not None})
-    return code_fingerprint((_PRECOMPUTATION, *phases))
+    return code_fingerprint((_PRECOMPUTATION, *phases), memo_folder)
 
 
 def table_metadata(profile: OpticalProfile, resolution: TableResolution, orders: int,
-                   min_cos_sun_zenith: float) -> dict[str, Any]:
-    """What an entry was made from; two entries with equal metadata hold equal tables."""
-    return {"format": TABLE_FORMAT, "version": __version__, "code": _code_fingerprint(profile),
+                   min_cos_sun_zenith: float, memo_folder: Path | None = None
+                   ) -> dict[str, Any]:
+    """What an entry was made from; two entries with equal metadata hold equal tables. The
+    code's fingerprint is remembered in `memo_folder` (the cache's folder)."""
+    return {"format": TABLE_FORMAT, "version": __version__,
+            "code": _code_fingerprint(profile, memo_folder),
             "atmosphere_fingerprint": profile_fingerprint(profile),
             "constituents": list(profile.names),
             "resolution": dataclasses.asdict(resolution), "orders": int(orders),
@@ -118,11 +122,13 @@ def cached_tables(profile: OpticalProfile, resolution: TableResolution | None = 
     if cache is None:
         return precompute_tables(profile, resolution, orders,
                                  min_cos_sun_zenith=min_cos_sun_zenith, progress=progress)
-    metadata = table_metadata(profile, resolution, orders, min_cos_sun_zenith)
+    # Before the work: a file as cache dir is refused, an unwritable one reported
+    unwritable = cache.check_writable()
+    metadata = table_metadata(profile, resolution, orders, min_cos_sun_zenith,
+                              cache.directory)
     key = _key(metadata)
     path = cache.path(key)
-    # Before the work: a file as cache dir is refused, an unwritable one reported
-    unwritable = cache.check_writable() or cache.entry_problem(key)
+    unwritable = unwritable or cache.entry_problem(key)
     if force:
         reason = "recomputing as asked"
     else:
