@@ -6,6 +6,7 @@ import pytest
 from transport_cases import SMALL, exponential_earth
 
 from skyscatter.transport import lut_solver
+from skyscatter.transport._table_lookup_kernels import EXP_DARKEST, exp_by_squaring
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import observer_position
@@ -59,3 +60,16 @@ def test_small_frames_and_many_origins_are_looked_up_ray_by_ray(hazy_earth, monk
     hazy_earth.sky_radiance(np.repeat(origin[None], RAYS, 0),
                             np.repeat(views[:1], RAYS, 0), sun)
     assert calls == []
+
+
+def test_the_grids_exponential_is_the_librarys_to_its_stated_accuracy():
+    # Reference: numpy's exp. exp_by_squaring's docstring: 1e-12 relative from -40 (the
+    # logarithms of skies down to 4e-18 of 1), 1e-8 down to the darkest argument it takes
+    # (half the logarithm of the view tables' floor), 0 below.
+    bright = np.linspace(-40.0, 50.0, 20_001)
+    dark = np.linspace(EXP_DARKEST + 1e-9, -40.0, 20_001)
+    for x, tolerance in ((bright, 1e-12), (dark, 1e-8)):
+        values = np.array([exp_by_squaring(v) for v in x])
+        np.testing.assert_allclose(values, np.exp(x), rtol=tolerance, atol=0.0)
+    assert exp_by_squaring(EXP_DARKEST - 1e-9) == 0.0
+    assert exp_by_squaring(-np.inf) == 0.0

@@ -28,6 +28,7 @@ from skyscatter import api
 from skyscatter.cli import main
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache
+from skyscatter.transport.code_fingerprint import MEMO_FILE
 from skyscatter.viewer import server as server_module
 from skyscatter.viewer import table_service
 from skyscatter.viewer.server import (
@@ -144,6 +145,13 @@ def snapshot(directory: Path, skip: str | None = None) -> dict[str, tuple[int, i
                                                      path.stat().st_mtime_ns)
             for path in directory.rglob("*")
             if path.is_file() and not (skip and skip in path.parts)}
+
+
+def table_entries(cache_dir: Path) -> dict[str, tuple[int, int]]:
+    """`snapshot` of the scattering tables' entries in a cache folder (not the Mie tables'
+    subfolder, nor the memo of the tables' code fingerprint)."""
+    return {name: stat for name, stat in snapshot(cache_dir, skip="mie").items()
+            if name != MEMO_FILE}
 
 
 # 1. Binding ------------------------------------------------------------------------------------
@@ -568,7 +576,9 @@ def test_full_tables_write_only_into_the_cache_dir(server, tmp_path, monkeypatch
     status, _, body = request(server, "/api/tables?quality=full")
     assert status == 200 and body[:4] == b"SKYT"
     written = snapshot(cache)
-    assert written and all(re.fullmatch(r"[\w-]+\.npz", name) for name in written), written
+    # cache entries, and the memo of the tables' code fingerprint
+    assert written and all(re.fullmatch(r"[\w-]+\.npz", name) or name == MEMO_FILE
+                           for name in written), written
     assert [snapshot(place) for place in (cwd, default_cache)] == before
     assert set(snapshot(PACKAGE_DIR, skip="__pycache__")) == package_before
 
@@ -945,8 +955,8 @@ def test_the_viewer_adds_a_bounded_amount_to_the_cache(server, tmp_path, monkeyp
     cache.budget_bytes = 1
     status, _, first = request(server, "/api/tables?quality=full&albedo=0.1")
     assert status == 200 and first[:4] == b"SKYT"
-    stored = snapshot(tmp_path / "cache", skip="mie")
+    stored = table_entries(tmp_path / "cache")
     assert len(stored) == 1 and cache.stored_bytes == sum(size for size, _ in stored.values())
     status, _, second = request(server, "/api/tables?quality=full&albedo=0.2")
     assert status == 200 and second[:4] == b"SKYT" and second != first
-    assert snapshot(tmp_path / "cache", skip="mie") == stored
+    assert table_entries(tmp_path / "cache") == stored

@@ -32,6 +32,7 @@ from numba import njit, prange
 
 from skyscatter.transport._kernels import column_below, density_at
 from skyscatter.transport._table_common_kernels import (
+    fast_acos,
     linear_axis,
     lookup_scratch,
     mu_axis,
@@ -803,17 +804,6 @@ def _cubic_slab(source, k, a_r, o, a_th, slab):
 
 
 @njit(cache=True, error_model="numpy")
-def _fast_acos(x):
-    """acos(x) [rad] within 2e-8 for x in [-1, 1] (Abramowitz & Stegun 1964, eq. 4.4.46: a
-    polynomial times sqrt(1 - |x|)); branch-free, so loops over it vectorise."""
-    a = abs(x)
-    p = (1.5707963050 + a * (-0.2145988016 + a * (0.0889789874 + a * (-0.0501743046 + a * (
-        0.0308918810 + a * (-0.0170881256 + a * (0.0066700901 + a * -0.0012624911)))))))
-    angle = math.sqrt(max(1.0 - a, 0.0)) * p
-    return angle if x >= 0.0 else math.pi - angle
-
-
-@njit(cache=True, error_model="numpy")
 def _slab_corners(r_ratio, t_ratio, mu_t, cell_mu_s, cell_nu, n_mu_s, n_phi, n_wl, mapping,
                   corner, weights):
     """For every cell (mu_s, nu) of a ray (cell_mu_s, cell_nu (n_cells,)), where its sample
@@ -837,7 +827,7 @@ def _slab_corners(r_ratio, t_ratio, mu_t, cell_mu_s, cell_nu, n_mu_s, n_phi, n_w
         denominator = sin_t * math.sqrt(max(1.0 - mu_s_j * mu_s_j, 0.0))
         cos_phi = min(max((nu - mu_t * mu_s_j) / max(denominator, 1e-12), -1.0), 1.0)
         cos_phi = cos_phi if denominator > 1e-12 else 1.0
-        m, a_m = linear_axis(_fast_acos(cos_phi) / math.pi * (n_phi - 1), n_phi)
+        m, a_m = linear_axis(fast_acos(cos_phi) / math.pi * (n_phi - 1), n_phi)
         corner[c] = (l * n_phi + m) * n_wl
         weights[0, c] = (1.0 - a_l) * (1.0 - a_m)
         weights[1, c] = (1.0 - a_l) * a_m

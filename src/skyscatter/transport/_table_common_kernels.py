@@ -42,6 +42,17 @@ def linear_axis(f, n):
     return i, f - i
 
 
+@njit(cache=True, error_model="numpy")
+def fast_acos(x):
+    """acos(x) [rad] within 2e-8 for x in [-1, 1] (Abramowitz & Stegun 1964, eq. 4.4.46: a
+    polynomial times sqrt(1 - |x|)); branch-free, so loops over it vectorise."""
+    a = abs(x)
+    p = (1.5707963050 + a * (-0.2145988016 + a * (0.0889789874 + a * (-0.0501743046 + a * (
+        0.0308918810 + a * (-0.0170881256 + a * (0.0066700901 + a * -0.0012624911)))))))
+    angle = math.sqrt(max(1.0 - a, 0.0)) * p
+    return angle if x >= 0.0 else math.pi - angle
+
+
 @njit(cache=True, inline="always")  # a call per cell and sample costs 15 % of single scattering
 def transmittance_bilinear(transmittance, i, a, j, b, out):
     """Bilinear in `transmittance` (n_r_t, n_mu_t, n_wl) at row i + a and column j + b (lower
@@ -72,7 +83,13 @@ def phase_values(phase_table, nu, out):
 def mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu):
     """(i, a): lower entry and weight of the ray (r, mu) on a mu axis of n_mu entries
     (`scattering_u_mu`), the interpolation kept inside the half chosen by `hits_ground`."""
-    u_mu = scattering_u_mu(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
+    return mu_axis_from_u(scattering_u_mu(r, mu, hits_ground, bottom_radius, top_radius, n_mu),
+                          hits_ground, n_mu)
+
+
+@njit(cache=True)
+def mu_axis_from_u(u_mu, hits_ground, n_mu):
+    """`mu_axis` of the table coordinate u_mu (`scattering_u_mu`)."""
     half = n_mu // 2
     f_mu = u_mu * n_mu - 0.5
     if hits_ground:

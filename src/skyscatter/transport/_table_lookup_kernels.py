@@ -26,9 +26,11 @@ from numba import njit, prange
 
 from skyscatter.transport._kernels import density_at
 from skyscatter.transport._table_common_kernels import (
+    fast_acos,
     linear_axis,
     lookup_scratch,
     mu_axis,
+    mu_axis_from_u,
     mu_s_corner,
     nu_corner,
     phase_values,
@@ -41,13 +43,16 @@ from skyscatter.transport.geometry import horizon_cos_zenith, sun_visible_fracti
 from skyscatter.transport.table_parameterisation import (
     distance_to_bottom_boundary,
     distance_to_top_boundary,
+    horizon_zenith_angle,
     irradiance_x_from_r_mu_s,
     ray_intersects_ground,
     scattering_mu_from_u,
+    scattering_u_mu_of_angle,
     transmittance_x_from_r_mu,
     transmittance_x_mu,
     transmittance_x_r,
     view_sun_azimuth,
+    view_sun_cos_azimuth,
 )
 
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loops of the lookups
@@ -502,37 +507,81 @@ def sky_view_grid_nodes(r, n_mu, n_phi, bottom_radius, top_radius):
     return nodes
 
 
-@njit(parallel=True, cache=True)
+# `exp_by_squaring`: exp(x) as exp(x / 2^EXP_HALVINGS)^(2^EXP_HALVINGS), the inner exponential
+# by its Taylor polynomial of degree 9; arguments below EXP_DARKEST give 0
+EXP_HALVINGS = 10
+EXP_DARKEST = 0.5 * math.log(VIEW_TABLE_FLOOR)
+
+
+@njit(cache=True, error_model="numpy")
+def exp_by_squaring(x):
+    """exp(x) for EXP_DARKEST < x <= 50 within 1e-8 relative (within 1e-12 for x >= -40;
+    `tests/transport/test_sky_view_grid.py`), 0 below: no call, so loops over it vectorise,
+    unlike math.exp (numba has no vector math library). The Taylor remainder of
+    y = x / 1024 >= -0.34 is below y^10 / 10! = 5e-12, and squaring 10 times multiplies a
+    relative error by 1024."""
+    y = x * (1.0 / (1 << EXP_HALVINGS))
+    p = 1.0 + y * (1.0 + y * (1.0 / 2.0 + y * (1.0 / 6.0 + y * (1.0 / 24.0 + y * (
+        1.0 / 120.0 + y * (1.0 / 720.0 + y * (1.0 / 5040.0 + y * (1.0 / 40320.0 + y * (
+            1.0 / 362880.0)))))))))
+    for _ in range(EXP_HALVINGS):
+        p *= p
+    return p if x > EXP_DARKEST else 0.0
+
+
+@njit(parallel=True, cache=True, error_model="numpy")
 def sky_view_grid_lookup(log_grid, up, sun_direction, cos_exact, bottom_radius, top_radius,
                          r, directions, out, exact):
     """The radiance along `directions` (n_ray, 3) of one observer at radius r [m] (unit
     vertical `up`), interpolated in `log_grid` (n_mu, n_phi, n_wl), the logarithm of the
     radiance at `sky_view_grid_nodes`: bilinear on the table's mu axis (each side of the
-    horizon kept to its half, `mu_axis`) and in the azimuth from the sun, into out
+    horizon kept to its half, `mu_axis_from_u`) and in the azimuth from the sun, into out
     (n_ray, n_wl). Rays whose cos(angle from the sun) exceeds cos_exact are left to the
-    caller: exact[j] = True, out[j] untouched."""
+    caller: exact[j] = True, out[j] untouched. In blocks of RAYS_PER_BLOCK rays: their grid
+    coordinates in one loop, then their radiances, both free of calls that do not inline, so
+    that they vectorise (the angles by `fast_acos`, within 2e-8 rad; the exponential by
+    `exp_by_squaring`): 3 x faster than one ray at a time with the library's functions."""
     n_mu, n_phi, n_wl = log_grid.shape
     mu_s = up[0] * sun_direction[0] + up[1] * sun_direction[1] + up[2] * sun_direction[2]
-    for j in prange(directions.shape[0]):
-        dx, dy, dz = directions[j, 0], directions[j, 1], directions[j, 2]
-        norm = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if not norm > 0.0:  # no direction: no light, as `sky_radiance_rays`
-            exact[j] = False
-            out[j, :] = 0.0
-            continue
-        nu = (dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]) / norm
-        exact[j] = nu > cos_exact
-        if exact[j]:
-            continue
-        mu = (dx * up[0] + dy * up[1] + dz * up[2]) / norm
-        hits_ground = ray_intersects_ground(r, mu, bottom_radius)
-        i, a = mu_axis(r, mu, hits_ground, bottom_radius, top_radius, n_mu)
-        k, b = linear_axis(view_sun_azimuth(nu, mu, mu_s) / math.pi * (n_phi - 1), n_phi)
-        for w in range(n_wl):
-            out[j, w] = math.exp((1.0 - a) * ((1.0 - b) * log_grid[i, k, w]
-                                              + b * log_grid[i, k + 1, w])
-                                 + a * ((1.0 - b) * log_grid[i + 1, k, w]
-                                        + b * log_grid[i + 1, k + 1, w]))
+    theta_h = horizon_zenith_angle(r, bottom_radius)
+    n_rays = directions.shape[0]
+    for block in prange((n_rays + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK):
+        first = block * RAYS_PER_BLOCK
+        count = min(RAYS_PER_BLOCK, n_rays - first)
+        i_mu = np.empty(count, dtype=np.int64)
+        a_mu = np.empty(count)
+        k_phi = np.empty(count, dtype=np.int64)
+        b_phi = np.empty(count)
+        dark = np.empty(count, dtype=np.bool_)
+        for q in range(count):
+            j = first + q
+            dx, dy, dz = directions[j, 0], directions[j, 1], directions[j, 2]
+            norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+            # no direction gives no light, as `sky_radiance_rays`
+            dark[q] = not norm > 0.0
+            scale = 0.0 if dark[q] else 1.0 / norm
+            nu = (dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]) * scale
+            mu = min(max((dx * up[0] + dy * up[1] + dz * up[2]) * scale, -1.0), 1.0)
+            exact[j] = nu > cos_exact and not dark[q]
+            hits_ground = ray_intersects_ground(r, mu, bottom_radius)
+            i_mu[q], a_mu[q] = mu_axis_from_u(scattering_u_mu_of_angle(
+                fast_acos(mu), theta_h, hits_ground, n_mu), hits_ground, n_mu)
+            k_phi[q], b_phi[q] = linear_axis(
+                fast_acos(view_sun_cos_azimuth(nu, mu, mu_s)) / math.pi * (n_phi - 1), n_phi)
+        for q in range(count):
+            j = first + q
+            row = out[j]
+            if exact[j]:
+                continue
+            if dark[q]:
+                row[:] = 0.0
+                continue
+            a, b = a_mu[q], b_phi[q]
+            g00, g01 = log_grid[i_mu[q], k_phi[q]], log_grid[i_mu[q], k_phi[q] + 1]
+            g10, g11 = log_grid[i_mu[q] + 1, k_phi[q]], log_grid[i_mu[q] + 1, k_phi[q] + 1]
+            for w in range(n_wl):
+                row[w] = exp_by_squaring((1.0 - a) * ((1.0 - b) * g00[w] + b * g01[w])
+                                         + a * ((1.0 - b) * g10[w] + b * g11[w]))
 
 
 # --------------------------------------------------------------------------------------------

@@ -295,9 +295,15 @@ def scattering_u_mu(r, mu, ray_hits_ground, bottom_radius, top_radius, n_mu):
     `horizon_dense_from_angle` (module docstring); the view zenith angle as atan2, precise at
     the zenith in float32 too. `top_radius` is unused (the signature is the one of the other
     axes)."""
-    theta_h = horizon_zenith_angle(r, bottom_radius)
     mu = min(max(mu, -1.0), 1.0)
     theta = math.atan2(math.sqrt(max((1.0 - mu) * (1.0 + mu), 0.0)), mu)
+    return scattering_u_mu_of_angle(theta, horizon_zenith_angle(r, bottom_radius),
+                                    ray_hits_ground, n_mu)
+
+
+@njit(cache=True)
+def scattering_u_mu_of_angle(theta, theta_h, ray_hits_ground, n_mu):
+    """`scattering_u_mu` of the view zenith angle theta and the horizon's theta_h [rad]."""
     half = n_mu // 2
     if ray_hits_ground:
         x = horizon_dense_from_angle((math.pi - theta) / (math.pi - theta_h))
@@ -396,9 +402,15 @@ def view_sun_azimuth(nu, mu, mu_s):
     """phi in [0, pi] [rad], the view's azimuth about the local zenith from the sun's, from
     nu = cos(view-sun angle) and the zenith cosines mu, mu_s; 0 where it is undefined
     (spread <= SPREAD_MIN: a view or a sun at the zenith or the nadir)."""
+    return math.acos(view_sun_cos_azimuth(nu, mu, mu_s))
+
+
+@njit(cache=True)
+def view_sun_cos_azimuth(nu, mu, mu_s):
+    """cos(`view_sun_azimuth`), clamped to [-1, 1]; 1 where the azimuth is undefined."""
     spread = view_sun_spread(mu, mu_s)
     cos_phi = (nu - mu * mu_s) / spread if spread > SPREAD_MIN else 1.0
-    return math.acos(min(max(cos_phi, -1.0), 1.0))
+    return min(max(cos_phi, -1.0), 1.0)
 
 
 @njit(cache=True)
