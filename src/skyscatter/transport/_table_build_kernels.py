@@ -433,11 +433,12 @@ def _sun_at_samples(r_mu_s, nu, t, radius, mu_h, d_min, d_max, top_radius, n_mu_
 
 @njit(parallel=True, cache=True, error_model="numpy")
 def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_depth, scatterers,
-                            factor, sun_angular_radius):
-    """Single scattering without phase function, per scattering constituent:
+                            factor, sun_angular_radius, table):
+    """Single scattering without phase function, per scattering constituent, into `table`:
     table[s, cell, w] = factor[s, w] * int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt, with
     factor = E_sun beta_s,s [W m^-2 nm^-1 / density]; (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl)
-    float32 (interleaved, `scattering_lookup`). T(x, p) from the ray's columns, T_sun bilinear
+    float32 (interleaved, `scattering_lookup`; any strides, so the tables' own slots can be
+    written without a copy beside them). T(x, p) from the ray's columns, T_sun bilinear
     in `sun_table` (n_r_t, n_mu_t, n_wl) in the transmittance table's parameterisation: the
     transmittances themselves (no exponential per cell), or where `sun_table_is_depth` the
     optical depths, exponentiated after the interpolation: interpolating T itself overestimates
@@ -450,7 +451,6 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
     extinction = medium.extinction
     n_s = scatterers.size
     n_wl = extinction.shape[1]
-    table = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_s, n_wl), dtype=np.float32)
     n_r_t, n_mu_t = sun_table.shape[0], sun_table.shape[1]
     # mu_s >= mu_h + alpha + alpha^2 / 2 >= cos(theta_h - alpha): the whole sun disk is above
     # the horizon, `sun_visible_fraction` = 1 (its own fast exit costs a cos and a sin).
@@ -466,6 +466,7 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
         r, mu, total, t, radius, mu_t, dens, view, view_depth = _table_ray(
             i_r, i_mu, n_samples, grid, medium, selection)
         if total == 0:
+            table[i_r, i_mu] = 0.0
             continue
         # Per sample: the horizon, and the r part of the transmittance lookup towards the sun.
         mu_h = np.empty(total)
@@ -514,7 +515,6 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
                 for s in range(n_s):
                     for w in range(n_wl):
                         table[i_r, i_mu, i_s, i_nu, s, w] = acc[s, w] * factor[s, w]
-    return table
 
 
 @njit(cache=True)
@@ -567,19 +567,19 @@ def direct_irradiance_nodes(n_r_e, n_mu_s_e, grid, medium, sun_irradiance, sun_a
 
 
 @njit(parallel=True, cache=True)
-def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
+def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid, out):
     """sum_s p*_s(nu) (scaled_single_s - kept_s single_s) on every cell of the scattering
-    table, (n_r, n_mu, n_mu_s, n_nu, n_wl) float32: what the first order of the delta-M scaled
-    medium has more than the exact first order's smooth part (`phase_truncation`). Tables
-    (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl) without phase functions, as `single_scattering_table`
-    writes them; kept = 1 - f (n_s, n_wl); p* from `smooth_phase` (n_s, n_angle, n_wl) at each
-    cell's nu. `grid`: a `TableGrid`. The scaled medium attenuates less, so each difference is
-    >= 0; where the true one is ~0 (air above the particles) the two quadratures can differ by
-    a hair in either direction (measured: 33 of 131 072 cells of a small table, down to
-    -0.8 % of its largest value), which is clipped to 0."""
+    table, into out (n_r, n_mu, n_mu_s, n_nu, n_wl) float32, any strides: what the first
+    order of the delta-M scaled medium has more than the exact first order's smooth part
+    (`phase_truncation`). Tables (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl) without phase functions,
+    as `single_scattering_table` writes them; kept = 1 - f (n_s, n_wl); p* from `smooth_phase`
+    (n_s, n_angle, n_wl) at each cell's nu. `grid`: a `TableGrid`. The scaled medium
+    attenuates less, so each difference is >= 0; where the true one is ~0 (air above the
+    particles) the two quadratures can differ by a hair in either direction (measured: 33 of
+    131 072 cells of a small table, down to -0.8 % of its largest value), which is clipped
+    to 0."""
     n_r, n_mu, n_mu_s, n_nu, n_s, n_wl = single.shape
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
-    out = np.zeros((n_r, n_mu, n_mu_s, n_nu, n_wl), dtype=np.float32)
     nodes = mu_s_nodes(grid)
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
@@ -593,12 +593,12 @@ def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid):
             for i_nu in range(n_nu):
                 nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 phase_values(smooth_phase, nu, phase)
+                out[i_r, i_mu, i_s, i_nu] = 0.0
                 for s in range(n_s):
                     for w in range(n_wl):
                         out[i_r, i_mu, i_s, i_nu, w] += phase[s * n_wl + w] * max(
                             scaled_single[i_r, i_mu, i_s, i_nu, s, w]
                             - kept[s, w] * single[i_r, i_mu, i_s, i_nu, s, w], 0.0)
-    return out
 
 
 @njit(parallel=True, cache=True)

@@ -519,20 +519,24 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
         label = f"wavelengths {batch.start + 1}-{batch.stop} of {n_wl}"
 
-        single = _table_build_kernels.single_scattering_table(
+        # written into the tables' own slots: no copy of the first order beside them
+        single = scattering[..., :n_s, batch]
+        _table_build_kernels.single_scattering_table(
             grid, medium, res.ray_samples, np.ascontiguousarray(sun_table[..., batch]), thick,
-            scatterer_index, np.ascontiguousarray(sun[None, :] * beta_s), sun_radius)
-        scattering[..., :n_s, batch] = single
+            scatterer_index, np.ascontiguousarray(sun[None, :] * beta_s), sun_radius, single)
         if truncated and orders > 1:
             # first order of the scaled medium, which lights the second; the tables keep the
             # exact first order and gain what the scaled one has more (TMS, module docstring)
             peak_b = np.ascontiguousarray(peak[:, batch])
-            scaled_single = _table_build_kernels.single_scattering_table(
+            scaled_single = np.empty(single.shape, dtype=np.float32)
+            _table_build_kernels.single_scattering_table(
                 grid, scaled_medium, res.ray_samples,
                 np.ascontiguousarray(scaled_sun_table[..., batch]), thick, scatterer_index,
-                np.ascontiguousarray(sun[None, :] * (1.0 - peak_b) * beta_s), sun_radius)
-            scattering[..., n_s, batch] = _table_build_kernels.phase_weighted_difference(
-                scaled_single, single, 1.0 - peak_b, smooth_b, grid)
+                np.ascontiguousarray(sun[None, :] * (1.0 - peak_b) * beta_s), sun_radius,
+                scaled_single)
+            _table_build_kernels.phase_weighted_difference(
+                scaled_single, single, 1.0 - peak_b, smooth_b, grid,
+                scattering[..., n_s, batch])
             # the light the peak scatters stays near the sun: on the ground it is the direct
             # sun of the scaled medium less the true one
             irradiance[..., batch] = (
@@ -544,7 +548,6 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             scaled_single = single
         order_mean[0, batch], order_zenith[0, batch] = _table_build_kernels.order_statistics(
             single, True, phase_b, grid)
-        del single  # in the tables now: its memory goes to the orders >= 2
         report(f"single scattering, {label}")
         if on_order is not None:
             on_order(1, batch, _read_only(scattering[..., n_s, :]),
@@ -579,10 +582,11 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                 res.irradiance_phi, order_grid, lit)
             irradiance[..., batch] += delta_irradiance
             ground = np.ascontiguousarray(delta_irradiance[0])
+            del lit, previous  # read: their memory goes to the next order
             delta = _table_build_kernels.multiple_scattering_table(
                 order_grid, scaled_medium, res.multiple_ray_samples,
                 np.ascontiguousarray(scattering_all[:, batch]), source, res.density_phi)
-            del source, lit
+            del source
             previous, use_phase = delta[..., None, :], False
             order_mean[order - 1, batch], order_zenith[order - 1, batch] = (
                 _table_build_kernels.order_statistics(previous, False, phase_b, order_grid))
