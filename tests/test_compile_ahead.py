@@ -1,11 +1,18 @@
 """`skyscatter compile` and the first-run note (skyscatter.compile_ahead)."""
 
+import numpy as np
 import pytest
 
 from cli_runner import run_cli
 from skyscatter import compile_ahead
 from skyscatter.cli import build_parser
-from skyscatter.transport.lut_solver import SKY_GRID_MIN_RAYS
+from skyscatter.render.camera import PerspectiveCamera
+from skyscatter.render.scene import sun_direction
+from skyscatter.transport.lut_solver import (
+    SKY_GRID_EXACT_DEG,
+    SKY_GRID_MIN_RAYS,
+    SUN_GRID_MIN_RAYS,
+)
 
 
 @pytest.fixture
@@ -54,10 +61,28 @@ def test_the_warm_up_reaches_the_full_frame_kernels():
     assert size * (2 * size) // 2 >= SKY_GRID_MIN_RAYS
 
 
+def test_the_warm_up_reaches_the_sun_grid():
+    # the sun grid compiles only in frames with at least SUN_GRID_MIN_RAYS rays within
+    # SKY_GRID_EXACT_DEG of the sun: the perspective frame centred on it must have them
+    command = next(arguments for what, arguments in compile_ahead.WARM_UP_COMMANDS
+                   if "sun grid" in what)
+
+    def value(flag: str) -> float:
+        return float(command[command.index(flag) + 1])
+    size = int(value("--size"))
+    camera = PerspectiveCamera(round(size * 16 / 9), size, value("--fov"), heading_deg=180.0,
+                               pitch_deg=value("--pitch"))
+    directions, _ = camera.directions()
+    sun = sun_direction(60.0, 180.0)  # the command line's default: 30 deg high, south
+    near = directions.reshape(-1, 3) @ sun > np.cos(np.radians(SKY_GRID_EXACT_DEG))
+    assert np.count_nonzero(near) >= SUN_GRID_MIN_RAYS
+    assert directions.shape[0] * directions.shape[1] >= SKY_GRID_MIN_RAYS
+
+
 def test_compile_runs_the_warm_up_and_writes_the_marker(capsys, fresh_marker, monkeypatch):
     # two of the commands (the rest are the same command line with other cameras and presets;
     # all of them run in `make`'s install step, whose failure stops the build)
-    monkeypatch.setattr(compile_ahead, "WARM_UP_COMMANDS", compile_ahead.WARM_UP_COMMANDS[::6])
+    monkeypatch.setattr(compile_ahead, "WARM_UP_COMMANDS", compile_ahead.WARM_UP_COMMANDS[::7])
     code, out, err = run_cli(capsys, ["compile"])
     assert code == 0, err
     lines = out.splitlines()

@@ -40,13 +40,18 @@ FIRST_RUN_NOTE = ("skyscatter: first run on this machine: compiling the numerica
 _TINY = ("--size", "16", "--wavelengths", "1")
 # A frame of at least `lut_solver.SKY_GRID_MIN_RAYS` sky rays from one observer takes the
 # sky-view grid and the aureole's per-frame table, which the tiny frames never reach: the
-# panorama's upper half (384 x 768 pixels) does.
+# panorama's upper half (384 x 768 pixels) does; one with `lut_solver.SUN_GRID_MIN_RAYS` of
+# them within 20 deg of the sun takes the sun grid: a perspective frame of 683 x 384 pixels,
+# 40 deg high, centred on the default sun (30 deg high in the south).
 _FULL_FRAME = ("--size", "384", "--wavelengths", "1")
 # (what it compiles, the command line's arguments without the output and cache options)
 WARM_UP_COMMANDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("tables and the fisheye", ("render", "earth", *_TINY)),
     ("the panorama and a full frame's sky-view grid", ("render", "earth", "--camera",
                                                        "panorama", *_FULL_FRAME)),
+    ("a full frame around the sun, its sun grid", ("render", "earth", "--camera", "perspective",
+                                                   "--fov", "40", "--pitch", "30",
+                                                   *_FULL_FRAME)),
     ("the perspective camera and terrain", ("render", "earth", "--camera", "perspective",
                                             "--terrain", "demo", "--altitude", "300", *_TINY)),
     ("the view from orbit", ("render", "earth", "--camera", "orbit", "--distance-km", "20000",

@@ -584,6 +584,95 @@ def sky_view_grid_lookup(log_grid, up, sun_direction, cos_exact, bottom_radius, 
                                          + a * ((1.0 - b) * g10[w] + b * g11[w]))
 
 
+@njit(cache=True)
+def sun_grid_frame(up, sun_direction):
+    """(e1, e2): unit vectors across the sun's direction, e1 in the sun's vertical plane on
+    the zenith's side (for a sun at the zenith or the nadir: any), e2 = s x e1."""
+    mu_s = up[0] * sun_direction[0] + up[1] * sun_direction[1] + up[2] * sun_direction[2]
+    e1 = up - mu_s * sun_direction
+    if math.sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]) < 1e-9:
+        helper = np.zeros(3)
+        helper[0 if abs(sun_direction[0]) < 0.9 else 1] = 1.0
+        e1 = helper - (helper[0] * sun_direction[0] + helper[1] * sun_direction[1]
+                       + helper[2] * sun_direction[2]) * sun_direction
+    e1 = e1 / math.sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2])
+    return e1, np.cross(sun_direction, e1)
+
+
+@njit(cache=True)
+def sun_grid_psi(i, n_psi, psi_max):
+    """Angle from the sun [rad] of node i of a sun grid's n_psi: psi_max (i / (n_psi - 1))^2,
+    dense next to the sun, where the particles' forward peaks are."""
+    return psi_max * (i / (n_psi - 1)) ** 2
+
+
+@njit(cache=True)
+def sun_grid_nodes(up, sun_direction, n_psi, n_chi, psi_max):
+    """The view directions (n_psi, n_chi, 3) of a sun grid: angles from the sun
+    `sun_grid_psi` x angles about the sun from its vertical plane chi = pi k / (n_chi - 1),
+    0 on the zenith's side (the sky is symmetric about that plane)."""
+    e1, e2 = sun_grid_frame(up, sun_direction)
+    nodes = np.empty((n_psi, n_chi, 3))
+    for i in range(n_psi):
+        psi = sun_grid_psi(i, n_psi, psi_max)
+        for k in range(n_chi):
+            chi = math.pi * k / (n_chi - 1)
+            nodes[i, k] = math.cos(psi) * sun_direction + math.sin(psi) * (
+                math.cos(chi) * e1 + math.sin(chi) * e2)
+    return nodes
+
+
+@njit(parallel=True, cache=True, error_model="numpy")
+def sun_grid_lookup(log_grid, up, sun_direction, psi_max, theta_h, horizon_band, directions,
+                    out, exact):
+    """The radiance along `directions` (n_ray, 3), all within psi_max of the sun, of one
+    observer whose horizon lies theta_h from the zenith [rad], interpolated in `log_grid`
+    (n_psi, n_chi, n_wl), the logarithm of the radiance at `sun_grid_nodes`: bilinear in
+    sqrt(psi / psi_max) and in chi, into out (n_ray, n_wl). A ray whose cell may reach across
+    the horizon (the sky's light jumps there) is left to the caller: exact[j] = True, out[j]
+    untouched. In blocks of RAYS_PER_BLOCK rays, vectorised as `sky_view_grid_lookup`."""
+    n_psi, n_chi, n_wl = log_grid.shape
+    e1, e2 = sun_grid_frame(up, sun_direction)
+    chi_step = math.pi / (n_chi - 1)
+    n_rays = directions.shape[0]
+    for block in prange((n_rays + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK):
+        first = block * RAYS_PER_BLOCK
+        count = min(RAYS_PER_BLOCK, n_rays - first)
+        i_psi = np.empty(count, dtype=np.int64)
+        a_psi = np.empty(count)
+        k_chi = np.empty(count, dtype=np.int64)
+        b_chi = np.empty(count)
+        for q in range(count):
+            j = first + q
+            dx, dy, dz = directions[j, 0], directions[j, 1], directions[j, 2]
+            scale = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+            nu = (dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]) * scale
+            x1 = (dx * e1[0] + dy * e1[1] + dz * e1[2]) * scale
+            x2 = (dx * e2[0] + dy * e2[1] + dz * e2[2]) * scale
+            mu = (dx * up[0] + dy * up[1] + dz * up[2]) * scale
+            psi = fast_acos(min(max(nu, -1.0), 1.0))
+            i, a = linear_axis(math.sqrt(psi / psi_max) * (n_psi - 1), n_psi)
+            across = math.sqrt(x1 * x1 + x2 * x2)
+            cos_chi = min(max(x1 / across, -1.0), 1.0) if across > 1e-12 else 1.0
+            k, b = linear_axis(fast_acos(cos_chi) / chi_step, n_chi)
+            i_psi[q], a_psi[q], k_chi[q], b_chi[q] = i, a, k, b
+            # the cell's reach: its extent in psi plus its widest arc in chi
+            outer = sun_grid_psi(i + 1, n_psi, psi_max)
+            reach = outer - sun_grid_psi(i, n_psi, psi_max) + outer * chi_step
+            exact[j] = abs(fast_acos(min(max(mu, -1.0), 1.0)) - theta_h) <= reach + horizon_band
+        for q in range(count):
+            j = first + q
+            if exact[j]:
+                continue
+            row = out[j]
+            a, b = a_psi[q], b_chi[q]
+            g00, g01 = log_grid[i_psi[q], k_chi[q]], log_grid[i_psi[q], k_chi[q] + 1]
+            g10, g11 = log_grid[i_psi[q] + 1, k_chi[q]], log_grid[i_psi[q] + 1, k_chi[q] + 1]
+            for w in range(n_wl):
+                row[w] = exp_by_squaring((1.0 - a) * ((1.0 - b) * g00[w] + b * g01[w])
+                                         + a * ((1.0 - b) * g10[w] + b * g11[w]))
+
+
 # --------------------------------------------------------------------------------------------
 # Lookups for the solver
 # --------------------------------------------------------------------------------------------

@@ -24,7 +24,7 @@ from skyscatter.errors import InputError
 from skyscatter.transport import _table_lookup_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.geometry import horizontal_towards
-from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
+from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN, horizon_zenith_angle
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
 
 __all__ = ["LutSolver"]
@@ -38,12 +38,19 @@ VIEW_TABLE_SAMPLES = 64
 # SKY_GRID_PHI azimuths from the sun and interpolate it per pixel in the logarithm (Hillaire
 # 2020, "A scalable and production ready sky and atmosphere rendering technique", Comput.
 # Graph. Forum 39(4), doi:10.1111/cgf.14050, its sky-view table); the rays within
-# SKY_GRID_EXACT_DEG of the sun, where the particles' phase functions peak, are looked up one
-# by one (benchmarks/bench_sky_view_grid.py, docs/performance.md).
+# SKY_GRID_EXACT_DEG of the sun, where the particles' phase functions peak, on a grid of their
+# own around the sun, SUN_GRID_PSI angles from it (dense next to it) x SUN_GRID_CHI angles
+# about it, once SUN_GRID_MIN_RAYS of them are in the frame; the rays whose grid cell may
+# reach across the horizon are looked up one by one (benchmarks/bench_sky_view_grid.py,
+# docs/performance.md).
 SKY_GRID_MIN_RAYS = 1 << 17
 SKY_GRID_MU = 256
 SKY_GRID_PHI = 128
 SKY_GRID_EXACT_DEG = 20.0
+SUN_GRID_PSI = 128
+SUN_GRID_CHI = 128
+SUN_GRID_HORIZON_DEG = 2.0
+SUN_GRID_MIN_RAYS = 4 * SUN_GRID_PSI * SUN_GRID_CHI
 # the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
 SLANT_DEPTH_MAX = 700.0
 
@@ -186,11 +193,43 @@ class LutSolver:
         near_sun = np.flatnonzero(exact)
         if near_sun.size:
             values = np.empty((near_sun.size, self.profile.n_wavelengths))
-            self._sky_per_ray(origin[None], np.ascontiguousarray(directions[near_sun]), sun,
-                              view_table, aureole_table, values, None)
+            self._sky_near_sun(origin, np.ascontiguousarray(directions[near_sun]), sun,
+                               view_table, aureole_table, values)
             out[near_sun] = values
         if progress is not None:
             progress(directions.shape[0])
+
+    def _sky_near_sun(self, origin: np.ndarray, directions: np.ndarray, sun: np.ndarray,
+                      view_table: np.ndarray, aureole_table: np.ndarray,
+                      out: np.ndarray) -> None:
+        """`sky_radiance` of one observer along `directions` within SKY_GRID_EXACT_DEG of the
+        sun, into out: from a sun grid (module constants) when there are at least
+        SUN_GRID_MIN_RAYS, each ray whose cell may reach across the horizon looked up alone."""
+        if directions.shape[0] < SUN_GRID_MIN_RAYS:
+            self._sky_per_ray(origin[None], directions, sun, view_table, aureole_table, out,
+                              None)
+            return
+        t = self.tables
+        r = float(np.linalg.norm(origin))
+        up = origin / r
+        psi_max = float(np.radians(SKY_GRID_EXACT_DEG))
+        nodes = _table_lookup_kernels.sun_grid_nodes(up, sun, SUN_GRID_PSI, SUN_GRID_CHI,
+                                                     psi_max)
+        grid = np.empty((SUN_GRID_PSI * SUN_GRID_CHI, self.profile.n_wavelengths))
+        self._sky_per_ray(origin[None], np.ascontiguousarray(nodes.reshape(-1, 3)), sun,
+                          view_table, aureole_table, grid, None)
+        log_grid = np.log(np.maximum(grid, _table_lookup_kernels.VIEW_TABLE_FLOOR)).reshape(
+            SUN_GRID_PSI, SUN_GRID_CHI, -1)
+        exact = np.empty(directions.shape[0], dtype=np.bool_)
+        _table_lookup_kernels.sun_grid_lookup(
+            log_grid, up, sun, psi_max, horizon_zenith_angle(r, t.bottom_radius_m),
+            float(np.radians(SUN_GRID_HORIZON_DEG)), directions, out, exact)
+        at_horizon = np.flatnonzero(exact)
+        if at_horizon.size:
+            values = np.empty((at_horizon.size, self.profile.n_wavelengths))
+            self._sky_per_ray(origin[None], np.ascontiguousarray(directions[at_horizon]), sun,
+                              view_table, aureole_table, values, None)
+            out[at_horizon] = values
 
     def _view_table(self, origins: np.ndarray, sun: np.ndarray) -> np.ndarray:
         """Single scattering of every view direction of the one observer in `origins` (1, 3)
