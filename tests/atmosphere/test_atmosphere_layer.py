@@ -12,7 +12,7 @@ from scipy.integrate import quad
 
 from cli_runner import run_cli
 from skyscatter.atmosphere.config import load_atmosphere
-from skyscatter.atmosphere.model import DEFAULT_PROFILE_LEVELS
+from skyscatter.atmosphere.model import DEFAULT_PROFILE_LEVELS, MAX_PROFILE_LEVELS
 from skyscatter.atmosphere.profiles import UniformLayerProfile
 from skyscatter.errors import ConfigError, InputError
 from skyscatter.transport import _kernels
@@ -96,6 +96,16 @@ def test_solver_levels_resolve_a_thin_layer_and_leave_other_atmospheres_alone(tm
     profile = fog.optical_profile([550.0])
     assert profile.altitudes_m[1] - profile.altitudes_m[0] <= 300.0 / 40
     assert load_atmosphere("earth").profile_levels == DEFAULT_PROFILE_LEVELS
+
+
+@pytest.mark.parametrize("edge_m", [5e-324, 1e-310, 1e-6])
+def test_edges_finer_than_any_grid_ask_for_the_most_levels(tmp_path, edge_m):
+    # An edge whose level spacing underflows to 0 (5e-324 / 10) or makes the level count
+    # overflow (1e-310) was a ZeroDivisionError / OverflowError: it asks for the most levels
+    # there are, like any edge finer than they resolve (1e-6 m).
+    fine = load_atmosphere(_config(tmp_path, "base_altitude_m = 437.0, top_altitude_m = 563.0, "
+                                             f"edge_m = {edge_m!r}"))
+    assert fine.profile_levels == MAX_PROFILE_LEVELS
 
 
 @pytest.mark.parametrize("n_levels", [None, 2001, 1001])

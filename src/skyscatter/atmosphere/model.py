@@ -141,8 +141,12 @@ class Atmosphere:
         `MAX_PROFILE_LEVELS`."""
         step = min((getattr(c.profile, "altitude_step_m", math.inf) for c in self.constituents),
                    default=math.inf)
-        needed = math.ceil(self.top_altitude_m / step) + 1  # 1 when no profile asks (step inf)
-        return min(max(DEFAULT_PROFILE_LEVELS, needed), MAX_PROFILE_LEVELS)
+        # a step that underflows to 0 (an edge of 1e-320 m) asks for as many as allowed
+        spans = self.top_altitude_m / step if step > 0.0 else math.inf
+        if spans >= MAX_PROFILE_LEVELS:
+            return MAX_PROFILE_LEVELS
+        needed = math.ceil(spans) + 1  # 1 when no profile asks (step inf)
+        return max(DEFAULT_PROFILE_LEVELS, needed)
 
     def optical_profile(self, wavelengths_nm: ArrayLike, n_levels: int | None = None,
                         monochromatic: bool = False) -> OpticalProfile:
