@@ -574,15 +574,15 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             incoming = _table_build_kernels.incoming_radiance(
                 order_grid, scaled_medium, theta_in, phi_in, lit, ground,
                 albedo)
-            source = _source_function(phases, incoming, scaled_beta_s, node_density,
-                                      order_res)
-            del incoming
             delta_irradiance = _table_build_kernels.indirect_irradiance(
                 res.irradiance_r, res.irradiance_mu_s, res.irradiance_theta,
                 res.irradiance_phi, order_grid, lit)
             irradiance[..., batch] += delta_irradiance
             ground = np.ascontiguousarray(delta_irradiance[0])
-            del lit, previous  # read: their memory goes to the next order
+            del lit, previous  # read: their memory goes to the source and the next order
+            source = _source_function(phases, incoming, scaled_beta_s, node_density,
+                                      order_res)
+            del incoming
             delta = _table_build_kernels.multiple_scattering_table(
                 order_grid, scaled_medium, res.multiple_ray_samples,
                 np.ascontiguousarray(scattering_all[:, batch]), source, res.density_phi)
