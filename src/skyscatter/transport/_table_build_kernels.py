@@ -335,17 +335,53 @@ def _opaque_end(total, tau, view_depth):
 
 
 @njit(cache=True)
+def _ray_depths(total, col_view, dens, extinction):
+    """(tau, extinct): the optical depth from the ray's start and the extinction coefficient
+    (total, n_wl) at each of its samples (columns col_view and densities dens (total, n_c)),
+    in `extinction` (n_c, n_wl)."""
+    n_c, n_wl = extinction.shape
+    tau = np.empty((total, n_wl))
+    extinct = np.empty((total, n_wl))
+    for j in range(total):
+        for w in range(n_wl):
+            depth = 0.0
+            coefficient = 0.0
+            for c in range(n_c):
+                depth += extinction[c, w] * col_view[j, c]
+                coefficient += extinction[c, w] * dens[j, c]
+            tau[j, w] = depth
+            extinct[j, w] = coefficient
+    return tau, extinct
+
+
+@njit(cache=True)
+def _view_weights(total, tau, extinct, dens, coefficients):
+    """view (n_k, total, n_wl): for each k of `coefficients` (n_k, n_c, n_wl), the weights of
+    a source S at the ray's samples in int beta_k S T dt, beta_k = sum_c dens_c
+    coefficients[k, c] (`_ray_weights`)."""
+    n_k, n_c, n_wl = coefficients.shape
+    beta = np.empty((total, n_wl))
+    view = np.empty((n_k, total, n_wl))
+    for k in range(n_k):
+        for j in range(total):
+            for w in range(n_wl):
+                value = 0.0
+                for c in range(n_c):
+                    value += dens[j, c] * coefficients[k, c, w]
+                beta[j, w] = value
+        _ray_weights(total, tau, extinct, beta, view[k])
+    return view
+
+
+@njit(cache=True)
 def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
     """The ray of scattering-table cell (i_r, i_mu): (r, mu, total, t, radius, mu_t, dens,
-    view, view_depth) with its `total` samples (`_ray_samples`, up to `_opaque_end`), each
-    sample's smallest optical depth from the origin view_depth (total,) and, for each k of
-    `coefficients` (n_k, n_c, n_wl), the weights view[k] (total, n_wl) of a source S at the
-    samples in int beta_k S T dt along the ray, beta_k = sum_c dens_c coefficients[k, c]
-    (`_ray_weights`)."""
+    col_view, view, view_depth) with its `total` samples (`_ray_samples`, up to
+    `_opaque_end`), each sample's smallest optical depth from the origin view_depth (total,)
+    and the weights `_view_weights` of `coefficients` (n_k, n_c, n_wl)."""
     n_r, n_mu = grid.n_r, grid.n_mu
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
-    extinction = medium.extinction
-    n_c, n_wl = extinction.shape
+    n_c = medium.extinction.shape[0]
     n_max = REFINED_SAMPLES_FACTOR * n_samples + 8
     r = scattering_r_from_u((i_r + 0.5) / n_r, bottom_radius, top_radius, n_r,
                             grid.radius_warp)
@@ -358,31 +394,11 @@ def _table_ray(i_r, i_mu, n_samples, grid, medium, coefficients):
     col_view = np.empty((n_max, n_c))
     total = _ray_samples(r, mu, hits_ground, n_samples, grid, medium, t, radius, mu_t, dens,
                          col_view)
-    tau = np.empty((total, n_wl))
-    extinct = np.empty((total, n_wl))
-    for j in range(total):
-        for w in range(n_wl):
-            depth = 0.0
-            coefficient = 0.0
-            for c in range(n_c):
-                depth += extinction[c, w] * col_view[j, c]
-                coefficient += extinction[c, w] * dens[j, c]
-            tau[j, w] = depth
-            extinct[j, w] = coefficient
+    tau, extinct = _ray_depths(total, col_view, dens, medium.extinction)
     view_depth = np.empty(total)
     total = _opaque_end(total, tau, view_depth)
-    n_k = coefficients.shape[0]
-    beta = np.empty((total, n_wl))
-    view = np.empty((n_k, total, n_wl))
-    for k in range(n_k):
-        for j in range(total):
-            for w in range(n_wl):
-                value = 0.0
-                for c in range(n_c):
-                    value += dens[j, c] * coefficients[k, c, w]
-                beta[j, w] = value
-        _ray_weights(total, tau, extinct, beta, view[k])
-    return r, mu, total, t, radius, mu_t, dens, view, view_depth
+    view = _view_weights(total, tau, extinct, dens, coefficients)
+    return r, mu, total, t, radius, mu_t, dens, col_view, view, view_depth
 
 
 @njit(cache=True)
@@ -431,9 +447,37 @@ def _sun_at_samples(r_mu_s, nu, t, radius, mu_h, d_min, d_max, top_radius, n_mu_
         column_i[j], column_a[j] = linear_axis(x_mu * (n_mu_t - 1), n_mu_t)
 
 
+@njit(cache=True, inline="always")
+def _sun_at_sample(sun_table, sun_table_is_depth, view_depth, i, a, j, b, sun):
+    """The sun's transmittance at a sample of a table ray, bilinear in `sun_table` at row
+    i + a and column j + b, into sun (n_wl,); where the table holds optical depths
+    (`single_scattering_table`), False when the sun and the view together cross more than
+    OPAQUE_OPTICAL_DEPTH (view_depth: the view's smallest) and sun is left as it is."""
+    transmittance_bilinear(sun_table, i, a, j, b, sun)
+    if sun_table_is_depth:
+        if sun.min() + view_depth > OPAQUE_OPTICAL_DEPTH:
+            return False  # no light from there: no exponentials
+        # in single precision, as the table: 1.8 x faster than exp (no vector math library in
+        # numba's LLVM), 1e-6 relative from a depth of 30
+        for w in range(sun.size):
+            sun[w] = math.exp(-np.float32(sun[w]))
+    return True
+
+
+@njit(cache=True, inline="always")
+def _add_sample(acc, view, j, visible, sun):
+    """acc[s] += visible view[s, j] sun for every constituent s (acc (n_s, n_wl))."""
+    for s in range(acc.shape[0]):
+        acc_s = acc[s]  # row views: see `multiple_scattering_table`
+        view_s = view[s, j]
+        for w in range(acc_s.size):
+            acc_s[w] += visible * view_s[w] * sun[w]
+
+
 @njit(parallel=True, cache=True, error_model="numpy")
 def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_depth, scatterers,
-                            factor, sun_angular_radius, table):
+                            factor, sun_angular_radius, table, scaled_extinction,
+                            scaled_sun_table, scaled_factor, scaled_table):
     """Single scattering without phase function, per scattering constituent, into `table`:
     table[s, cell, w] = factor[s, w] * int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt, with
     factor = E_sun beta_s,s [W m^-2 nm^-1 / density]; (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl)
@@ -445,12 +489,20 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
     the sun inside an optically thick layer (T falls by e^-1.4 between two of 512 rows in a
     stratus deck). Bruneton 2017,
     `ComputeSingleScattering`; V = visible part of the sun disk. `grid`: a `TableGrid`,
-    `medium`: a `RayMedium`."""
+    `medium`: a `RayMedium`.
+
+    With a second medium (`scaled_table` not empty: the delta-M scaled one of the orders >= 2,
+    its extinction per density `scaled_extinction` (n_c, n_wl), its `scaled_sun_table` and
+    `scaled_factor`) its first order goes into `scaled_table` in the same pass, on the same
+    ray samples (those of `medium`, whose extinction is the larger: its samples and its opaque
+    end serve both): the cells' geometry and the sun's position at each sample, two thirds of
+    the work, are found once for both."""
     n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
     extinction = medium.extinction
     n_s = scatterers.size
     n_wl = extinction.shape[1]
+    two = scaled_table.size > 0
     n_r_t, n_mu_t = sun_table.shape[0], sun_table.shape[1]
     # mu_s >= mu_h + alpha + alpha^2 / 2 >= cos(theta_h - alpha): the whole sun disk is above
     # the horizon, `sun_visible_fraction` = 1 (its own fast exit costs a cos and a sin).
@@ -463,11 +515,20 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r, mu, total, t, radius, mu_t, dens, view, view_depth = _table_ray(
+        r, mu, total, t, radius, mu_t, dens, col_view, view, view_depth = _table_ray(
             i_r, i_mu, n_samples, grid, medium, selection)
         if total == 0:
             table[i_r, i_mu] = 0.0
+            if two:
+                scaled_table[i_r, i_mu] = 0.0
             continue
+        scaled_view, scaled_view_depth = view, view_depth
+        if two:
+            tau, extinct = _ray_depths(total, col_view, dens, scaled_extinction)
+            scaled_view = _view_weights(total, tau, extinct, dens, selection)
+            scaled_view_depth = np.empty(total)
+            for j in range(total):
+                scaled_view_depth[j] = tau[j].min()
         # Per sample: the horizon, and the r part of the transmittance lookup towards the sun.
         mu_h = np.empty(total)
         row_i = np.empty(total, dtype=np.int64)
@@ -481,6 +542,7 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
             row_i[j], row_a[j] = linear_axis(x_r * (n_r_t - 1), n_r_t)
         sun = np.empty(n_wl)
         acc = np.empty((n_s, n_wl))
+        scaled_acc = np.empty((n_s, n_wl))
         mu_s_j = np.empty(total)
         column_i = np.empty(total, dtype=np.int64)
         column_a = np.empty(total)
@@ -489,6 +551,7 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
             for i_nu in range(n_nu):
                 nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 acc[:, :] = 0.0
+                scaled_acc[:, :] = 0.0
                 _sun_at_samples(r * mu_s, nu, t, radius, mu_h, row_d_min, row_d_max, top_radius,
                                 n_mu_t, mu_s_j, column_i, column_a)
                 for j in range(total):
@@ -498,23 +561,21 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
                                                        sun_angular_radius)
                         if visible <= 0.0:
                             continue
-                    transmittance_bilinear(sun_table, row_i[j], row_a[j], column_i[j],
-                                           column_a[j], sun)
-                    if sun_table_is_depth:
-                        if sun.min() + view_depth[j] > OPAQUE_OPTICAL_DEPTH:
-                            continue  # no light from there: no exponentials
-                        # in single precision, as the table: 1.8 x faster than exp (no vector
-                        # math library in numba's LLVM), 1e-6 relative from a depth of 30
-                        for w in range(n_wl):
-                            sun[w] = math.exp(-np.float32(sun[w]))
-                    for s in range(n_s):
-                        acc_s = acc[s]  # row views: see `multiple_scattering_table`
-                        view_s = view[s, j]
-                        for w in range(n_wl):
-                            acc_s[w] += visible * view_s[w] * sun[w]
+                    if _sun_at_sample(sun_table, sun_table_is_depth, view_depth[j], row_i[j],
+                                      row_a[j], column_i[j], column_a[j], sun):
+                        _add_sample(acc, view, j, visible, sun)
+                    if two and _sun_at_sample(scaled_sun_table, sun_table_is_depth,
+                                              scaled_view_depth[j], row_i[j], row_a[j],
+                                              column_i[j], column_a[j], sun):
+                        _add_sample(scaled_acc, scaled_view, j, visible, sun)
                 for s in range(n_s):
                     for w in range(n_wl):
                         table[i_r, i_mu, i_s, i_nu, s, w] = acc[s, w] * factor[s, w]
+                if two:
+                    for s in range(n_s):
+                        for w in range(n_wl):
+                            scaled_table[i_r, i_mu, i_s, i_nu, s, w] = (scaled_acc[s, w]
+                                                                        * scaled_factor[s, w])
 
 
 @njit(cache=True)
@@ -861,7 +922,7 @@ def multiple_scattering_table(grid, medium, n_samples, scattering, source, n_phi
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
-        r, mu, total, t, radius, mu_t, dens, view, _ = _table_ray(
+        r, mu, total, t, radius, mu_t, dens, _, view, _ = _table_ray(
             i_r, i_mu, n_samples, grid, medium, scattering[None])
         if total == 0:
             continue

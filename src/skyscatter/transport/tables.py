@@ -519,21 +519,22 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
         label = f"wavelengths {batch.start + 1}-{batch.stop} of {n_wl}"
 
-        # written into the tables' own slots: no copy of the first order beside them
+        # the exact first order written into the tables' own slots (no copy beside them), and
+        # the scaled medium's, which lights the second order; the tables keep the exact first
+        # order and gain what the scaled one has more (TMS, module docstring)
         single = scattering[..., :n_s, batch]
-        _table_build_kernels.single_scattering_table(
-            grid, medium, res.ray_samples, np.ascontiguousarray(sun_table[..., batch]), thick,
-            scatterer_index, np.ascontiguousarray(sun[None, :] * beta_s), sun_radius, single)
-        if truncated and orders > 1:
-            # first order of the scaled medium, which lights the second; the tables keep the
-            # exact first order and gain what the scaled one has more (TMS, module docstring)
-            peak_b = np.ascontiguousarray(peak[:, batch])
-            scaled_single = np.empty(single.shape, dtype=np.float32)
-            _table_build_kernels.single_scattering_table(
-                grid, scaled_medium, res.ray_samples,
-                np.ascontiguousarray(scaled_sun_table[..., batch]), thick, scatterer_index,
-                np.ascontiguousarray(sun[None, :] * (1.0 - peak_b) * beta_s), sun_radius,
-                scaled_single)
+        scaled_pass = truncated and orders > 1
+        peak_b = np.ascontiguousarray(peak[:, batch])
+        scaled_single = np.empty(single.shape if scaled_pass else (0,) * single.ndim,
+                                 dtype=np.float32)
+        first_orders = _FirstOrders(
+            np.ascontiguousarray(sun_table[..., batch]),
+            np.ascontiguousarray(sun[None, :] * beta_s),
+            np.ascontiguousarray((scaled_sun_table if truncated else sun_table)[..., batch]),
+            np.ascontiguousarray(sun[None, :] * (1.0 - peak_b) * beta_s))
+        first_orders.compute(grid, medium, scaled_medium, res.ray_samples, thick,
+                             scatterer_index, sun_radius, single, scaled_single)
+        if scaled_pass:
             _table_build_kernels.phase_weighted_difference(
                 scaled_single, single, 1.0 - peak_b, smooth_b, grid,
                 scattering[..., n_s, batch])
@@ -850,6 +851,35 @@ def _coarse_grid(res: TableResolution, grid: _table_build_kernels.TableGrid
             grid._replace(n_mu=n_mu // 2, n_nu=coarse_nu),
             _Resampling(_mu_resampling(n_mu, n_mu // 2), _linear_resampling(n_nu, coarse_nu)),
             _Resampling(_mu_resampling(n_mu // 2, n_mu), _linear_resampling(coarse_nu, n_nu)))
+
+
+class _FirstOrders(NamedTuple):
+    """The sun tables and factors of the exact and the delta-M scaled medium's first orders
+    (`_table_build_kernels.single_scattering_table`)."""
+
+    sun_table: np.ndarray
+    factor: np.ndarray
+    scaled_sun_table: np.ndarray
+    scaled_factor: np.ndarray
+
+    def compute(self, grid: _table_build_kernels.TableGrid,
+                medium: _table_build_kernels.RayMedium,
+                scaled_medium: _table_build_kernels.RayMedium, n_samples: int, thick: bool,
+                scatterers: np.ndarray, sun_radius: float, single: np.ndarray,
+                scaled_single: np.ndarray) -> None:
+        """Fill `single` and, unless it is empty, `scaled_single`: in one pass on the same ray
+        samples, or, with an optically thick layer, where each medium places its own samples
+        (refined and cut off by its own optical depths), in one pass each."""
+        build = _table_build_kernels.single_scattering_table
+        none = np.empty((0,) * single.ndim, dtype=np.float32)
+        if thick and scaled_single.size:
+            build(grid, scaled_medium, n_samples, self.scaled_sun_table, thick, scatterers,
+                  self.scaled_factor, sun_radius, scaled_single, scaled_medium.extinction,
+                  self.scaled_sun_table, self.scaled_factor, none)
+            scaled_single = none
+        build(grid, medium, n_samples, self.sun_table, thick, scatterers, self.factor,
+              sun_radius, single, scaled_medium.extinction, self.scaled_sun_table,
+              self.scaled_factor, scaled_single)
 
 
 class _OrderSums:
