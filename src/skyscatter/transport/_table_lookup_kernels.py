@@ -548,10 +548,7 @@ def sky_view_grid_lookup(log_grid, up, sun_direction, cos_exact, bottom_radius, 
     for block in prange((n_rays + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK):
         first = block * RAYS_PER_BLOCK
         count = min(RAYS_PER_BLOCK, n_rays - first)
-        i_mu = np.empty(count, dtype=np.int64)
-        a_mu = np.empty(count)
-        k_phi = np.empty(count, dtype=np.int64)
-        b_phi = np.empty(count)
+        i_mu, a_mu, k_phi, b_phi = _grid_block(count)
         dark = np.empty(count, dtype=np.bool_)
         for q in range(count):
             j = first + q
@@ -569,19 +566,35 @@ def sky_view_grid_lookup(log_grid, up, sun_direction, cos_exact, bottom_radius, 
             k_phi[q], b_phi[q] = linear_axis(
                 fast_acos(view_sun_cos_azimuth(nu, mu, mu_s)) / math.pi * (n_phi - 1), n_phi)
         for q in range(count):
-            j = first + q
-            row = out[j]
-            if exact[j]:
-                continue
             if dark[q]:
-                row[:] = 0.0
-                continue
-            a, b = a_mu[q], b_phi[q]
-            g00, g01 = log_grid[i_mu[q], k_phi[q]], log_grid[i_mu[q], k_phi[q] + 1]
-            g10, g11 = log_grid[i_mu[q] + 1, k_phi[q]], log_grid[i_mu[q] + 1, k_phi[q] + 1]
-            for w in range(n_wl):
-                row[w] = exp_by_squaring((1.0 - a) * ((1.0 - b) * g00[w] + b * g01[w])
-                                         + a * ((1.0 - b) * g10[w] + b * g11[w]))
+                out[first + q] = 0.0
+        _log_bilinear_block(log_grid, first, i_mu, a_mu, k_phi, b_phi,
+                            exact[first:first + count] | dark, out)
+
+
+@njit(cache=True)
+def _grid_block(count):
+    """Scratch for the grid coordinates of a block of `count` rays: lower entries and weights
+    on the grid's two axes."""
+    return (np.empty(count, dtype=np.int64), np.empty(count), np.empty(count, dtype=np.int64),
+            np.empty(count))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _log_bilinear_block(log_grid, first, i_index, a_weight, k_index, b_weight, skip, out):
+    """out[first + q] = exp of `log_grid` (n_i, n_k, n_wl) interpolated bilinearly at
+    (i_index[q] + a_weight[q], k_index[q] + b_weight[q]) for each ray q of a block not to
+    `skip` (`exp_by_squaring`; the loop over wavelengths vectorises)."""
+    for q in range(skip.size):
+        if skip[q]:
+            continue
+        row = out[first + q]
+        a, b = a_weight[q], b_weight[q]
+        g00, g01 = log_grid[i_index[q], k_index[q]], log_grid[i_index[q], k_index[q] + 1]
+        g10, g11 = log_grid[i_index[q] + 1, k_index[q]], log_grid[i_index[q] + 1, k_index[q] + 1]
+        for w in range(row.size):
+            row[w] = exp_by_squaring((1.0 - a) * ((1.0 - b) * g00[w] + b * g01[w])
+                                     + a * ((1.0 - b) * g10[w] + b * g11[w]))
 
 
 @njit(cache=True)
@@ -638,10 +651,7 @@ def sun_grid_lookup(log_grid, up, sun_direction, psi_max, theta_h, horizon_band,
     for block in prange((n_rays + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK):
         first = block * RAYS_PER_BLOCK
         count = min(RAYS_PER_BLOCK, n_rays - first)
-        i_psi = np.empty(count, dtype=np.int64)
-        a_psi = np.empty(count)
-        k_chi = np.empty(count, dtype=np.int64)
-        b_chi = np.empty(count)
+        i_psi, a_psi, k_chi, b_chi = _grid_block(count)
         for q in range(count):
             j = first + q
             dx, dy, dz = directions[j, 0], directions[j, 1], directions[j, 2]
@@ -660,17 +670,8 @@ def sun_grid_lookup(log_grid, up, sun_direction, psi_max, theta_h, horizon_band,
             outer = sun_grid_psi(i + 1, n_psi, psi_max)
             reach = outer - sun_grid_psi(i, n_psi, psi_max) + outer * chi_step
             exact[j] = abs(fast_acos(min(max(mu, -1.0), 1.0)) - theta_h) <= reach + horizon_band
-        for q in range(count):
-            j = first + q
-            if exact[j]:
-                continue
-            row = out[j]
-            a, b = a_psi[q], b_chi[q]
-            g00, g01 = log_grid[i_psi[q], k_chi[q]], log_grid[i_psi[q], k_chi[q] + 1]
-            g10, g11 = log_grid[i_psi[q] + 1, k_chi[q]], log_grid[i_psi[q] + 1, k_chi[q] + 1]
-            for w in range(n_wl):
-                row[w] = exp_by_squaring((1.0 - a) * ((1.0 - b) * g00[w] + b * g01[w])
-                                         + a * ((1.0 - b) * g10[w] + b * g11[w]))
+        _log_bilinear_block(log_grid, first, i_psi, a_psi, k_chi, b_chi,
+                            exact[first:first + count], out)
 
 
 # --------------------------------------------------------------------------------------------
