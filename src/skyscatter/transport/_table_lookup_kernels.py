@@ -530,8 +530,8 @@ def exp_by_squaring(x):
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
-def sky_view_grid_lookup(log_grid, up, sun_direction, cos_exact, bottom_radius, top_radius,
-                         r, directions, out, exact):
+def sky_view_grid_lookup(log_grid, up, sun_direction, cos_exact, bottom_radius, r,
+                         directions, out, exact):
     """The radiance along `directions` (n_ray, 3) of one observer at radius r [m] (unit
     vertical `up`), interpolated in `log_grid` (n_mu, n_phi, n_wl), the logarithm of the
     radiance at `sky_view_grid_nodes`: bilinear on the table's mu axis (each side of the
@@ -642,8 +642,10 @@ def sun_grid_lookup(log_grid, up, sun_direction, psi_max, theta_h, horizon_band,
     observer whose horizon lies theta_h from the zenith [rad], interpolated in `log_grid`
     (n_psi, n_chi, n_wl), the logarithm of the radiance at `sun_grid_nodes`: bilinear in
     sqrt(psi / psi_max) and in chi, into out (n_ray, n_wl). A ray whose cell may reach across
-    the horizon (the sky's light jumps there) is left to the caller: exact[j] = True, out[j]
-    untouched. In blocks of RAYS_PER_BLOCK rays, vectorised as `sky_view_grid_lookup`."""
+    the horizon (the sky's light jumps there), or comes within `horizon_band` [rad] of it
+    (where the twilight sky changes fastest in elevation), is left to the caller:
+    exact[j] = True, out[j] untouched. In blocks of RAYS_PER_BLOCK rays, vectorised as
+    `sky_view_grid_lookup`."""
     n_psi, n_chi, n_wl = log_grid.shape
     e1, e2 = sun_grid_frame(up, sun_direction)
     chi_step = math.pi / (n_chi - 1)

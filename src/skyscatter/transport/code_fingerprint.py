@@ -24,12 +24,12 @@ import contextlib
 import hashlib
 import importlib.util
 import json
-import os
 from collections.abc import Callable, Iterable, Iterator
 from functools import cache, lru_cache
 from pathlib import Path
 
-from skyscatter.output_files import temporary_path
+from skyscatter.errors import InputError
+from skyscatter.output_files import atomic_write
 
 __all__ = ["MEMO_FILE", "code_fingerprint", "reached_definitions"]
 
@@ -202,17 +202,13 @@ def _remembered(memo: dict, key: str) -> str | None:
 
 
 def _remember(path: Path, key: str, modules: dict[str, str | None], fingerprint: str) -> None:
-    """Add the entry to the memo at `path` (written to a temporary, then renamed); a folder
-    that cannot be written is left alone."""
+    """Add the entry to the memo at `path` (`atomic_write`); a folder that cannot be written
+    is left alone."""
     memo = _read_memo(path)
     memo[key] = {"modules": modules, "fingerprint": fingerprint}
-    temporary = temporary_path(path)
-    with contextlib.suppress(OSError):
-        try:
-            temporary.write_text(json.dumps(memo, sort_keys=True), encoding="utf-8")
-            os.replace(temporary, path)
-        finally:
-            temporary.unlink(missing_ok=True)
+    text = json.dumps(memo, sort_keys=True)
+    with contextlib.suppress(InputError):
+        atomic_write(path, lambda temporary: Path(temporary).write_text(text, encoding="utf-8"))
 
 
 @lru_cache(maxsize=32)

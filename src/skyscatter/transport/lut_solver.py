@@ -50,6 +50,7 @@ SKY_GRID_EXACT_DEG = 20.0
 SUN_GRID_PSI = 128
 SUN_GRID_CHI = 128
 SUN_GRID_HORIZON_DEG = 2.0
+# the grid's own lookups cost as much as as many rays: below 4 rays per node it saves little
 SUN_GRID_MIN_RAYS = 4 * SUN_GRID_PSI * SUN_GRID_CHI
 # the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
 SLANT_DEPTH_MAX = 700.0
@@ -181,48 +182,51 @@ class LutSolver:
         frame = np.stack([x_axis, np.cross(up, x_axis), up])  # rows: local x, y, z
         nodes = _table_lookup_kernels.sky_view_grid_nodes(
             r, SKY_GRID_MU, SKY_GRID_PHI, t.bottom_radius_m, t.top_radius_m)
-        grid = np.empty((SKY_GRID_MU * SKY_GRID_PHI, self.profile.n_wavelengths))
-        self._sky_per_ray(origin[None], np.ascontiguousarray(nodes.reshape(-1, 3) @ frame),
-                          sun, view_table, aureole_table, grid, None)
-        log_grid = np.log(np.maximum(grid, _table_lookup_kernels.VIEW_TABLE_FLOOR)).reshape(
-            SKY_GRID_MU, SKY_GRID_PHI, -1)
+        log_grid = self._log_radiance_grid(origin, nodes @ frame, sun, view_table,
+                                           aureole_table)
         exact = np.empty(directions.shape[0], dtype=np.bool_)
         _table_lookup_kernels.sky_view_grid_lookup(
             log_grid, up, sun, float(np.cos(np.radians(SKY_GRID_EXACT_DEG))), t.bottom_radius_m,
-            t.top_radius_m, r, directions, out, exact)
+            r, directions, out, exact)
         near_sun = np.flatnonzero(exact)
         if near_sun.size:
             values = np.empty((near_sun.size, self.profile.n_wavelengths))
-            self._sky_near_sun(origin, np.ascontiguousarray(directions[near_sun]), sun,
+            self._sky_near_sun(origin, r, np.ascontiguousarray(directions[near_sun]), sun,
                                view_table, aureole_table, values)
             out[near_sun] = values
         if progress is not None:
             progress(directions.shape[0])
 
-    def _sky_near_sun(self, origin: np.ndarray, directions: np.ndarray, sun: np.ndarray,
-                      view_table: np.ndarray, aureole_table: np.ndarray,
+    def _log_radiance_grid(self, origin: np.ndarray, nodes: np.ndarray, sun: np.ndarray,
+                           view_table: np.ndarray, aureole_table: np.ndarray) -> np.ndarray:
+        """The logarithm of `sky_radiance` of one observer along the grid's view directions
+        `nodes` (n_a, n_b, 3), floored at VIEW_TABLE_FLOOR: (n_a, n_b, n_wl)."""
+        grid = np.empty((nodes.shape[0] * nodes.shape[1], self.profile.n_wavelengths))
+        self._sky_per_ray(origin[None], np.ascontiguousarray(nodes.reshape(-1, 3)), sun,
+                          view_table, aureole_table, grid, None)
+        return np.log(np.maximum(grid, _table_lookup_kernels.VIEW_TABLE_FLOOR)).reshape(
+            nodes.shape[0], nodes.shape[1], -1)
+
+    def _sky_near_sun(self, origin: np.ndarray, r: float, directions: np.ndarray,
+                      sun: np.ndarray, view_table: np.ndarray, aureole_table: np.ndarray,
                       out: np.ndarray) -> None:
-        """`sky_radiance` of one observer along `directions` within SKY_GRID_EXACT_DEG of the
-        sun, into out: from a sun grid (module constants) when there are at least
-        SUN_GRID_MIN_RAYS, each ray whose cell may reach across the horizon looked up alone."""
+        """`sky_radiance` of one observer at `origin`, radius r [m], along `directions` within
+        SKY_GRID_EXACT_DEG of the sun, into out: from a sun grid (module constants) when there
+        are at least SUN_GRID_MIN_RAYS, each ray whose cell may reach across the horizon (or
+        comes within SUN_GRID_HORIZON_DEG of it) looked up alone."""
         if directions.shape[0] < SUN_GRID_MIN_RAYS:
             self._sky_per_ray(origin[None], directions, sun, view_table, aureole_table, out,
                               None)
             return
-        t = self.tables
-        r = float(np.linalg.norm(origin))
         up = origin / r
         psi_max = float(np.radians(SKY_GRID_EXACT_DEG))
-        nodes = _table_lookup_kernels.sun_grid_nodes(up, sun, SUN_GRID_PSI, SUN_GRID_CHI,
-                                                     psi_max)
-        grid = np.empty((SUN_GRID_PSI * SUN_GRID_CHI, self.profile.n_wavelengths))
-        self._sky_per_ray(origin[None], np.ascontiguousarray(nodes.reshape(-1, 3)), sun,
-                          view_table, aureole_table, grid, None)
-        log_grid = np.log(np.maximum(grid, _table_lookup_kernels.VIEW_TABLE_FLOOR)).reshape(
-            SUN_GRID_PSI, SUN_GRID_CHI, -1)
+        log_grid = self._log_radiance_grid(
+            origin, _table_lookup_kernels.sun_grid_nodes(up, sun, SUN_GRID_PSI, SUN_GRID_CHI,
+                                                         psi_max),
+            sun, view_table, aureole_table)
         exact = np.empty(directions.shape[0], dtype=np.bool_)
         _table_lookup_kernels.sun_grid_lookup(
-            log_grid, up, sun, psi_max, horizon_zenith_angle(r, t.bottom_radius_m),
+            log_grid, up, sun, psi_max, horizon_zenith_angle(r, self.tables.bottom_radius_m),
             float(np.radians(SUN_GRID_HORIZON_DEG)), directions, out, exact)
         at_horizon = np.flatnonzero(exact)
         if at_horizon.size:
