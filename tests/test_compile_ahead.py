@@ -63,17 +63,16 @@ def test_the_warm_up_reaches_the_full_frame_kernels():
 
 def test_the_warm_up_reaches_the_sun_grid():
     # the sun grid compiles only in frames with at least SUN_GRID_MIN_RAYS rays within
-    # SKY_GRID_EXACT_DEG of the sun: the perspective frame centred on it must have them
+    # SKY_GRID_EXACT_DEG of the sun: the perspective frame centred on it must have them (its
+    # camera and sun as the command line parses them; the sun 30 deg high by default)
     command = next(arguments for what, arguments in compile_ahead.WARM_UP_COMMANDS
                    if "sun grid" in what)
-
-    def value(flag: str) -> float:
-        return float(command[command.index(flag) + 1])
-    size = int(value("--size"))
-    camera = PerspectiveCamera(round(size * 16 / 9), size, value("--fov"), heading_deg=180.0,
-                               pitch_deg=value("--pitch"))
+    args = build_parser().parse_args(list(command))
+    assert args.sun_zenith is None and args.sun_elevation is None
+    camera = PerspectiveCamera(round(args.size * args.aspect), args.size, args.fov,
+                               heading_deg=args.heading, pitch_deg=args.pitch)
     directions, _ = camera.directions()
-    sun = sun_direction(60.0, 180.0)  # the command line's default: 30 deg high, south
+    sun = sun_direction(60.0, args.sun_azimuth)
     near = directions.reshape(-1, 3) @ sun > np.cos(np.radians(SKY_GRID_EXACT_DEG))
     assert np.count_nonzero(near) >= SUN_GRID_MIN_RAYS
     assert directions.shape[0] * directions.shape[1] >= SKY_GRID_MIN_RAYS
