@@ -17,7 +17,9 @@ from skyscatter.errors import InputError
 from skyscatter.optics.phase import HenyeyGreensteinPhase
 from skyscatter.transport import table_store
 from skyscatter.transport.cache import TableCache
+from skyscatter.transport.table_packing import LOG_FLOOR
 from skyscatter.transport.table_store import cached_tables
+from skyscatter.transport.tables import precompute_tables
 
 ARRAYS = ("transmittance", "scattering", "irradiance", "phase", "order_mean_radiance")
 
@@ -63,6 +65,29 @@ def test_second_call_loads_the_stored_tables_bit_for_bit(cache):
     assert len(list(cache.directory.glob("*.npz"))) == 1
 
 
+def test_the_stored_tables_are_the_computed_ones_within_half_a_code_step(cache):
+    # the scattering table is stored as 16-bit logarithmic codes (transport/table_packing.py):
+    # each value within ln(1e30) / (2 * 65534) = 0.053 % of the exact table's
+    profile = exponential_earth()
+    exact = precompute_tables(profile, SMALL, 2)
+    stored, _ = _tables(profile, cache)
+    above = exact.scattering >= exact.scattering.max() * LOG_FLOOR
+    error = np.abs(stored.scattering[above] / exact.scattering[above].astype(float) - 1.0)
+    assert error.max() <= np.expm1(np.log(1.0 / LOG_FLOOR) / (2 * 65534)) + 1e-7
+    np.testing.assert_array_equal(stored.transmittance, exact.transmittance)
+
+
+def test_a_packed_shape_its_bytes_cannot_hold_is_refused_before_it_is_allocated(cache):
+    profile = exponential_earth()
+    tables, _ = _tables(profile, cache)
+    arrays = table_store.tables_to_arrays(tables)
+    arrays["scattering_shape"] = np.array([tables.scattering.shape[0], 2**20, 2**20, 2**20, 3,
+                                           16])
+    with pytest.raises(ValueError, match="cannot hold its shape"):
+        table_store.tables_from_arrays(arrays, {"min_cos_sun_zenith": -0.2, "orders": 2,
+                                                "resolution": dataclasses.asdict(SMALL)})
+
+
 def test_a_stored_entry_reports_the_resolution_its_tables_were_computed_at(cache):
     # HG particles of g 0.65 and optical depth 0.5 get 16 view-sun slices
     # (tables.forward_scattering_resolution); the entry read back says so too
@@ -105,7 +130,7 @@ def test_a_damaged_entry_is_recomputed_and_replaced(cache, damage):
         middle = len(data) // 2
         path.write_bytes(data[:middle] + bytes([data[middle] ^ 0x10]) + data[middle + 1:])
     elif damage == "huge header":  # the scattering member declares 7 TiB
-        declare_huge_array(path, "scattering.npy", (7 * 2**40 // 4,))
+        declare_huge_array(path, "scattering_packed.npy", (7 * 2**40 // 4,))
     else:  # an (empty) folder in the entry's place
         path.unlink()
         path.mkdir()

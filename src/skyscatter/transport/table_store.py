@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -25,6 +26,7 @@ from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfil
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache, profile_fingerprint
 from skyscatter.transport.code_fingerprint import code_fingerprint
+from skyscatter.transport.table_packing import PackedTable, round_and_pack, unpack
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN
 from skyscatter.transport.tables import (
     AtmosphereTables,
@@ -36,11 +38,12 @@ from skyscatter.transport.tables import (
 __all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_arrays"]
 
 # bump when the arrays stored change meaning (2: truncated peaks, the orders' tail, the aureole;
-# 3: the radius axis's warp)
-TABLE_FORMAT = 3
-_ARRAYS = ("wavelengths_nm", "transmittance", "scattering", "irradiance", "phase",
-           "order_mean_radiance", "order_zenith_radiance", "tail_share", "peak_transmittance",
-           "aureole_shape", "aureole_limits", "radius_warp")
+# 3: the radius axis's warp; 4: the scattering table packed, `table_packing`)
+TABLE_FORMAT = 4
+_ARRAYS = ("wavelengths_nm", "transmittance", "irradiance", "phase", "order_mean_radiance",
+           "order_zenith_radiance", "tail_share", "peak_transmittance", "aureole_shape",
+           "aureole_limits", "radius_warp")
+_MAX_DEFLATE_RATIO = 1100
 # Where the precomputation starts: the key covers the code it reaches (`code_fingerprint`).
 _PRECOMPUTATION = ("skyscatter.transport.tables", "precompute_tables")
 
@@ -74,8 +77,10 @@ def _key(metadata: dict[str, Any]) -> str:
 
 
 def tables_to_arrays(tables: AtmosphereTables) -> dict[str, np.ndarray]:
-    """The arrays of `tables` plus its scalars, for `TableCache.store`."""
+    """The arrays of `tables` plus its scalars, for `TableCache.store`; the scattering table
+    packed (`table_packing`), and rounded in place to the values the packed form holds."""
     arrays = {name: getattr(tables, name) for name in _ARRAYS}
+    arrays.update(_packed_arrays(round_and_pack(tables.scattering)))
     arrays["radii_m"] = np.array([tables.bottom_radius_m, tables.top_radius_m])
     arrays["orders_computed"] = np.array(tables.orders_computed, dtype=np.int64)
     arrays["scattering_constituents"] = np.array(tables.scattering_constituents, dtype=np.int64)
@@ -83,9 +88,36 @@ def tables_to_arrays(tables: AtmosphereTables) -> dict[str, np.ndarray]:
     return arrays
 
 
+def _packed_arrays(packed: PackedTable) -> dict[str, np.ndarray]:
+    slices = packed.high_bytes + packed.low_bytes
+    return {"scattering_shape": np.array(packed.shape, dtype=np.int64),
+            "scattering_log_range": np.array([packed.log_low, packed.log_high]),
+            "scattering_slice_bytes": np.array([len(data) for data in slices], dtype=np.int64),
+            "scattering_packed": np.frombuffer(b"".join(slices), dtype=np.uint8)}
+
+
+def _unpacked_scattering(arrays: dict[str, np.ndarray]) -> np.ndarray:
+    """The scattering table of `_packed_arrays`; ValueError when the arrays do not fit."""
+    shape = tuple(int(n) for n in arrays["scattering_shape"])
+    sizes = arrays["scattering_slice_bytes"]
+    data = arrays["scattering_packed"].tobytes()
+    if len(shape) != 6 or min(shape) < 1 or sizes.ndim != 1 or sizes.size != 2 * shape[0] or (
+            np.any(sizes < 0) or int(sizes.sum()) != len(data)):
+        raise ValueError("the packed scattering table's slices do not add up to its bytes")
+    # deflate shrinks by at most 1032:1 (RFC 1951's longest match per 2 bits), so a shape
+    # beyond that is damaged: refused before it is allocated
+    if 2 * math.prod(shape) > _MAX_DEFLATE_RATIO * len(data):
+        raise ValueError(f"the packed scattering table cannot hold its shape {shape}")
+    ends = np.cumsum(sizes)
+    slices = tuple(data[end - size:end] for end, size in zip(ends, sizes, strict=True))
+    log_low, log_high = (float(v) for v in arrays["scattering_log_range"])
+    return unpack(PackedTable(shape, log_low, log_high, slices[:shape[0]], slices[shape[0]:]))
+
+
 def tables_from_arrays(arrays: dict[str, np.ndarray],
                        metadata: dict[str, Any]) -> AtmosphereTables:
     """Inverse of `tables_to_arrays` (with the metadata the entry was checked against)."""
+    scattering = _unpacked_scattering(arrays)
     bottom, top = (float(v) for v in arrays["radii_m"])
     return AtmosphereTables(
         bottom_radius_m=bottom, top_radius_m=top,
@@ -95,11 +127,11 @@ def tables_from_arrays(arrays: dict[str, np.ndarray],
         resolution=dataclasses.replace(
             thick_layer_resolution(TableResolution(**metadata["resolution"]),
                                    arrays["radius_warp"]),
-            scattering_nu=int(arrays["scattering"].shape[3])),
+            scattering_nu=int(scattering.shape[3])),
         orders=int(metadata["orders"]),
         scattering_names=tuple(str(n) for n in arrays["scattering_names"]),
         scattering_constituents=tuple(int(c) for c in arrays["scattering_constituents"]),
-        orders_computed=int(arrays["orders_computed"]),
+        orders_computed=int(arrays["orders_computed"]), scattering=scattering,
         **{name: arrays[name] for name in _ARRAYS})
 
 
