@@ -22,7 +22,7 @@ cancelling each other; at most MAX_WAITING requests wait for the lock, more get 
 What the viewer may add to the table cache is bounded twice: the cache's own size limit (least
 recently used entries removed beyond `TableCache.max_bytes`) and, per service, VIEWER_CACHE_BYTES
 of new entries (`ViewerCache`); beyond it full tables are computed and kept in memory only, so
-a page stepping through parameters adds about 1 GiB at most, not 243 MiB per step.
+a page stepping through parameters adds about 1 GiB at most, not 41 MiB (Earth) per step.
 
 Nothing is written outside the service's cache directory: the full tables go through the table
 cache, and the Mie tables that loading a dusty or hazy atmosphere computes go to its mie/ folder
