@@ -12,15 +12,19 @@ docs/physics/disort_comparison.md.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.atmosphere.model import OpticalProfile
+from skyscatter.errors import InputError
 from skyscatter.optics.phase import HenyeyGreensteinPhase, RayleighPhase
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.validate.disort import (
     compare_with_disort,
+    disort_fluxes,
     disort_sky_radiance,
     legendre_moments,
     plane_parallel_layers,
@@ -86,6 +90,31 @@ def test_disort_set_up_matches_closed_form_single_scattering_of_a_thin_slab():
     closed_form = plane_parallel_single_scattering(
         plane_parallel_layers(profile), profile.toa_irradiance, sun_zenith, view_zenith, azimuth)
     np.testing.assert_allclose(disort, closed_form, rtol=0.05 * PERCENT)
+
+
+def test_disort_radiance_at_an_altitude_meets_the_boundary_conditions():
+    # Looking down from the ground: a Lambertian surface of albedo a under the irradiance E
+    # (diffuse + direct, `disort_fluxes`) has the radiance a E / pi in every direction; at the
+    # top no diffuse light comes down. A slab of optical depth 2 (g 0.7) over albedo 0.3.
+    profile = dataclasses.replace(slab_profile(2.0, g=0.7), ground_albedo=np.array([0.3]))
+    layers = plane_parallel_layers(profile)
+    sun_zenith = np.radians(40.0)
+    azimuth = np.radians([0.0, 90.0, 180.0])
+    view_zenith, radiance = disort_sky_radiance(profile, sun_zenith, azimuth, np.pi,
+                                                layers=layers)
+    _, diffuse, direct = disort_fluxes(layers, profile.toa_irradiance, sun_zenith,
+                                       profile.ground_albedo)
+    down = view_zenith > 0.5 * np.pi
+    assert down.sum() == 16 and np.all(np.diff(view_zenith) > 0.0)
+    reflected = 0.3 * (diffuse + direct) / np.pi
+    np.testing.assert_allclose(radiance[down], np.broadcast_to(reflected, radiance[down].shape),
+                               rtol=1e-6)
+    top = float(layers.altitudes_m[0])
+    view_zenith, radiance = disort_sky_radiance(profile, sun_zenith, azimuth, np.pi,
+                                                layers=layers, altitude_m=top)
+    assert np.abs(radiance[view_zenith < 0.5 * np.pi]).max() < 1e-9 * radiance.max()
+    with pytest.raises(InputError, match="altitude_m"):
+        disort_sky_radiance(profile, sun_zenith, azimuth, layers=layers, altitude_m=top + 1.0)
 
 
 # --------------------------------------------------------------------------------------------

@@ -171,10 +171,12 @@ def plane_parallel_layers(profile: OpticalProfile, n_layers: int = 60,
 
 def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
                         relative_azimuth_rad: ArrayLike, max_view_zenith_rad: float = 0.5 * np.pi,
-                        *, n_streams: int = 32, layers: PlaneParallelLayers | None = None
-                        ) -> tuple[np.ndarray, np.ndarray]:
-    """Diffuse sky radiance at the ground of the plane-parallel twin of `profile`, by
-    PythonicDISORT, along DISORT's own downward quadrature directions.
+                        *, n_streams: int = 32, layers: PlaneParallelLayers | None = None,
+                        altitude_m: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Diffuse sky radiance at the ground (or at `altitude_m`) of the plane-parallel twin of
+    `profile`, by PythonicDISORT, along DISORT's own quadrature directions: the downward ones
+    (seen looking up) and, for `max_view_zenith_rad` beyond pi/2, the upward ones (seen
+    looking down).
 
     PythonicDISORT gives intensities at arbitrary polar angles only by polynomial
     interpolation between its Gauss nodes, which is poor towards the zenith (an extrapolation
@@ -197,11 +199,14 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
     relative_azimuth_rad : array_like, shape (n_az,)
         Azimuth of the line of sight minus the sun's; 0 looks towards the sun. [rad]
     max_view_zenith_rad : float
-        Keep the nodes up to this view zenith angle. [rad]
+        Keep the nodes up to this view zenith angle (up to pi: looking down too). [rad]
     n_streams : int
         DISORT's NQuad (even): n_streams / 2 downward directions. [-]
     layers : PlaneParallelLayers, optional
         Layers made before (default: `plane_parallel_layers(profile)`).
+    altitude_m : float
+        The observer's altitude, at the optical depth interpolated linearly in altitude
+        between the layers' boundaries (exact inside a homogeneous layer). [m]
 
     Returns
     -------
@@ -221,6 +226,12 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
                          f"{n_streams} Legendre moments; the layers have "
                          f"{layers.moments.shape[1]}", key="n_streams", value=n_streams,
                          allowed=f"< {layers.moments.shape[1]}")
+    boundaries = layers.altitudes_m[::-1]  # ground first
+    if not boundaries[0] <= altitude_m <= boundaries[-1]:
+        raise InputError(f"disort_sky_radiance: altitude_m = {altitude_m} lies outside the "
+                         f"layers ({boundaries[0]:g} to {boundaries[-1]:g} m)",
+                         key="altitude_m", value=altitude_m,
+                         allowed=f"[{boundaries[0]:g}, {boundaries[-1]:g}]")
     phi = np.mod(np.atleast_1d(np.asarray(relative_azimuth_rad, dtype=np.float64)), 2.0 * np.pi)
     mu0 = float(np.cos(sun_zenith_rad))
     half = n_streams // 2
@@ -229,11 +240,13 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
         mu, _, _, _, u = _pydisort(layers, w, n_streams, mu0,
                                    float(profile.toa_irradiance[w]),
                                    float(profile.ground_albedo[w]), NT_cor=True)
+        depth = np.interp(altitude_m, boundaries,
+                          np.concatenate([[0.0], layers.optical_depth[:, w]])[::-1])
+        rows = np.reshape(u(depth, phi), (n_streams, phi.size))
         # Rows half: hold the downward nodes mu = -mu_i with mu_i increasing: reversed, the
-        # view zenith angle increases.
-        radiance.append(np.reshape(u(layers.optical_depth[-1, w], phi),
-                                   (n_streams, phi.size))[half:][::-1])
-    view_zenith = np.arccos(-mu[half:][::-1])
+        # view zenith angle increases; then the upward nodes mu_i, seen looking down.
+        radiance.append(np.concatenate([rows[half:][::-1], rows[:half]]))
+    view_zenith = np.arccos(-np.concatenate([mu[half:][::-1], mu[:half]]))
     keep = view_zenith <= max_view_zenith_rad
     return view_zenith[keep], np.stack(radiance, axis=-1)[keep]
 
