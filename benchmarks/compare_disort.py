@@ -59,11 +59,18 @@ AWAY_DEG = 10.0
 DEFAULT_PLOT = Path(__file__).resolve().parents[1] / "docs" / "images" / "disort_comparison.png"
 
 
-def stats(values: np.ndarray) -> str:
-    """Median of the signed difference, then median / 95th percentile / max of |difference|."""
+def agreement(values: np.ndarray) -> tuple[float, float, float, float]:
+    """Median of the signed relative difference, then median / 95th percentile / max of its
+    absolute value, in %."""
     a = np.abs(values)
-    return (f"{100 * np.median(values):+6.2f} {100 * np.median(a):6.2f} "
-            f"{100 * np.percentile(a, 95):6.2f} {100 * a.max():6.2f}")
+    return (100 * float(np.median(values)), 100 * float(np.median(a)),
+            100 * float(np.percentile(a, 95)), 100 * float(a.max()))
+
+
+def stats(values: np.ndarray) -> str:
+    """`agreement` in fixed-width columns."""
+    signed, median, p95, largest = agreement(values)
+    return f"{signed:+6.2f} {median:6.2f} {p95:6.2f} {largest:6.2f}"
 
 
 def print_agreement(c: DisortComparison) -> None:

@@ -23,7 +23,7 @@ import argparse
 import time
 
 import numpy as np
-from compare_disort import AWAY_DEG, MAX_VIEW_ZENITH_DEG, WAVELENGTHS_NM
+from compare_disort import AWAY_DEG, MAX_VIEW_ZENITH_DEG, WAVELENGTHS_NM, agreement
 
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.transport.geometry import local_frame_directions
@@ -45,18 +45,10 @@ def reference(profile, layers, altitude_m: float, sun_zenith_deg: float, streams
                                np.pi, n_streams=streams, layers=layers, altitude_m=altitude_m)
 
 
-def away_from_sun(view_zenith: np.ndarray, sun_zenith_deg: float) -> np.ndarray:
-    """(n_view, n_az) mask of the views more than AWAY_DEG from the sun."""
-    views = local_frame_directions(*np.meshgrid(view_zenith, np.radians(AZIMUTH_DEG),
-                                                indexing="ij"))
-    sun = local_frame_directions(np.radians(sun_zenith_deg), 0.0)
-    return views @ sun < np.cos(np.radians(AWAY_DEG))
-
-
-def stats(values: np.ndarray) -> str:
-    a = np.abs(values)
-    return (f"{100 * np.median(values):+.2f} | {100 * np.median(a):.2f} | "
-            f"{100 * np.percentile(a, 95):.2f} | {100 * a.max():.2f}")
+def markdown_stats(values: np.ndarray) -> str:
+    """`compare_disort.agreement` as Markdown table cells."""
+    return " | ".join(f"{value:+.2f}" if i == 0 else f"{value:.2f}"
+                      for i, value in enumerate(agreement(values)))
 
 
 def main() -> None:
@@ -93,10 +85,9 @@ def main() -> None:
             view_zenith, theirs = reference(profile, layers, altitude, sun_zenith, args.streams)
             views = local_frame_directions(*np.meshgrid(view_zenith, np.radians(AZIMUTH_DEG),
                                                         indexing="ij"))
-            ours = solver.sky_radiance(position, views,
-                                       local_frame_directions(np.radians(sun_zenith), 0.0))
-            error = ours / theirs - 1.0
-            away = away_from_sun(view_zenith, sun_zenith)
+            sun = local_frame_directions(np.radians(sun_zenith), 0.0)
+            error = solver.sky_radiance(position, views, sun) / theirs - 1.0
+            away = views @ sun < np.cos(np.radians(AWAY_DEG))  # the aureole left out
             moved = None
             if args.check_streams:
                 other_zenith, other = reference(profile, layers, altitude, sun_zenith,
@@ -112,7 +103,7 @@ def main() -> None:
                 if looking == "down" and altitude <= 0.0:
                     continue  # the ground itself: no air between
                 mask = away & (half & steep)[:, None]
-                row = stats(error[mask])
+                row = markdown_stats(error[mask])
                 extra = ""
                 if moved is not None:
                     part = moved[mask]

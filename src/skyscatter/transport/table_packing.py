@@ -1,6 +1,6 @@
 """The scattering table on disk: 16-bit logarithmic codes, differenced and deflated.
 
-Earth's default scattering table holds 126 million float32 values (240 MiB). On disk each
+Earth's default scattering table holds 63 million float32 values (240 MiB). On disk each
 value becomes a 16-bit code of its logarithm: codes 1 .. 65535 step evenly through
 [ln(m · LOG_FLOOR), ln(m)], m the table's largest value, so a value comes back within half a
 step, a relative error of at most ln(1 / LOG_FLOOR) / (2 · 65534) = 0.053 %; code 0 is zero
@@ -53,13 +53,13 @@ def round_and_pack(table: np.ndarray) -> PackedTable:
     log_high = np.log(largest) if largest > 0.0 else 0.0
     log_low = log_high + np.log(LOG_FLOOR) if largest > 0.0 else 0.0
     values = _code_values(log_low, log_high)
+    step = _code_step(log_low, log_high)
     slices = table.reshape(table.shape[0], table.shape[1], -1)
 
     def pack_slice(i: int) -> tuple[bytes, bytes]:
         high = np.empty(slices[i].size, dtype=np.uint8)
         low = np.empty(slices[i].size, dtype=np.uint8)
-        _encode_slice(slices[i], log_low, (log_high - log_low) / _CODE_STEPS, values, high,
-                      low)
+        _encode_slice(slices[i], log_low, step, values, high, low)
         return zlib.compress(high, _ZLIB_LEVEL), zlib.compress(low, _ZLIB_LEVEL)
 
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
@@ -104,10 +104,15 @@ def _inflate(data: bytes, size: int) -> np.ndarray:
     return np.frombuffer(raw, dtype=np.uint8)
 
 
+def _code_step(log_low: float, log_high: float) -> float:
+    """The step in ln(value) from one code to the next."""
+    return (log_high - log_low) / _CODE_STEPS
+
+
 def _code_values(log_low: float, log_high: float) -> np.ndarray:
     """The float32 value of each code: 0 for code 0, exp(log_low + (k - 1) step) for k >= 1."""
     steps = np.arange(_CODE_STEPS + 1, dtype=np.float64)
-    values = np.exp(log_low + steps * ((log_high - log_low) / _CODE_STEPS))
+    values = np.exp(log_low + steps * _code_step(log_low, log_high))
     return np.concatenate(([0.0], values)).astype(np.float32)
 
 
