@@ -68,6 +68,7 @@ from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.aureole import PeakAureole, peak_aureole
 from skyscatter.transport.order_extrapolation import OrderExtrapolation
+from skyscatter.transport.phase_quadrature import phase_quadrature, source_function, sphere_grids
 from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
 from skyscatter.transport.table_parameterisation import (
@@ -351,40 +352,6 @@ class AtmosphereTables:
                                       self.phase, self.peak_transmittance, self.aureole_shape))
 
 
-def _sphere_grids(resolution: TableResolution) -> tuple[np.ndarray, ...]:
-    """(theta_in, phi_in, solid_angle_in (n_in,), out directions (n_out, 3), in directions and
-    their mirror images (n_in, 3) each) in a frame whose x-z plane holds the sun."""
-    theta_in = (np.arange(resolution.sphere_theta) + 0.5) * np.pi / resolution.sphere_theta
-    phi_in = (np.arange(resolution.sphere_phi) + 0.5) * np.pi / resolution.sphere_phi
-    theta_out = np.linspace(0.0, np.pi, resolution.density_theta)
-    phi_out = np.linspace(0.0, np.pi, resolution.density_phi)
-
-    def directions(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
-        t, p = np.meshgrid(theta, phi, indexing="ij")
-        return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)],
-                        axis=-1).reshape(-1, 3)
-
-    solid = (np.sin(theta_in)[:, None] * (np.pi / resolution.sphere_theta)
-             * (np.pi / resolution.sphere_phi) * np.ones(resolution.sphere_phi)).reshape(-1)
-    incoming = directions(theta_in, phi_in)
-    mirrored = incoming * np.array([1.0, -1.0, 1.0])
-    return theta_in, phi_in, solid, directions(theta_out, phi_out), incoming, mirrored
-
-
-def _phase_matrices(phase: np.ndarray, resolution: TableResolution) -> np.ndarray:
-    """Discrete sphere integral of each phase function, laid out for `_source_function`:
-    (n_wl, n_out, n_s n_in) float32, the constituents side by side, P_s[o, i] = (p_s(w_o . w_i)
-    + p_s(w_o . w_i')) dOmega_i with w_i' the mirror image of w_i about the sun's vertical
-    plane, each row scaled to sum to 1 (the phase function's normalisation); p from the sampled
-    phase functions `phase` (n_s, n_angle, n_wl)."""
-    _, _, solid, out, incoming, mirrored = _sphere_grids(resolution)
-    matrices = _table_build_kernels.phase_matrices(  # (n_s, n_wl, n_out, n_in)
-        phase, np.ascontiguousarray(out @ incoming.T), np.ascontiguousarray(out @ mirrored.T),
-        solid)
-    n_s, n_wl, n_out, n_in = matrices.shape
-    return np.ascontiguousarray(matrices.transpose(1, 2, 0, 3)).reshape(n_wl, n_out, n_s * n_in)
-
-
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
                       orders: int = DEFAULT_SCATTERING_ORDERS, *,
                       min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
@@ -479,7 +446,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     peak_transmittance, aureole = _peak_aureole(profile, scaled, scatterer_index, phase,
                                                 smooth_phase, peak, columns,
                                                 res.truncation_angle_deg)
-    theta_in, phi_in, *_ = _sphere_grids(res)
+    theta_in, phi_in, *_ = sphere_grids(res)
     node_altitude = np.array([scattering_r_from_u((k + 0.5) / res.scattering_r, bottom, top,
                                                   res.scattering_r, warp)
                               for k in range(res.scattering_r)]) - bottom
@@ -555,7 +522,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                      _read_only(irradiance))
         if orders == 1 or n_s == 0:  # nothing scatters: no higher orders
             continue
-        phases = _phase_matrices(smooth_b, res)
+        phases = phase_quadrature(smooth_b, res)
         scaled_beta_s = scaled.scattering[scatterer_index][:, batch]
         previous, use_phase = scaled_single, True
         del scaled_single  # `previous` holds it until the second order has read it
@@ -581,8 +548,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             irradiance[..., batch] += delta_irradiance
             ground = np.ascontiguousarray(delta_irradiance[0])
             del lit, previous  # read: their memory goes to the source and the next order
-            source = _source_function(phases, incoming, scaled_beta_s, node_density,
-                                      order_res)
+            source = source_function(phases, incoming, scaled_beta_s, node_density,
+                                     order_res)
             del incoming
             delta = _table_build_kernels.multiple_scattering_table(
                 order_grid, scaled_medium, res.multiple_ray_samples,
@@ -962,34 +929,3 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     view = array.view()
     view.flags.writeable = False
     return view
-
-
-def _source_function(phases: np.ndarray, incoming: np.ndarray, beta_s: np.ndarray,
-                     node_density: np.ndarray, res: TableResolution) -> np.ndarray:
-    """Source function S = J / beta_s on the scattering-density grid, laid out for
-    `multiple_scattering_table`: (n_r, n_theta, n_mu_s * n_phi * n_b) float32 (axes r, theta,
-    then mu_s, phi, wavelength flattened).
-
-    J = sum_s n_s beta_s (P_s @ L) and beta_s = sum_s n_s beta_s at each r node (densities
-    `node_density` (n_s, n_r)), so S is the phase-weighted mean incoming radiance, smooth in r;
-    the kernel multiplies it by the exact scattering coefficient along each ray. Where no
-    constituent scatters (above the profile), the constituents are weighted by beta_s alone.
-    phases: (n_b, n_out, n_s n_in) (`_phase_matrices`); incoming: (n_b, n_in, n_r n_mu_s);
-    beta_s: (n_s, n_b)."""
-    n_s, n_b = beta_s.shape
-    n_in = incoming.shape[1]
-    n_r, n_mu_s = res.scattering_r, res.scattering_mu_s
-    weights = node_density[:, :, None] * beta_s[:, None, :]  # (n_s, n_r, n_b)
-    empty = weights.sum(axis=0) <= 0.0
-    weights = np.where(empty[None], beta_s[:, None, :], weights)
-    weights = (weights / weights.sum(axis=0, keepdims=True)).astype(np.float32)
-    incoming = incoming.reshape(n_b, n_in, n_r, n_mu_s)
-    source = np.empty((n_r, res.density_theta, n_mu_s, res.density_phi, n_b), dtype=np.float32)
-    for b in range(n_b):
-        # one product for all constituents: [P_1 .. P_s] @ [w_1 L; ..; w_s L], the weights
-        # per r applied to the incoming radiance (the smaller operand)
-        weighted = (weights[:, None, :, b, None] * incoming[b][None]).reshape(n_s * n_in, -1)
-        product = (phases[b] @ weighted).reshape(res.density_theta, res.density_phi, n_r,
-                                                  n_mu_s)
-        source[..., b] = product.transpose(2, 0, 3, 1)  # (r, theta, mu_s, phi)
-    return source.reshape(res.scattering_r, res.density_theta, -1)

@@ -1,0 +1,91 @@
+"""The sphere integral of the orders >= 2 against the matrices written out from the phase
+functions' closed forms, with and without the rank-5 path of quadratic phase functions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skyscatter.optics.phase import henyey_greenstein, rayleigh
+from skyscatter.transport.phase_quadrature import (
+    phase_quadrature,
+    source_function,
+    sphere_grids,
+)
+from skyscatter.transport.tables import TableResolution
+
+# A small grid keeps the dense reference cheap; the factorisation does not depend on its size.
+RESOLUTION = TableResolution(scattering_r=4, scattering_mu_s=6, sphere_theta=16, sphere_phi=8,
+                             density_theta=9, density_phi=5)
+N_ANGLE = 4097
+
+
+def closed_form_matrix(phase, resolution: TableResolution) -> np.ndarray:
+    """P[o, i] = (p(v_o . w_i) + p(v_o . w_i')) dOmega_i, rows normalised to 1, from the closed
+    form `phase` (a function of the cosine)."""
+    _, _, solid, out, incoming, mirrored = sphere_grids(resolution)
+    matrix = (phase(out @ incoming.T) + phase(out @ mirrored.T)) * solid[None, :]
+    return matrix / matrix.sum(axis=1, keepdims=True)
+
+
+def sampled(phase) -> np.ndarray:
+    """`phase` sampled at N_ANGLE angles uniform over [0, pi], (n_angle,)."""
+    return phase(np.cos(np.linspace(0.0, np.pi, N_ANGLE)))
+
+
+def depolarised_rayleigh(c: np.ndarray) -> np.ndarray:
+    """Rayleigh with depolarisation factor 0.0279 (Young 1980, Appl. Opt. 19, 3427):
+    p = 3/(16 pi) (1 + 3 gamma + (1 - gamma) c^2) / (1 + 2 gamma), gamma = rho / (2 - rho)."""
+    gamma = 0.0279 / (2.0 - 0.0279)
+    return 3.0 / (16.0 * np.pi) * (1.0 + 3.0 * gamma + (1.0 - gamma) * c * c) / (1.0 + 2.0 * gamma)
+
+
+def hg(c: np.ndarray) -> np.ndarray:
+    return henyey_greenstein(c, 0.6)
+
+
+def isotropic(c: np.ndarray) -> np.ndarray:
+    return np.full_like(c, 1.0 / (4.0 * np.pi))
+
+
+def test_quadratic_phase_functions_take_the_rank_5_path_and_others_the_full_matrix():
+    phase = np.stack([np.stack([sampled(f)] * 2, axis=-1)
+                      for f in (rayleigh, hg, depolarised_rayleigh, isotropic)])
+    quadrature = phase_quadrature(phase, RESOLUTION)
+    assert list(quadrature.quadratic) == [0, 2, 3]
+    assert list(quadrature.full) == [1]
+
+
+@pytest.mark.parametrize("phase", [rayleigh, depolarised_rayleigh, isotropic])
+def test_the_rank_5_matrix_is_the_closed_form_matrix(phase):
+    quadrature = phase_quadrature(sampled(phase)[None, :, None], RESOLUTION)
+    matrix = quadrature.quadratic_rows[0, 0].astype(np.float64) @ quadrature.incoming_features
+    expected = closed_form_matrix(phase, RESOLUTION)
+    # float32 factors: relative rounding 6e-8 per factor, summed over 5 features
+    np.testing.assert_allclose(matrix, expected, rtol=2e-6, atol=0.0)
+
+
+def test_source_function_of_gas_and_particles_is_the_closed_form_integral():
+    rng = np.random.default_rng(3)
+    res = RESOLUTION
+    n_in = res.sphere_theta * res.sphere_phi
+    n_r, n_mu_s, n_b = res.scattering_r, res.scattering_mu_s, 2
+    phase = np.stack([np.stack([sampled(f)] * n_b, axis=-1) for f in (depolarised_rayleigh, hg)])
+    incoming = rng.uniform(0.1, 1.0, (n_b, n_in, n_r * n_mu_s)).astype(np.float32)
+    beta_s = np.array([[1e-5, 2e-5], [3e-6, 1e-6]])  # (n_s, n_b)
+    node_density = np.array([[1.0, 0.8, 0.5, 0.1], [2.0, 0.5, 0.0, 0.0]])  # (n_s, n_r)
+    got = source_function(phase_quadrature(phase, res), incoming, beta_s, node_density, res)
+    got = got.reshape(n_r, res.density_theta, n_mu_s, res.density_phi, n_b)
+
+    # S = sum_s w_s P_s @ L with w_s = n_s beta_s / sum_s n_s beta_s, in float64
+    matrices = [closed_form_matrix(f, res) for f in (depolarised_rayleigh, hg)]
+    light = incoming.astype(np.float64).reshape(n_b, n_in, n_r, n_mu_s)
+    weights = node_density[:, :, None] * beta_s[:, None, :]
+    weights /= weights.sum(axis=0, keepdims=True)
+    for b in range(n_b):
+        expected = sum(np.einsum("oi,irm->orm", m, light[b]) * weights[s, None, :, b, None]
+                       for s, m in enumerate(matrices))
+        expected = expected.reshape(res.density_theta, res.density_phi, n_r, n_mu_s)
+        # the full matrix interpolates HG's samples linearly in the angle (1e-6 at 4097
+        # samples) and both paths work in float32
+        np.testing.assert_allclose(got[..., b], expected.transpose(2, 0, 3, 1), rtol=2e-5)
