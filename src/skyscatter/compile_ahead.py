@@ -30,6 +30,7 @@ import numba
 
 from skyscatter import __version__
 from skyscatter.errors import SkyscatterError
+from skyscatter.jit_cache import kernel_cache_folder
 
 __all__ = ["FIRST_RUN_NOTE", "WARM_UP_COMMANDS", "compile_kernels", "kernels_compiled",
            "mark_compiled", "marker_path"]
@@ -44,6 +45,9 @@ _TINY = ("--size", "16", "--wavelengths", "1")
 # them within 20 deg of the sun takes the sun grid: a perspective frame of 683 x 384 pixels,
 # 40 deg high, centred on the default sun (30 deg high in the south).
 _FULL_FRAME = ("--size", "384", "--wavelengths", "1")
+# A terrain frame of at least `terrain.HORIZON_MIN_RAYS` rays culls them with the terrain's
+# horizon: 96 x 54 pixels.
+_TERRAIN_FRAME = ("--size", "96", "--wavelengths", "1")
 # (what it compiles, the command line's arguments without the output and cache options)
 WARM_UP_COMMANDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("tables and the fisheye", ("render", "earth", *_TINY)),
@@ -52,8 +56,11 @@ WARM_UP_COMMANDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("a full frame around the sun, its sun grid", ("render", "earth", "--camera", "perspective",
                                                    "--fov", "40", "--pitch", "30",
                                                    *_FULL_FRAME)),
+    ("a low sun: single scattering marched along the views", (
+        "render", "earth", "--camera", "panorama", "--sun-elevation", "2", *_FULL_FRAME)),
     ("the perspective camera and terrain", ("render", "earth", "--camera", "perspective",
-                                            "--terrain", "demo", "--altitude", "300", *_TINY)),
+                                            "--terrain", "demo", "--altitude", "300",
+                                            *_TERRAIN_FRAME)),
     ("the view from orbit", ("render", "earth", "--camera", "orbit", "--distance-km", "20000",
                              *_TINY)),
     ("the sky at a date: sun, moon, stars", ("render", "earth", "--time",
@@ -67,7 +74,7 @@ WARM_UP_COMMANDS: tuple[tuple[str, tuple[str, ...]], ...] = (
 def marker_path() -> Path:
     """The marker file in numba's cache folder for this package, numba and Python version
     and machine."""
-    folder = os.environ.get("NUMBA_CACHE_DIR") or Path(__file__).parent / "__pycache__"
+    folder = kernel_cache_folder()
     python = f"{sys.version_info.major}{sys.version_info.minor}"
     name = (f"skyscatter-{__version__}-numba-{numba.__version__}-py{python}-"
             f"{platform.machine() or 'cpu'}.compiled")

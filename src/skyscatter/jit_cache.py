@@ -18,7 +18,14 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["use_writable_cache_folder"]
+__all__ = ["kernel_cache_folder", "use_writable_cache_folder"]
+
+
+def kernel_cache_folder() -> Path:
+    """The folder of this package's compiled kernels: $NUMBA_CACHE_DIR (the user's, or the one
+    `use_writable_cache_folder` chose), else `__pycache__` beside its sources. What is made at
+    install time for the code as installed is kept there too (`compile_ahead`)."""
+    return Path(os.environ.get("NUMBA_CACHE_DIR") or Path(__file__).parent / "__pycache__")
 
 
 def _can_write_in(folder: Path) -> bool:

@@ -138,18 +138,38 @@ def test_the_memo_serves_the_fingerprint_until_a_source_the_walk_read_changes(tm
     # while the sources are unchanged) and must give way to the walk when one changes.
     walk = code_fingerprint.__wrapped__
     walked = walk((ROOT,))
-    assert walk((ROOT,), tmp_path) == walked
+    assert walk((ROOT,), (tmp_path,)) == walked
     memo_path = tmp_path / fingerprint_module.MEMO_FILE
     memo = json.loads(memo_path.read_text())
     (entry,) = memo.values()
     assert {BUILD, COMMON} <= set(entry["modules"])
     entry["fingerprint"] = "forged"
     memo_path.write_text(json.dumps(memo))
-    assert walk((ROOT,), tmp_path) == "forged"
+    assert walk((ROOT,), (tmp_path,)) == "forged"
     edit = _edited(COMMON, "i = min(int(f), n - 2)", "i = min(int(f), n - 3)")
     monkeypatch.setattr(fingerprint_module, "_module_source", edit)
-    edited = walk((ROOT,), tmp_path)
+    edited = walk((ROOT,), (tmp_path,))
     assert edited not in ("forged", walked)
     assert walk((ROOT,)) == edited
     memo_path.write_text("{not json")  # a damaged memo is only a miss
-    assert walk((ROOT,), tmp_path) == edited
+    assert walk((ROOT,), (tmp_path,)) == edited
+
+
+def test_a_memo_beside_the_kernels_serves_a_new_table_cache_and_is_copied_into_it(tmp_path):
+    # What `skyscatter compile` leaves beside the kernels serves the first run with a new
+    # table cache (a forged entry shows that it was read, not walked), which keeps a copy;
+    # the walk itself is the reference for what the copy holds.
+    walk = code_fingerprint.__wrapped__
+    kernels, tables = tmp_path / "kernels", tmp_path / "tables"
+    kernels.mkdir()
+    tables.mkdir()
+    walked = walk((ROOT,), (kernels,))
+    memo_path = kernels / fingerprint_module.MEMO_FILE
+    memo = json.loads(memo_path.read_text())
+    (entry,) = memo.values()
+    entry["fingerprint"] = "from-install"
+    memo_path.write_text(json.dumps(memo))
+    assert walk((ROOT,), (tables, kernels)) == "from-install"
+    copied = json.loads((tables / fingerprint_module.MEMO_FILE).read_text())
+    assert copied == memo
+    assert walk((ROOT,)) == walked

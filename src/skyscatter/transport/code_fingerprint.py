@@ -12,9 +12,11 @@ assignments) and names from outside skyscatter (numpy, numba, builtins) are not 
 Methods called on objects passed in (`phase.evaluate`) are found only when the caller gives
 their class as a root.
 
-The walk parses and unparses every module it reaches (about 0.5 s). Given a folder, the
+The walk parses and unparses every module it reaches (about 0.5 s). Given folders, the
 fingerprint is kept there (`MEMO_FILE`) with a SHA-256 of each module source the walk read,
 and taken from there while all of those sources are unchanged: a few milliseconds per process.
+The tables' key keeps it in the table cache and beside the compiled kernels, where
+`skyscatter compile` leaves it at install time (`table_store`).
 """
 
 from __future__ import annotations
@@ -189,16 +191,16 @@ def _read_memo(path: Path) -> dict:
     return memo if isinstance(memo, dict) else {}
 
 
-def _remembered(memo: dict, key: str) -> str | None:
-    """The fingerprint `memo` holds for `key` when every module source it was made from is
-    unchanged, else None."""
+def _remembered(memo: dict, key: str) -> tuple[str, dict[str, str | None]] | None:
+    """(fingerprint, module digests) that `memo` holds for `key` when every module source it
+    was made from is unchanged, else None."""
     entry = memo.get(key)
     try:
         modules, fingerprint = entry["modules"], entry["fingerprint"]
         unchanged = all(_digest(_module_source(m)) == d for m, d in modules.items())
     except (TypeError, KeyError, AttributeError):
         return None
-    return fingerprint if unchanged and isinstance(fingerprint, str) else None
+    return (fingerprint, modules) if unchanged and isinstance(fingerprint, str) else None
 
 
 def _remember(path: Path, key: str, modules: dict[str, str | None], fingerprint: str) -> None:
@@ -212,14 +214,29 @@ def _remember(path: Path, key: str, modules: dict[str, str | None], fingerprint:
 
 
 @lru_cache(maxsize=32)
-def code_fingerprint(roots: tuple[Definition, ...], memo_folder: Path | None = None) -> str:
+def code_fingerprint(roots: tuple[Definition, ...], memo_folders: tuple[Path, ...] = ()) -> str:
     """SHA-256 (16 hex digits) of the code reached from `roots` (`reached_definitions`), in
     a fixed order: the same code gives the same fingerprint in every process. With
-    `memo_folder` it is kept in and taken from the memo there (module docstring)."""
+    `memo_folders` it is taken from the first memo there that holds it, else computed, and
+    kept in each of those folders whose memo lacked it (module docstring)."""
     key = json.dumps(roots)
-    memo_path = None if memo_folder is None else Path(memo_folder) / MEMO_FILE
-    if memo_path is not None and (known := _remembered(_read_memo(memo_path), key)):
-        return known
+    memo_paths = [Path(folder) / MEMO_FILE for folder in memo_folders]
+    fingerprint, modules = None, {}
+    for path in memo_paths:
+        if (known := _remembered(_read_memo(path), key)) is not None:
+            fingerprint, modules = known
+            break
+    if fingerprint is None:
+        fingerprint, modules = _walked(roots)
+    for path in memo_paths:
+        if path.parent.is_dir() and _remembered(_read_memo(path), key) != (fingerprint,
+                                                                           modules):
+            _remember(path, key, modules, fingerprint)
+    return fingerprint
+
+
+def _walked(roots: tuple[Definition, ...]) -> tuple[str, dict[str, str | None]]:
+    """(fingerprint, {module: SHA-256 of each source the walk read}) of `roots`."""
     read: dict[str, str | None] = {}
 
     def recorded_source(module: str) -> str | None:
@@ -230,7 +247,4 @@ def code_fingerprint(roots: tuple[Definition, ...], memo_folder: Path | None = N
     digest = hashlib.sha256()
     for (module, name), code in sorted(reached_definitions(roots, recorded_source).items()):
         digest.update(f"{module}:{name}\n{code}\n".encode())
-    fingerprint = digest.hexdigest()[:16]
-    if memo_path is not None and memo_path.parent.is_dir():
-        _remember(memo_path, key, read, fingerprint)
-    return fingerprint
+    return digest.hexdigest()[:16], read

@@ -24,6 +24,7 @@ import numpy as np
 from skyscatter import __version__
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
+from skyscatter.jit_cache import kernel_cache_folder
 from skyscatter.transport.cache import TableCache, profile_fingerprint
 from skyscatter.transport.code_fingerprint import code_fingerprint
 from skyscatter.transport.table_packing import PackedTable, round_and_pack, unpack
@@ -51,10 +52,13 @@ _PRECOMPUTATION = ("skyscatter.transport.tables", "precompute_tables")
 def _code_fingerprint(profile: OpticalProfile, memo_folder: Path | None) -> str:
     """Fingerprint of the code `precompute_tables` runs for `profile`: its call graph, plus
     the classes of the profile's phase functions (called through the objects, so found by
-    type, not by name); remembered in `memo_folder` (`code_fingerprint`)."""
+    type, not by name); remembered in `memo_folder` and beside the compiled kernels, where
+    `skyscatter compile` leaves the fingerprints of its commands' atmospheres at install time
+    (`code_fingerprint`)."""
     phases = sorted({(type(phase).__module__, type(phase).__name__)
                      for phase in profile.phases if phase is not None})
-    return code_fingerprint((_PRECOMPUTATION, *phases), memo_folder)
+    folders = (() if memo_folder is None else (Path(memo_folder),)) + (kernel_cache_folder(),)
+    return code_fingerprint((_PRECOMPUTATION, *phases), folders)
 
 
 def table_metadata(profile: OpticalProfile, resolution: TableResolution, orders: int,
