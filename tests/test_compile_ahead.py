@@ -8,6 +8,7 @@ from skyscatter import compile_ahead
 from skyscatter.cli import build_parser
 from skyscatter.render.camera import PerspectiveCamera
 from skyscatter.render.scene import sun_direction
+from skyscatter.render.terrain import HORIZON_MIN_RAYS
 from skyscatter.transport.lut_solver import (
     SKY_GRID_EXACT_DEG,
     SKY_GRID_MIN_RAYS,
@@ -78,10 +79,28 @@ def test_the_warm_up_reaches_the_sun_grid():
     assert directions.shape[0] * directions.shape[1] >= SKY_GRID_MIN_RAYS
 
 
+def test_the_warm_up_reaches_the_low_sun_and_the_terrain_horizon():
+    # the marched single scattering of a low sun compiles in a full frame's sky-view grid with
+    # the sun near the horizon; the terrain's horizon culling only in frames of at least
+    # HORIZON_MIN_RAYS rays (make run's scenes have both)
+    parser = build_parser()
+    low_sun = next(arguments for what, arguments in compile_ahead.WARM_UP_COMMANDS
+                   if "low sun" in what)
+    args = parser.parse_args([*low_sun, "-o", "x.png"])
+    assert args.camera == "panorama" and args.sun_elevation <= 5.0
+    assert args.size * (2 * args.size) // 2 >= SKY_GRID_MIN_RAYS
+    terrain = next(arguments for what, arguments in compile_ahead.WARM_UP_COMMANDS
+                   if "terrain" in what)
+    args = parser.parse_args([*terrain, "-o", "x.png"])
+    # every pixel of the perspective camera is a ray
+    assert args.terrain == "demo" and args.camera == "perspective"
+    assert round(args.size * args.aspect) * args.size >= HORIZON_MIN_RAYS
+
+
 def test_compile_runs_the_warm_up_and_writes_the_marker(capsys, fresh_marker, monkeypatch):
     # two of the commands (the rest are the same command line with other cameras and presets;
     # all of them run in `make`'s install step, whose failure stops the build)
-    monkeypatch.setattr(compile_ahead, "WARM_UP_COMMANDS", compile_ahead.WARM_UP_COMMANDS[::7])
+    monkeypatch.setattr(compile_ahead, "WARM_UP_COMMANDS", compile_ahead.WARM_UP_COMMANDS[::8])
     code, out, err = run_cli(capsys, ["compile"])
     assert code == 0, err
     lines = out.splitlines()
