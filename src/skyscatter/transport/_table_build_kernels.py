@@ -496,7 +496,9 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
     `scaled_factor`) its first order goes into `scaled_table` in the same pass, on the same
     ray samples (those of `medium`, whose extinction is the larger: its samples and its opaque
     end serve both): the cells' geometry and the sun's position at each sample, two thirds of
-    the work, are found once for both."""
+    the work, are found once for both, and the two sun tables, side by side in one array, are
+    looked up together. Two media share a pass only where the sun tables hold transmittances
+    (no optically thick layer: `tables._FirstOrders`)."""
     n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
     extinction = medium.extinction
@@ -512,6 +514,11 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
     for s in range(n_s):
         selection[s, scatterers[s], :] = 1.0
     nodes = mu_s_nodes(grid)
+    # both media's sun transmittances side by side: one bilinear lookup per sample serves both
+    pair_table = np.empty((n_r_t, n_mu_t, 2 * n_wl) if two else (0, 0, 0))
+    if two:
+        pair_table[:, :, :n_wl] = sun_table
+        pair_table[:, :, n_wl:] = scaled_sun_table
     for row in prange(n_r * n_mu):
         i_r = row // n_mu
         i_mu = row % n_mu
@@ -522,13 +529,10 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
             if two:
                 scaled_table[i_r, i_mu] = 0.0
             continue
-        scaled_view, scaled_view_depth = view, view_depth
+        scaled_view = view
         if two:
             tau, extinct = _ray_depths(total, col_view, dens, scaled_extinction)
             scaled_view = _view_weights(total, tau, extinct, dens, selection)
-            scaled_view_depth = np.empty(total)
-            for j in range(total):
-                scaled_view_depth[j] = tau[j].min()
         # Per sample: the horizon, and the r part of the transmittance lookup towards the sun.
         mu_h = np.empty(total)
         row_i = np.empty(total, dtype=np.int64)
@@ -541,6 +545,9 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
                                                                 top_radius)
             row_i[j], row_a[j] = linear_axis(x_r * (n_r_t - 1), n_r_t)
         sun = np.empty(n_wl)
+        pair = np.empty(2 * n_wl)
+        pair_exact = pair[:n_wl]  # views made once per ray, not per sample
+        pair_scaled = pair[n_wl:]
         acc = np.empty((n_s, n_wl))
         scaled_acc = np.empty((n_s, n_wl))
         mu_s_j = np.empty(total)
@@ -561,13 +568,14 @@ def single_scattering_table(grid, medium, n_samples, sun_table, sun_table_is_dep
                                                        sun_angular_radius)
                         if visible <= 0.0:
                             continue
-                    if _sun_at_sample(sun_table, sun_table_is_depth, view_depth[j], row_i[j],
-                                      row_a[j], column_i[j], column_a[j], sun):
+                    if two:
+                        transmittance_bilinear(pair_table, row_i[j], row_a[j], column_i[j],
+                                               column_a[j], pair)
+                        _add_sample(acc, view, j, visible, pair_exact)
+                        _add_sample(scaled_acc, scaled_view, j, visible, pair_scaled)
+                    elif _sun_at_sample(sun_table, sun_table_is_depth, view_depth[j], row_i[j],
+                                        row_a[j], column_i[j], column_a[j], sun):
                         _add_sample(acc, view, j, visible, sun)
-                    if two and _sun_at_sample(scaled_sun_table, sun_table_is_depth,
-                                              scaled_view_depth[j], row_i[j], row_a[j],
-                                              column_i[j], column_a[j], sun):
-                        _add_sample(scaled_acc, scaled_view, j, visible, sun)
                 for s in range(n_s):
                     for w in range(n_wl):
                         table[i_r, i_mu, i_s, i_nu, s, w] = acc[s, w] * factor[s, w]
