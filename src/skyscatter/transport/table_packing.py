@@ -29,6 +29,12 @@ __all__ = ["LOG_FLOOR", "PackedTable", "round_and_pack", "unpack"]
 LOG_FLOOR = 1e-30  # values below this fraction of the table's largest are stored as zero
 _CODE_STEPS = 65534  # codes 1 .. 65535; 0 is zero
 _ZLIB_LEVEL = 1  # Earth's table: 27.6 MiB in 0.9 s of CPU; level 6: 24.5 MiB in 2.8 s
+# ln of a float32 value from its bits, (exponent - 127) ln 2 + ln(1 + mantissa), the second
+# term interpolated linearly in a table of ln(1 + k / 2^12): within (2^-12)^2 / 8 = 7.5e-9
+# (|d^2 ln(1 + x) / dx^2| <= 1 on [0, 1]), 1.4e-5 of a code step; 4 times faster than log
+_MANTISSA_TABLE_BITS = 12
+_LN2 = float(np.log(2.0))
+_LN_MANTISSA = np.log1p(np.arange(2**_MANTISSA_TABLE_BITS + 1) / 2**_MANTISSA_TABLE_BITS)
 
 
 @dataclass(frozen=True)
@@ -59,7 +65,8 @@ def round_and_pack(table: np.ndarray) -> PackedTable:
     def pack_slice(i: int) -> tuple[bytes, bytes]:
         high = np.empty(slices[i].size, dtype=np.uint8)
         low = np.empty(slices[i].size, dtype=np.uint8)
-        _encode_slice(slices[i], log_low, step, values, high, low)
+        _encode_slice(slices[i], slices[i].view(np.uint32), log_low, step, values,
+                      _LN_MANTISSA, high, low)
         return zlib.compress(high, _ZLIB_LEVEL), zlib.compress(low, _ZLIB_LEVEL)
 
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
@@ -117,19 +124,32 @@ def _code_values(log_low: float, log_high: float) -> np.ndarray:
 
 
 @njit(cache=True, nogil=True)
-def _encode_slice(table, log_low, step, values, high, low):
-    """Codes of `table` (view zenith, the rest) differenced along its first axis into the
-    `high` and `low` bytes; each value rounded in place to its code's value."""
+def _encode_slice(table, bits, log_low, step, values, ln_mantissa, high, low):
+    """Codes of `table` (view zenith, the rest; `bits`: the same memory as uint32) differenced
+    along its first axis into the `high` and `low` bytes; each value rounded in place to its
+    code's value. ln from the bits (`_LN_MANTISSA`)."""
     n_mu, n_rest = table.shape
     previous = np.zeros(n_rest, dtype=np.int64)
     floor = np.exp(log_low) if step > 0.0 else np.inf
+    shift = 23 - _MANTISSA_TABLE_BITS
+    to_fraction = 1.0 / (1 << shift)
     for i in range(n_mu):
         for j in range(n_rest):
             value = table[i, j]
             code = 0
             if value >= floor:
-                code = min(1 + int(np.rint((np.log(np.float64(value)) - log_low) / step)),
-                           _CODE_STEPS + 1)
+                word = np.int64(bits[i, j])
+                exponent = (word >> 23) & 0xFF
+                if exponent == 0:  # subnormal
+                    ln = np.log(np.float64(value))
+                else:
+                    mantissa = word & 0x7FFFFF
+                    k = mantissa >> shift
+                    below = ln_mantissa[k]
+                    ln = ((exponent - 127) * _LN2 + below
+                          + (mantissa & ((1 << shift) - 1)) * to_fraction
+                          * (ln_mantissa[k + 1] - below))
+                code = min(1 + int(np.rint((ln - log_low) / step)), _CODE_STEPS + 1)
             table[i, j] = values[code]
             difference = (code - previous[j]) & 0xFFFF
             previous[j] = code
