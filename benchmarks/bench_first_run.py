@@ -7,7 +7,8 @@ table cache, in this order:
 1. the first render without `skyscatter compile` (kernels compiled on the way: the install
    before issue 18, and a `pip install` whose user skipped the step);
 2. `skyscatter compile` on a fresh kernel cache (what `make` now runs at install time);
-3. the first render after it (kernels from the cache, tables computed);
+3. the first render after it (kernels from the cache, tables computed), `--repeat` times, each
+   with a new table cache;
 4. the same render again (kernels and tables from the cache).
 
 Prints wall and CPU time (user + system of the child, all its threads) of each step.
@@ -43,6 +44,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--render-args", default="earth",
                         help="the first render's arguments (default: earth, every default)")
+    parser.add_argument("--repeat", type=int, default=3,
+                        help="first renders after the install step, each with a new table "
+                             "cache (default 3: the machine's noise beside the number)")
     args = parser.parse_args()
     skyscatter = [sys.executable, "-m", "skyscatter.cli"]
     with tempfile.TemporaryDirectory(prefix="bench-first-run-") as folder:
@@ -55,14 +59,18 @@ def main() -> None:
             return [*skyscatter, "render", *shlex.split(args.render_args), "-o",
                     str(work / "sky.png"), "--cache-dir", str(work / tables)]
 
+        def again(k: int) -> str:
+            return f" (again, new table cache {k + 1})" if k else ""
+
         steps = [
             ("first render, kernels compiled on the way", render("kernels-a", "tables-a"),
              environment("kernels-a")),
             ("skyscatter compile (install step)", [*skyscatter, "compile"],
              environment("kernels-b")),
-            ("first render after `skyscatter compile`", render("kernels-b", "tables-b"),
-             environment("kernels-b")),
-            ("the same render again (tables cached)", render("kernels-b", "tables-b"),
+            *[(f"first render after `skyscatter compile`{again(k)}",
+               render("kernels-b", f"tables-b{k}"), environment("kernels-b"))
+              for k in range(args.repeat)],
+            ("the same render again (tables cached)", render("kernels-b", "tables-b0"),
              environment("kernels-b")),
         ]
         print(f"render: skyscatter render {args.render_args}")
