@@ -46,7 +46,7 @@ Departures from Bruneton 2017, deliberate:
   constituent, 95 % of the orders >= 2 agree within 0.17 %). The sphere integral is a matrix
   product with phase matrices normalised so that each row integrates to exactly 1 (energy is
   conserved by the discrete sphere integral even where the quadrature does not resolve a
-  forward peak);
+  forward peak; `phase_quadrature`, which takes a gas's matrix in rank 5);
 - transmittances along table rays come from a wavelength-free table of column densities in the
   transmittance parameterisation (towards the sun: the transmittance table, as Bruneton); rays
   are sampled densest at their lowest point and at the observer.
