@@ -34,13 +34,11 @@ from skyscatter.transport._kernels import column_below, density_at
 from skyscatter.transport._table_common_kernels import (
     fast_acos,
     linear_axis,
-    lookup_scratch,
     mu_axis,
     mu_s_corner,
     nu_corner,
     phase_values,
     radius_corner,
-    scattering_lookup,
     table_ray_distances,
     transmittance_bilinear,
 )
@@ -729,6 +727,51 @@ def _add_ground_radiance(r, mu_s, nu, d, seen, ground_irradiance, bottom_radius,
         out[w] += seen[w] * ((1.0 - a) * ground_irradiance[i, w] + a * ground_irradiance[i + 1, w])
 
 
+@njit(cache=True)
+def _nu_profile(flat, n_mu, n_mu_s, n_nu, i_r, a_r, i_mu, a_mu, i_s, a_s, profile):
+    """profile (n_nu m,) = the interleaved tables `flat` (n_r, n_mu, n_mu_s, n_nu, m as 1-D,
+    `flat_tables`) interpolated at the r, mu and mu_s corners (lower entries and weights) on
+    every nu slice: the part of `scattering_lookup` that lookups differing only in nu share.
+    For one (r, mu, mu_s) corner the slices are n_nu m contiguous numbers."""
+    size = profile.size
+    s_s = size
+    s_mu = n_mu_s * s_s
+    s_r = n_mu * s_mu
+    profile[:] = 0.0
+    base = i_r * s_r + i_mu * s_mu + i_s * s_s
+    for dr in range(2):
+        wr = a_r if dr == 1 else 1.0 - a_r
+        if wr == 0.0:
+            continue
+        for dm in range(2):
+            wm = wr * (a_mu if dm == 1 else 1.0 - a_mu)
+            if wm == 0.0:
+                continue
+            for ds in range(2):
+                ws = wm * (a_s if ds == 1 else 1.0 - a_s)
+                if ws == 0.0:
+                    continue
+                offset = base + dr * s_r + dm * s_mu + ds * s_s
+                segment = flat[offset:offset + size]
+                for k in range(size):
+                    profile[k] += ws * segment[k]
+
+
+@njit(cache=True, inline="always")
+def _nu_lookup(profile, weights, i_nu, a_nu, out):
+    """out[w] = sum_t weights[t n_wl + w] x the nu profile (`_nu_profile`) linear between its
+    slices i_nu and i_nu + 1 (weight a_nu of the upper): the rest of `scattering_lookup`."""
+    m = weights.size
+    n_wl = out.size
+    below = profile[i_nu * m:(i_nu + 1) * m]  # row views: their loops vectorise
+    above = profile[(i_nu + 1) * m:(i_nu + 2) * m]
+    out[:] = 0.0
+    for t in range(m // n_wl):
+        for w in range(n_wl):
+            k = t * n_wl + w
+            out[w] += weights[k] * ((1.0 - a_nu) * below[k] + a_nu * above[k])
+
+
 @njit(parallel=True, cache=True)
 def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradiance, albedo):
     """Radiance of the previous order arriving at the scattering-density nodes (the (r, mu_s)
@@ -737,7 +780,10 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
     functions when its `use_phase`, i.e. the single-scattering tables) plus the ground lit by
     `ground_irradiance` for directions that hit it (`medium`: a `RayMedium`). Returns
     (n_wl, n_a n_p, n_r n_mu_s) float32, the layout of the matrix product that follows.
-    Bruneton 2017, `ComputeScatteringDensity`, the inner part."""
+    Bruneton 2017, `ComputeScatteringDensity`, the inner part. The directions of one zenith
+    angle share their r, mu and mu_s corners: the tables are interpolated there once, on every
+    nu slice (`_nu_profile`), and each azimuth only interpolates in nu (as `scattering_lookup`,
+    summed in another order)."""
     n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
     bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
     tables, n_t = previous.tables, previous.n_t
@@ -759,7 +805,8 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
         i_r, a_r = radius_corner(r, bottom_radius, top_radius, n_r, grid.radius_warp)
         i_s, a_s = mu_s_corner(mu_s, bottom_radius, top_radius, mu_s_min, grid.sun_angle_share,
                                n_mu_s)
-        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
+        weights = np.ones(n_t * n_wl)
+        profile = np.empty(n_nu * n_t * n_wl)
         value = np.empty(n_wl)
         seen = np.empty(n_wl)
         col_a = np.empty(n_c)
@@ -772,14 +819,13 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
             d = 0.0
             if hits_ground:
                 d = _ground_seen(r, mu_in, grid, medium, albedo, col_a, col_b, seen)
+            _nu_profile(tables, n_mu, n_mu_s, n_nu, i_r, a_r, i_mu, a_mu, i_s, a_s, profile)
             for p in range(n_p):
                 nu_in = min(max(mu_in * mu_s + sin_in * sin_s * math.cos(phi_in[p]), -1.0), 1.0)
                 if use_phase:
                     phase_values(phase_table, nu_in, weights)
-                value[:] = 0.0
                 i_nu, a_nu = nu_corner(nu_in, mu_in, mu_s, n_nu)
-                scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
-                                  i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
+                _nu_lookup(profile, weights, i_nu, a_nu, value)
                 if hits_ground:
                     _add_ground_radiance(r, mu_s, nu_in, d, seen, ground_irradiance,
                                          bottom_radius, value)
@@ -810,7 +856,8 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
         r, mu_s = irradiance_r_mu_s_from_x(j / (n_mu_s_e - 1), i / (n_r_e - 1), bottom_radius,
                                            top_radius)
         sin_s = math.sqrt(max(1.0 - mu_s * mu_s, 0.0))
-        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
+        weights = np.ones(n_t * n_wl)
+        profile = np.empty(n_nu * n_t * n_wl)
         value = np.empty(n_wl)
         i_r, a_r = radius_corner(r, bottom_radius, top_radius, n_r, grid.radius_warp)
         i_s, a_s = mu_s_corner(mu_s, bottom_radius, top_radius, mu_s_min, grid.sun_angle_share,
@@ -821,15 +868,15 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
             sin_in = math.sin(theta)
             solid = 2.0 * mu_in * sin_in * d_theta * d_phi  # x 2: the mirrored half
             i_mu, a_mu = mu_axis(r, mu_in, False, bottom_radius, top_radius, n_mu)
+            # the azimuths of one zenith angle share their r, mu and mu_s corners
+            _nu_profile(tables, n_mu, n_mu_s, n_nu, i_r, a_r, i_mu, a_mu, i_s, a_s, profile)
             for p in range(n_phi):
                 phi = (p + 0.5) * d_phi
                 nu_in = min(max(mu_in * mu_s + sin_in * sin_s * math.cos(phi), -1.0), 1.0)
                 if use_phase:
                     phase_values(phase_table, nu_in, weights)
-                value[:] = 0.0
                 i_nu, a_nu = nu_corner(nu_in, mu_in, mu_s, n_nu)
-                scattering_lookup(tables, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu,
-                                  i_s, a_s, i_nu, a_nu, pair_weights, pair_values, value)
+                _nu_lookup(profile, weights, i_nu, a_nu, value)
                 for w in range(n_wl):
                     out[i, j, w] += value[w] * solid
     return out

@@ -28,14 +28,12 @@ from skyscatter.transport._kernels import density_at
 from skyscatter.transport._table_common_kernels import (
     fast_acos,
     linear_axis,
-    lookup_scratch,
     mu_axis,
     mu_axis_from_u,
     mu_s_corner,
     nu_corner,
     phase_values,
     radius_corner,
-    scattering_lookup,
     table_ray_distances,
     transmittance_bilinear,
 )
@@ -88,6 +86,57 @@ class LookupTables(NamedTuple):
     aureole_shape: np.ndarray  # (n_x, n_psi, n_wl) multiple peak scattering [sr^-1]
     aureole_x_max: float  # largest peak depth of aureole_shape [-]
     aureole_psi_max: float  # its largest angle from the sun [rad]; 0: no aureole
+
+
+@njit(cache=True)
+def lookup_scratch(n_t, n_wl):
+    """(weights, pair_weights, pair_values) for `scattering_lookup` of n_t tables of n_wl
+    wavelengths: weights 1 (for the tables without a phase function), the others scratch."""
+    return np.ones(n_t * n_wl), np.empty(2 * n_t * n_wl), np.empty(2 * n_t * n_wl)
+
+
+@njit(cache=True)
+def scattering_lookup(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu,
+                      a_nu, pair_weights, pair_values, out):
+    """out[w] += sum_t weights[t n_wl + w] * table_t(w) interpolated at the corners of
+    `scattering_corners`.
+
+    `flat` is the interleaved table (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl) as a 1-D view
+    (`flat_tables`): for each (r, mu, mu_s) corner the two nu slices and all tables and
+    wavelengths are 2 n_t n_wl contiguous numbers, read in one loop. pair_weights and
+    pair_values are scratch arrays of 2 n_t n_wl."""
+    m = weights.size
+    n_wl = out.size
+    n_t = m // n_wl
+    s_nu = m
+    s_s = n_nu * s_nu
+    s_mu = n_mu_s * s_s
+    s_r = n_mu * s_mu
+    for k in range(m):
+        pair_weights[k] = (1.0 - a_nu) * weights[k]
+        pair_weights[m + k] = a_nu * weights[k]
+        pair_values[k] = 0.0
+        pair_values[m + k] = 0.0
+    base = i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu
+    for dr in range(2):
+        wr = a_r if dr == 1 else 1.0 - a_r
+        if wr == 0.0:
+            continue
+        for dm in range(2):
+            wm = wr * (a_mu if dm == 1 else 1.0 - a_mu)
+            if wm == 0.0:
+                continue
+            for ds in range(2):
+                ws = wm * (a_s if ds == 1 else 1.0 - a_s)
+                if ws == 0.0:
+                    continue
+                offset = base + dr * s_r + dm * s_mu + ds * s_s
+                segment = flat[offset:offset + 2 * m]
+                for k in range(2 * m):
+                    pair_values[k] += ws * pair_weights[k] * segment[k]
+    for t in range(2 * n_t):
+        for w in range(n_wl):
+            out[w] += pair_values[t * n_wl + w]
 
 
 @njit(cache=True)
