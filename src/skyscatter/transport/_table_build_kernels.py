@@ -32,6 +32,7 @@ from numba import njit, prange
 
 from skyscatter.transport._kernels import column_below, density_at
 from skyscatter.transport._table_common_kernels import (
+    corner_sum,
     fast_acos,
     linear_axis,
     mu_axis,
@@ -738,23 +739,8 @@ def _nu_profile(flat, n_mu, n_mu_s, n_nu, i_r, a_r, i_mu, a_mu, i_s, a_s, profil
     s_mu = n_mu_s * s_s
     s_r = n_mu * s_mu
     profile[:] = 0.0
-    base = i_r * s_r + i_mu * s_mu + i_s * s_s
-    for dr in range(2):
-        wr = a_r if dr == 1 else 1.0 - a_r
-        if wr == 0.0:
-            continue
-        for dm in range(2):
-            wm = wr * (a_mu if dm == 1 else 1.0 - a_mu)
-            if wm == 0.0:
-                continue
-            for ds in range(2):
-                ws = wm * (a_s if ds == 1 else 1.0 - a_s)
-                if ws == 0.0:
-                    continue
-                offset = base + dr * s_r + dm * s_mu + ds * s_s
-                segment = flat[offset:offset + size]
-                for k in range(size):
-                    profile[k] += ws * segment[k]
+    corner_sum(flat, i_r * s_r + i_mu * s_mu + i_s * s_s, s_r, s_mu, s_s, a_r, a_mu, a_s,
+               profile)
 
 
 @njit(cache=True, inline="always")

@@ -122,6 +122,31 @@ def nu_corner(nu, mu, mu_s, n_nu):
     return linear_axis(scattering_u_nu(nu, mu, mu_s) * (n_nu - 1), n_nu)
 
 
+@njit(cache=True, inline="always")
+def corner_sum(flat, base, s_r, s_mu, s_s, a_r, a_mu, a_s, out):
+    """out[k] += the interleaved tables `flat` (1-D, `flat_tables`) trilinear in r, mu and mu_s
+    at the corners base + (0 or s_r) + (0 or s_mu) + (0 or s_s) (weights a_r, a_mu, a_s of the
+    upper ones), for the out.size contiguous numbers from each corner (its nu slices, tables
+    and wavelengths); corners of weight 0 are not read."""
+    size = out.size
+    for dr in range(2):
+        wr = a_r if dr == 1 else 1.0 - a_r
+        if wr == 0.0:
+            continue
+        for dm in range(2):
+            wm = wr * (a_mu if dm == 1 else 1.0 - a_mu)
+            if wm == 0.0:
+                continue
+            for ds in range(2):
+                ws = wm * (a_s if ds == 1 else 1.0 - a_s)
+                if ws == 0.0:
+                    continue
+                offset = base + dr * s_r + dm * s_mu + ds * s_s
+                segment = flat[offset:offset + size]
+                for k in range(size):
+                    out[k] += ws * segment[k]
+
+
 def flat_tables(tables: np.ndarray) -> np.ndarray:
     """An interleaved scattering table (n_r, n_mu, n_mu_s, n_nu, [n_t,] n_wl) as the 1-D view
     `scattering_lookup` reads (a copy only if it is not C-contiguous)."""

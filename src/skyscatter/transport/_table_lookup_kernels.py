@@ -26,6 +26,7 @@ from numba import njit, prange
 
 from skyscatter.transport._kernels import density_at
 from skyscatter.transport._table_common_kernels import (
+    corner_sum,
     fast_acos,
     linear_axis,
     mu_axis,
@@ -117,26 +118,11 @@ def scattering_lookup(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i
         pair_weights[m + k] = a_nu * weights[k]
         pair_values[k] = 0.0
         pair_values[m + k] = 0.0
-    base = i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu
-    for dr in range(2):
-        wr = a_r if dr == 1 else 1.0 - a_r
-        if wr == 0.0:
-            continue
-        for dm in range(2):
-            wm = wr * (a_mu if dm == 1 else 1.0 - a_mu)
-            if wm == 0.0:
-                continue
-            for ds in range(2):
-                ws = wm * (a_s if ds == 1 else 1.0 - a_s)
-                if ws == 0.0:
-                    continue
-                offset = base + dr * s_r + dm * s_mu + ds * s_s
-                segment = flat[offset:offset + 2 * m]
-                for k in range(2 * m):
-                    pair_values[k] += ws * pair_weights[k] * segment[k]
+    corner_sum(flat, i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu, s_r, s_mu, s_s, a_r,
+               a_mu, a_s, pair_values)
     for t in range(2 * n_t):
         for w in range(n_wl):
-            out[w] += pair_values[t * n_wl + w]
+            out[w] += pair_weights[t * n_wl + w] * pair_values[t * n_wl + w]
 
 
 @njit(cache=True)
