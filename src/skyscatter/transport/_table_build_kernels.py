@@ -38,6 +38,7 @@ from skyscatter.transport._table_common_kernels import (
     mu_axis,
     mu_s_corner,
     nu_corner,
+    nu_interpolation,
     phase_values,
     radius_corner,
     table_ray_distances,
@@ -732,7 +733,8 @@ def _add_ground_radiance(r, mu_s, nu, d, seen, ground_irradiance, bottom_radius,
 def _nu_profile(flat, n_mu, n_mu_s, n_nu, i_r, a_r, i_mu, a_mu, i_s, a_s, profile):
     """profile (n_nu m,) = the interleaved tables `flat` (n_r, n_mu, n_mu_s, n_nu, m as 1-D,
     `flat_tables`) interpolated at the r, mu and mu_s corners (lower entries and weights) on
-    every nu slice: the part of `scattering_lookup` that lookups differing only in nu share.
+    every nu slice (`corner_sum`): the part of `scattering_lookup` that lookups differing only
+    in nu share.
     For one (r, mu, mu_s) corner the slices are n_nu m contiguous numbers."""
     size = profile.size
     s_s = size
@@ -741,21 +743,6 @@ def _nu_profile(flat, n_mu, n_mu_s, n_nu, i_r, a_r, i_mu, a_mu, i_s, a_s, profil
     profile[:] = 0.0
     corner_sum(flat, i_r * s_r + i_mu * s_mu + i_s * s_s, s_r, s_mu, s_s, a_r, a_mu, a_s,
                profile)
-
-
-@njit(cache=True, inline="always")
-def _nu_lookup(profile, weights, i_nu, a_nu, out):
-    """out[w] = sum_t weights[t n_wl + w] x the nu profile (`_nu_profile`) linear between its
-    slices i_nu and i_nu + 1 (weight a_nu of the upper): the rest of `scattering_lookup`."""
-    m = weights.size
-    n_wl = out.size
-    below = profile[i_nu * m:(i_nu + 1) * m]  # row views: their loops vectorise
-    above = profile[(i_nu + 1) * m:(i_nu + 2) * m]
-    out[:] = 0.0
-    for t in range(m // n_wl):
-        for w in range(n_wl):
-            k = t * n_wl + w
-            out[w] += weights[k] * ((1.0 - a_nu) * below[k] + a_nu * above[k])
 
 
 @njit(parallel=True, cache=True)
@@ -768,8 +755,8 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
     (n_wl, n_a n_p, n_r n_mu_s) float32, the layout of the matrix product that follows.
     Bruneton 2017, `ComputeScatteringDensity`, the inner part. The directions of one zenith
     angle share their r, mu and mu_s corners: the tables are interpolated there once, on every
-    nu slice (`_nu_profile`), and each azimuth only interpolates in nu (as `scattering_lookup`,
-    summed in another order)."""
+    nu slice (`_nu_profile`), and each azimuth only interpolates in nu (`nu_interpolation`, as
+    `scattering_lookup`)."""
     n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
     bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
     tables, n_t = previous.tables, previous.n_t
@@ -811,7 +798,8 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
                 if use_phase:
                     phase_values(phase_table, nu_in, weights)
                 i_nu, a_nu = nu_corner(nu_in, mu_in, mu_s, n_nu)
-                _nu_lookup(profile, weights, i_nu, a_nu, value)
+                value[:] = 0.0
+                nu_interpolation(profile, weights, i_nu, a_nu, value)
                 if hits_ground:
                     _add_ground_radiance(r, mu_s, nu_in, d, seen, ground_irradiance,
                                          bottom_radius, value)
@@ -862,7 +850,8 @@ def indirect_irradiance(n_r_e, n_mu_s_e, n_theta, n_phi, grid, previous):
                 if use_phase:
                     phase_values(phase_table, nu_in, weights)
                 i_nu, a_nu = nu_corner(nu_in, mu_in, mu_s, n_nu)
-                _nu_lookup(profile, weights, i_nu, a_nu, value)
+                value[:] = 0.0
+                nu_interpolation(profile, weights, i_nu, a_nu, value)
                 for w in range(n_wl):
                     out[i, j, w] += value[w] * solid
     return out

@@ -147,6 +147,22 @@ def corner_sum(flat, base, s_r, s_mu, s_s, a_r, a_mu, a_s, out):
                     out[k] += ws * segment[k]
 
 
+@njit(cache=True, inline="always")
+def nu_interpolation(profile, weights, i_nu, a_nu, out):
+    """out[w] += sum_t weights[t n_wl + w] x `profile` linear in nu between its slices i_nu and
+    i_nu + 1 (weight a_nu of the upper), each slice m = weights.size numbers (n_t tables of
+    n_wl wavelengths): the tables interpolated in r, mu and mu_s (`corner_sum`) on nu slices,
+    with the phase functions (or 1) as weights."""
+    m = weights.size
+    n_wl = out.size
+    below = profile[i_nu * m:(i_nu + 1) * m]  # row views: their loops vectorise
+    above = profile[(i_nu + 1) * m:(i_nu + 2) * m]
+    for t in range(m // n_wl):
+        for w in range(n_wl):
+            k = t * n_wl + w
+            out[w] += weights[k] * ((1.0 - a_nu) * below[k] + a_nu * above[k])
+
+
 def flat_tables(tables: np.ndarray) -> np.ndarray:
     """An interleaved scattering table (n_r, n_mu, n_mu_s, n_nu, [n_t,] n_wl) as the 1-D view
     `scattering_lookup` reads (a copy only if it is not C-contiguous)."""

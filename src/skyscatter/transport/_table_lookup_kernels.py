@@ -33,6 +33,7 @@ from skyscatter.transport._table_common_kernels import (
     mu_axis_from_u,
     mu_s_corner,
     nu_corner,
+    nu_interpolation,
     phase_values,
     radius_corner,
     table_ray_distances,
@@ -91,38 +92,29 @@ class LookupTables(NamedTuple):
 
 @njit(cache=True)
 def lookup_scratch(n_t, n_wl):
-    """(weights, pair_weights, pair_values) for `scattering_lookup` of n_t tables of n_wl
-    wavelengths: weights 1 (for the tables without a phase function), the others scratch."""
-    return np.ones(n_t * n_wl), np.empty(2 * n_t * n_wl), np.empty(2 * n_t * n_wl)
+    """(weights, pair_values) for `scattering_lookup` of n_t tables of n_wl wavelengths:
+    weights 1 (for the tables without a phase function), the other scratch."""
+    return np.ones(n_t * n_wl), np.empty(2 * n_t * n_wl)
 
 
 @njit(cache=True)
 def scattering_lookup(flat, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu,
-                      a_nu, pair_weights, pair_values, out):
+                      a_nu, pair_values, out):
     """out[w] += sum_t weights[t n_wl + w] * table_t(w) interpolated at the corners of
     `scattering_corners`.
 
     `flat` is the interleaved table (n_r, n_mu, n_mu_s, n_nu, n_t, n_wl) as a 1-D view
     (`flat_tables`): for each (r, mu, mu_s) corner the two nu slices and all tables and
-    wavelengths are 2 n_t n_wl contiguous numbers, read in one loop. pair_weights and
-    pair_values are scratch arrays of 2 n_t n_wl."""
+    wavelengths are 2 n_t n_wl contiguous numbers, read in one loop (`corner_sum`) into the
+    scratch array pair_values (2 n_t n_wl), then interpolated in nu (`nu_interpolation`)."""
     m = weights.size
-    n_wl = out.size
-    n_t = m // n_wl
-    s_nu = m
-    s_s = n_nu * s_nu
+    s_s = n_nu * m
     s_mu = n_mu_s * s_s
     s_r = n_mu * s_mu
-    for k in range(m):
-        pair_weights[k] = (1.0 - a_nu) * weights[k]
-        pair_weights[m + k] = a_nu * weights[k]
-        pair_values[k] = 0.0
-        pair_values[m + k] = 0.0
-    corner_sum(flat, i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu, s_r, s_mu, s_s, a_r,
+    pair_values[:] = 0.0
+    corner_sum(flat, i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * m, s_r, s_mu, s_s, a_r,
                a_mu, a_s, pair_values)
-    for t in range(2 * n_t):
-        for w in range(n_wl):
-            out[w] += pair_weights[t * n_wl + w] * pair_values[t * n_wl + w]
+    nu_interpolation(pair_values, weights, 0, a_nu, out)
 
 
 @njit(cache=True)
@@ -933,7 +925,7 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
     single_origin = origins.shape[0] == 1
     n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
+        weights, pair_values = lookup_scratch(n_t, n_wl)
         value = np.empty(n_wl)
         t_view = np.empty(n_wl)
         t_sun = np.empty(n_wl)
@@ -971,7 +963,7 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                 r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
                 tables.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, tables.radius_warp)
             scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s,
-                              a_s, i_nu, a_nu, pair_weights, pair_values, value)
+                              a_s, i_nu, a_nu, pair_values, value)
             if marched > 0.0:
                 geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu,
                                           a_mu, i_s, a_s, i_nu, a_nu, marched, slices, value)
@@ -1024,17 +1016,17 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
 def aerial_scratch(n_t, n_wl, n_c, n_s):
     """Scratch arrays of `_aerial_point` and `_aerial_lit_single` for n_t tables (n_s
     constituents that scatter and the orders >= 2) of n_wl wavelengths and n_c profile
-    constituents: (weights, pair_weights, pair_values, at_point, scratch, slices, samples,
-    observer, here, sun, dens, exact)."""
-    weights, pair_weights, pair_values = lookup_scratch(n_t, n_wl)
-    return (weights, pair_weights, pair_values, np.empty(n_wl), np.empty(n_wl),
+    constituents: (weights, pair_values, at_point, scratch, slices, samples, observer, here,
+    sun, dens, exact)."""
+    weights, pair_values = lookup_scratch(n_t, n_wl)
+    return (weights, pair_values, np.empty(n_wl), np.empty(n_wl),
             np.empty((2, n_wl)), np.empty(EXACT_SINGLE_SAMPLES + 8), np.empty(n_wl),
             np.empty(n_wl), np.empty(n_wl), np.empty(n_c), np.empty((n_s, n_wl)))
 
 
 @njit(cache=True)
-def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_weights,
-                  pair_values, at_point, scratch, slices, inscatter_out, transmittance_out):
+def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_values,
+                  at_point, scratch, slices, inscatter_out, transmittance_out):
     """Light scattered towards the observer o between o and the point p, into inscatter_out
     (n_wl,) [W m^-2 sr^-1 nm^-1], and the transmittance of that segment into
     transmittance_out (n_wl,): S(x, v) - T(x, p) S(p, v) with both lookups in the half of the
@@ -1094,7 +1086,7 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_w
         r, mu, mu_s, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
         tables.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, tables.radius_warp)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
-                      i_nu, a_nu, pair_weights, pair_values, inscatter_out)
+                      i_nu, a_nu, pair_values, inscatter_out)
     if marched > 0.0:
         geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, marched, slices, inscatter_out)
@@ -1102,7 +1094,7 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_w
         r_p, mu_p, mu_s_p, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
         tables.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, tables.radius_warp)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
-                      i_nu, a_nu, pair_weights, pair_values, at_point)
+                      i_nu, a_nu, pair_values, at_point)
     if marched > 0.0:
         geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu,
                                   i_s, a_s, i_nu, a_nu, marched, slices, at_point)
@@ -1142,11 +1134,11 @@ def _aerial_segment(ox, oy, oz, px, py, pz, sun_direction, tables, work, inscatt
     the light scattered towards o into inscatter_out and the segment's transmittance into
     transmittance_out (n_wl,). `tables`: the `LookupTables` record; `work`: the scratch arrays
     of `aerial_scratch`."""
-    (weights, pair_weights, pair_values, at_point, scratch, slices, samples, observer, here,
-     t_sun, dens, exact) = work
+    (weights, pair_values, at_point, scratch, slices, samples, observer, here, t_sun, dens,
+     exact) = work
     r, mu, mu_s, nu, d, hits_ground, marched = _aerial_point(
-        ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_weights, pair_values,
-        at_point, scratch, slices, inscatter_out, transmittance_out)
+        ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_values, at_point,
+        scratch, slices, inscatter_out, transmittance_out)
     if marched > 0.0:
         _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights, samples,
                            observer, here, t_sun, dens, exact, inscatter_out)

@@ -203,12 +203,10 @@ def _remembered(memo: dict, key: str) -> tuple[str, dict[str, str | None]] | Non
     return (fingerprint, modules) if unchanged and isinstance(fingerprint, str) else None
 
 
-def _remember(path: Path, key: str, modules: dict[str, str | None], fingerprint: str) -> None:
-    """Add the entry to the memo at `path` (`atomic_write`); a folder that cannot be written
-    is left alone."""
-    memo = _read_memo(path)
-    memo[key] = {"modules": modules, "fingerprint": fingerprint}
-    text = json.dumps(memo, sort_keys=True)
+def _remember(path: Path, memo: dict, key: str, entry: dict) -> None:
+    """Write `memo` (as read from `path`) with `entry` for `key` back to `path`
+    (`atomic_write`); a folder that cannot be written is left alone."""
+    text = json.dumps({**memo, key: entry}, sort_keys=True)
     with contextlib.suppress(InputError):
         atomic_write(path, lambda temporary: Path(temporary).write_text(text, encoding="utf-8"))
 
@@ -220,18 +218,14 @@ def code_fingerprint(roots: tuple[Definition, ...], memo_folders: tuple[Path, ..
     `memo_folders` it is taken from the first memo there that holds it, else computed, and
     kept in each of those folders whose memo lacked it (module docstring)."""
     key = json.dumps(roots)
-    memo_paths = [Path(folder) / MEMO_FILE for folder in memo_folders]
-    fingerprint, modules = None, {}
-    for path in memo_paths:
-        if (known := _remembered(_read_memo(path), key)) is not None:
-            fingerprint, modules = known
-            break
-    if fingerprint is None:
-        fingerprint, modules = _walked(roots)
-    for path in memo_paths:
-        if path.parent.is_dir() and _remembered(_read_memo(path), key) != (fingerprint,
-                                                                           modules):
-            _remember(path, key, modules, fingerprint)
+    memos = [(Path(folder) / MEMO_FILE, _read_memo(Path(folder) / MEMO_FILE))
+             for folder in memo_folders]
+    known = next((found for _, memo in memos if (found := _remembered(memo, key))), None)
+    fingerprint, modules = known or _walked(roots)
+    entry = {"modules": modules, "fingerprint": fingerprint}
+    for path, memo in memos:  # an equal entry was validated above or made just now
+        if memo.get(key) != entry and path.parent.is_dir():
+            _remember(path, memo, key, entry)
     return fingerprint
 
 
