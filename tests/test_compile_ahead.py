@@ -7,9 +7,10 @@ from cli_runner import run_cli
 from skyscatter import compile_ahead
 from skyscatter.cli import build_parser
 from skyscatter.render.camera import PerspectiveCamera
-from skyscatter.render.scene import sun_direction
-from skyscatter.render.terrain import HORIZON_MIN_RAYS
+from skyscatter.render.scene import ground_viewpoint, sun_direction
+from skyscatter.render.terrain import EARTH_RADIUS_M, HORIZON_MIN_RAYS, demo_mountains
 from skyscatter.transport.lut_solver import (
+    AERIAL_GRID_MIN_POINTS,
     SKY_GRID_EXACT_DEG,
     SKY_GRID_MIN_RAYS,
     SUN_GRID_MIN_RAYS,
@@ -95,6 +96,23 @@ def test_the_warm_up_reaches_the_low_sun_and_the_terrain_horizon():
     # every pixel of the perspective camera is a ray
     assert args.terrain == "demo" and args.camera == "perspective"
     assert round(args.size * args.aspect) * args.size >= HORIZON_MIN_RAYS
+
+
+def test_the_warm_up_terrain_frame_takes_the_aerial_perspective_grid():
+    # the grid's kernels compile only for frames with AERIAL_GRID_MIN_POINTS rays on the
+    # terrain: the warm-up's own camera and mountains, intersected
+    terrain_command = next(arguments for what, arguments in compile_ahead.WARM_UP_COMMANDS
+                           if "terrain" in what)
+    args = build_parser().parse_args([*terrain_command, "-o", "x.png"])
+    camera = PerspectiveCamera(round(args.size * args.aspect), args.size, args.fov or 60.0,
+                               heading_deg=args.heading, pitch_deg=args.pitch)
+    viewpoint = ground_viewpoint(args.altitude, EARTH_RADIUS_M)
+    mountains = demo_mountains(peak_m=args.terrain_height, spacing_m=args.terrain_spacing,
+                               planet_radius_m=EARTH_RADIUS_M)
+    directions, _ = camera.directions()
+    rays = np.ascontiguousarray(viewpoint.direction_to_world(directions).reshape(-1, 3))
+    *_, hit = mountains.intersect(np.asarray(viewpoint.position_m, dtype=float), rays)
+    assert np.count_nonzero(hit) >= AERIAL_GRID_MIN_POINTS
 
 
 def test_compile_runs_the_warm_up_and_writes_the_marker(capsys, fresh_marker, monkeypatch):

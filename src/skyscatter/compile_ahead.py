@@ -46,8 +46,9 @@ _TINY = ("--size", "16", "--wavelengths", "1")
 # 40 deg high, centred on the default sun (30 deg high in the south).
 _FULL_FRAME = ("--size", "384", "--wavelengths", "1")
 # A terrain frame of at least `terrain.HORIZON_MIN_RAYS` rays culls them with the terrain's
-# horizon: 96 x 54 pixels.
-_TERRAIN_FRAME = ("--size", "96", "--wavelengths", "1")
+# horizon, one with `lut_solver.AERIAL_GRID_MIN_POINTS` rays on the terrain takes the
+# aerial-perspective grid: 683 x 384 pixels (110 000 on the mountains).
+_TERRAIN_FRAME = ("--size", "384", "--wavelengths", "1")
 # (what it compiles, the command line's arguments without the output and cache options)
 WARM_UP_COMMANDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("tables and the fisheye", ("render", "earth", *_TINY)),

@@ -587,16 +587,27 @@ def sky_view_grid_lookup(log_grid, up, sun_direction, cos_exact, bottom_radius, 
             nu = (dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]) * scale
             mu = min(max((dx * up[0] + dy * up[1] + dz * up[2]) * scale, -1.0), 1.0)
             exact[j] = nu > cos_exact and not dark[q]
-            hits_ground = ray_intersects_ground(r, mu, bottom_radius)
-            i_mu[q], a_mu[q] = mu_axis_from_u(scattering_u_mu_of_angle(
-                fast_acos(mu), theta_h, hits_ground, n_mu), hits_ground, n_mu)
-            k_phi[q], b_phi[q] = linear_axis(
-                fast_acos(view_sun_cos_azimuth(nu, mu, mu_s)) / math.pi * (n_phi - 1), n_phi)
+            i_mu[q], a_mu[q], k_phi[q], b_phi[q] = view_grid_cell(
+                mu, nu, mu_s, theta_h, ray_intersects_ground(r, mu, bottom_radius), n_mu, n_phi)
         for q in range(count):
             if dark[q]:
                 out[first + q] = 0.0
         _log_bilinear_block(log_grid, first, i_mu, a_mu, k_phi, b_phi,
                             exact[first:first + count] | dark, out)
+
+
+@njit(cache=True, inline="always")
+def view_grid_cell(mu, nu, mu_s, theta_h, hits_ground, n_mu, n_phi):
+    """(i_mu, a_mu, k_phi, b_phi): the cell of the view (mu, nu) on a grid of
+    `sky_view_grid_nodes` (n_mu, n_phi) with the sun at zenith cosine mu_s and the horizon at
+    zenith angle theta_h [rad]: lower entries and weights on its mu axis (each side of the
+    horizon kept to its half) and its azimuth axis (angles by `fast_acos`, so that loops over
+    it vectorise)."""
+    i_mu, a_mu = mu_axis_from_u(scattering_u_mu_of_angle(fast_acos(mu), theta_h, hits_ground,
+                                                         n_mu), hits_ground, n_mu)
+    k_phi, b_phi = linear_axis(
+        fast_acos(view_sun_cos_azimuth(nu, mu, mu_s)) / math.pi * (n_phi - 1), n_phi)
+    return i_mu, a_mu, k_phi, b_phi
 
 
 @njit(cache=True)
@@ -1025,6 +1036,33 @@ def aerial_scratch(n_t, n_wl, n_c, n_s):
 
 
 @njit(cache=True)
+def segment_start(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radius):
+    """(r, mu, mu_s, nu, d, hits_ground) of the segment from o to p where it starts in the
+    atmosphere (observers in space move to the top boundary), with d its length in the
+    atmosphere before the ground or the top; d = 0 when it has none."""
+    dx, dy, dz = px - ox, py - oy, pz - oz
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if not d > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, False
+    dx, dy, dz = dx / d, dy / d, dz / d
+    x, y, z, travelled, inside = _enter_atmosphere(ox, oy, oz, dx, dy, dz, top_radius)
+    d -= travelled
+    if not inside or d <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, False
+    r = math.sqrt(x * x + y * y + z * z)
+    mu = (x * dx + y * dy + z * dz) / r
+    mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
+    nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
+    r = min(max(r, bottom_radius), top_radius)
+    hits_ground = ray_intersects_ground(r, mu, bottom_radius)
+    if hits_ground:
+        d = min(d, distance_to_bottom_boundary(r, mu, bottom_radius))
+    else:
+        d = min(d, distance_to_top_boundary(r, mu, top_radius))
+    return r, mu, mu_s, nu, d, hits_ground
+
+
+@njit(cache=True)
 def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_values,
                   at_point, scratch, slices, inscatter_out, transmittance_out):
     """Light scattered towards the observer o between o and the point p, into inscatter_out
@@ -1053,25 +1091,10 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_v
     for w in range(n_wl):
         inscatter_out[w] = 0.0
         transmittance_out[w] = 1.0
-    dx, dy, dz = px - ox, py - oy, pz - oz
-    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    r, mu, mu_s, nu, d, hits_ground = segment_start(ox, oy, oz, px, py, pz, sun_direction,
+                                                    bottom_radius, top_radius)
     if not d > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0
-    dx, dy, dz = dx / d, dy / d, dz / d
-    x, y, z, travelled, inside = _enter_atmosphere(ox, oy, oz, dx, dy, dz, top_radius)
-    d -= travelled
-    if not inside or d <= 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0
-    r = math.sqrt(x * x + y * y + z * z)
-    mu = (x * dx + y * dy + z * dz) / r
-    mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
-    nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
-    r = min(max(r, bottom_radius), top_radius)
-    hits_ground = ray_intersects_ground(r, mu, bottom_radius)
-    if hits_ground:
-        d = min(d, distance_to_bottom_boundary(r, mu, bottom_radius))
-    else:
-        d = min(d, distance_to_top_boundary(r, mu, top_radius))
     r_p = math.sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0))
     mu_p = min(max((r * mu + d) / r_p, -1.0), 1.0)
     mu_s_p = min(max((r * mu_s + d * nu) / r_p, -1.0), 1.0)
@@ -1128,8 +1151,8 @@ def _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights
 
 
 @njit(cache=True)
-def _aerial_segment(ox, oy, oz, px, py, pz, sun_direction, tables, work, inscatter_out,
-                    transmittance_out):
+def aerial_segment(ox, oy, oz, px, py, pz, sun_direction, tables, work, inscatter_out,
+                   transmittance_out):
     """`_aerial_point` from o to p and, in twilight, `_aerial_lit_single` over the segment:
     the light scattered towards o into inscatter_out and the segment's transmittance into
     transmittance_out (n_wl,). `tables`: the `LookupTables` record; `work`: the scratch arrays
@@ -1147,7 +1170,7 @@ def _aerial_segment(ox, oy, oz, px, py, pz, sun_direction, tables, work, inscatt
 @njit(parallel=True, cache=True)
 def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_out,
                               transmittance_out):
-    """`_aerial_segment` from each origin ((1, 3) or (n, 3)) to each point (n, 3), into
+    """`aerial_segment` from each origin ((1, 3) or (n, 3)) to each point (n, 3), into
     inscatter_out and transmittance_out (n, n_wl).
     `tables`: the `LookupTables` record of the tables and the profile."""
     n_points = points.shape[0]
@@ -1159,9 +1182,9 @@ def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_
         work = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
             o = 0 if single_origin else i
-            _aerial_segment(origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0],
-                            points[i, 1], points[i, 2], sun_direction, tables, work,
-                            inscatter_out[i], transmittance_out[i])
+            aerial_segment(origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0],
+                           points[i, 1], points[i, 2], sun_direction, tables, work,
+                           inscatter_out[i], transmittance_out[i])
 
 
 @njit(parallel=True, cache=True)
@@ -1169,7 +1192,7 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
     """Radiance (n, n_wl) reaching `origin` (3,) from Lambertian surfaces at `points` (n, 3)
     facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the sun
     where `lit` (n,) (not in a terrain shadow):
-    L_in + T albedo / pi (E_sun [lit] + E_sky), `_aerial_segment` and `_surface_irradiance`
+    L_in + T albedo / pi (E_sun [lit] + E_sky), `aerial_segment` and `surface_irradiance`
     in one pass.
     `tables`: the `LookupTables` record of the tables and the profile."""
     n_points = points.shape[0]
@@ -1179,20 +1202,26 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
         work = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
-        t_view = np.empty(n_wl)
-        direct = np.empty(n_wl)
-        diffuse = np.empty(n_wl)
+        t_view, direct, diffuse = np.empty(n_wl), np.empty(n_wl), np.empty(n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
-            _aerial_segment(origin[0], origin[1], origin[2], points[i, 0], points[i, 1],
-                            points[i, 2], sun_direction, tables, work, out[i], t_view)
-            _surface_irradiance(points[i], normals[i], sun_direction, tables.bottom_radius,
-                                tables.top_radius, tables.transmittance, tables.irradiance,
-                                tables.sun_irradiance, tables.sun_angular_radius, direct, diffuse)
-            a = 0 if one_albedo else i
-            sun = 1.0 if lit[i] else 0.0
-            for w in range(n_wl):
-                out[i, w] += (t_view[w] * albedo[a, w] / math.pi
-                              * (sun * direct[w] + diffuse[w]))
+            aerial_segment(origin[0], origin[1], origin[2], points[i, 0], points[i, 1],
+                           points[i, 2], sun_direction, tables, work, out[i], t_view)
+            add_reflected_light(points[i], normals[i], lit[i], albedo[0 if one_albedo else i],
+                                sun_direction, tables, t_view, direct, diffuse, out[i])
+
+
+@njit(cache=True)
+def add_reflected_light(point, normal, sunlit, albedo, sun_direction, tables, t_view, direct,
+                        diffuse, out):
+    """out (n_wl,) += T albedo / pi (E_sun [sunlit] + E_sky), the light a Lambertian surface
+    at `point` facing `normal` reflects towards the observer through the transmittance t_view
+    (`surface_irradiance`; direct and diffuse are scratch)."""
+    surface_irradiance(point, normal, sun_direction, tables.bottom_radius, tables.top_radius,
+                       tables.transmittance, tables.irradiance, tables.sun_irradiance,
+                       tables.sun_angular_radius, direct, diffuse)
+    sun = 1.0 if sunlit else 0.0
+    for w in range(out.size):
+        out[w] += t_view[w] * albedo[w] / math.pi * (sun * direct[w] + diffuse[w])
 
 
 @njit(cache=True)
@@ -1251,9 +1280,9 @@ def transmittance_rays(origins, directions, distances, bottom_radius, top_radius
 
 
 @njit(cache=True)
-def _surface_irradiance(position, normal, sun_direction, bottom_radius, top_radius,
-                        transmittance, irradiance, sun_irradiance, sun_angular_radius, direct,
-                        diffuse):
+def surface_irradiance(position, normal, sun_direction, bottom_radius, top_radius,
+                       transmittance, irradiance, sun_irradiance, sun_angular_radius, direct,
+                       diffuse):
     """(direct, diffuse) irradiance (n_wl,) each [W m^-2 nm^-1] on a surface at `position`
     facing unit `normal`: E_sun T_sun V max(n . s, 0), and the indirect-irradiance table times
     (1 + n . up) / 2, the part of the sky a tilted surface sees (Bruneton 2017,
@@ -1280,7 +1309,7 @@ def _surface_irradiance(position, normal, sun_direction, bottom_radius, top_radi
 
 @njit(parallel=True, cache=True)
 def ground_irradiance_points(positions, normals, sun_direction, tables):
-    """`_surface_irradiance` at `positions` (n, 3) facing unit `normals` (n, 3): (direct,
+    """`surface_irradiance` at `positions` (n, 3) facing unit `normals` (n, 3): (direct,
     diffuse), each (n, n_wl) [W m^-2 nm^-1].
     `tables`: the `LookupTables` record of the tables and the profile."""
     bottom_radius, top_radius = tables.bottom_radius, tables.top_radius
@@ -1291,7 +1320,7 @@ def ground_irradiance_points(positions, normals, sun_direction, tables):
     direct = np.zeros((n, n_wl))
     diffuse = np.zeros((n, n_wl))
     for i in prange(n):
-        _surface_irradiance(positions[i], normals[i], sun_direction, bottom_radius, top_radius,
-                            transmittance, irradiance, sun_irradiance, sun_angular_radius,
-                            direct[i], diffuse[i])
+        surface_irradiance(positions[i], normals[i], sun_direction, bottom_radius, top_radius,
+                           transmittance, irradiance, sun_irradiance, sun_angular_radius,
+                           direct[i], diffuse[i])
     return direct, diffuse

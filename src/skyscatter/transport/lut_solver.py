@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
-from skyscatter.transport import _table_lookup_kernels
+from skyscatter.transport import _aerial_grid_kernels, _table_lookup_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.geometry import horizontal_towards
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN, horizon_zenith_angle
@@ -52,6 +52,17 @@ SUN_GRID_CHI = 128
 SUN_GRID_HORIZON_DEG = 2.0
 # the grid's own lookups cost as much as as many rays: below 4 rays per node it saves little
 SUN_GRID_MIN_RAYS = 4 * SUN_GRID_PSI * SUN_GRID_CHI
+# One observer's surface points, at least AERIAL_GRID_MIN_POINTS of them, take the light the air
+# scatters in front of them from a grid per frame (Hillaire 2020's aerial-perspective volume,
+# `_aerial_grid_kernels`): the sky-view grid's directions on AERIAL_GRID_MU view-zenith cells x
+# AERIAL_GRID_PHI azimuths, those the points fall in, x AERIAL_GRID_DEPTHS distances; the
+# points within SKY_GRID_EXACT_DEG of the sun are computed one by one (docs/performance.md,
+# "An aerial-perspective grid per frame").
+AERIAL_GRID_MIN_POINTS = 1 << 16
+AERIAL_GRID_MU = 192
+AERIAL_GRID_PHI = 129
+AERIAL_GRID_DEPTHS = 12
+AERIAL_GRID_EXACT_DEG = 20.0
 # the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
 SLANT_DEPTH_MAX = 700.0
 
@@ -178,12 +189,10 @@ class LutSolver:
         t = self.tables
         r = float(np.linalg.norm(origin))
         up = origin / r
-        x_axis = horizontal_towards(up, sun)
-        frame = np.stack([x_axis, np.cross(up, x_axis), up])  # rows: local x, y, z
         nodes = _table_lookup_kernels.sky_view_grid_nodes(
             r, SKY_GRID_MU, SKY_GRID_PHI, t.bottom_radius_m, t.top_radius_m)
-        log_grid = self._log_radiance_grid(origin, nodes @ frame, sun, view_table,
-                                           aureole_table)
+        log_grid = self._log_radiance_grid(origin, nodes @ _sun_frame(up, sun), sun,
+                                           view_table, aureole_table)
         exact = np.empty(directions.shape[0], dtype=np.bool_)
         _table_lookup_kernels.sky_view_grid_lookup(
             log_grid, up, sun, float(np.cos(np.radians(SKY_GRID_EXACT_DEG))), t.bottom_radius_m,
@@ -322,10 +331,70 @@ class LutSolver:
         sunlit = (np.ones(n, dtype=np.bool_) if lit is None
                   else np.ascontiguousarray(np.broadcast_to(lit, (n,)), dtype=np.bool_))
         out = np.empty((n, p.n_wavelengths))
-        _table_lookup_kernels.surface_radiance_points(
-            _writable(np.asarray(position, dtype=np.float64).reshape(3)), targets, facing,
-            sunlit, reflectance, _sun(sun_direction), self._lookup, out)
+        origin = _writable(np.asarray(position, dtype=np.float64).reshape(3))
+        sun = _sun(sun_direction)
+        if self._uses_aerial_grid(origin, sun, n):
+            self._surface_radiance_from_grid(origin, targets, facing, sunlit, reflectance, sun,
+                                             out)
+        else:
+            _table_lookup_kernels.surface_radiance_points(origin, targets, facing, sunlit,
+                                                          reflectance, sun, self._lookup, out)
         return out
+
+    def _uses_aerial_grid(self, origin: np.ndarray, sun: np.ndarray, n_points: int) -> bool:
+        """Whether `surface_radiance` takes the aerial perspective from a grid (module
+        constants): at least AERIAL_GRID_MIN_POINTS points of one observer inside the
+        atmosphere, by day. In twilight (the lookups march single scattering,
+        `exact_single_weight`) the Earth's shadow crosses the views by the horizon within a
+        fraction of the grid's cells: up to 15 % off seen from 3 km with the sun 2 deg below
+        the horizon, so the points are computed one by one."""
+        if n_points < AERIAL_GRID_MIN_POINTS or not self._one_observer_inside(origin[None]):
+            return False
+        mu_s = float(origin @ sun) / float(np.linalg.norm(origin))
+        return _table_lookup_kernels.exact_single_weight(mu_s) <= 0.0
+
+    def _surface_radiance_from_grid(self, origin: np.ndarray, points: np.ndarray,
+                                    normals: np.ndarray, lit: np.ndarray, albedo: np.ndarray,
+                                    sun: np.ndarray, out: np.ndarray) -> None:
+        """`surface_radiance` of one observer inside the atmosphere with the light the air
+        scatters in front of the points from an aerial-perspective grid (module constants):
+        the cells of the sky-view grid the points fall in, at AERIAL_GRID_DEPTHS distances,
+        L_in / (1 - T) from `aerial_perspective_points` at its nodes."""
+        t = self.tables
+        n = points.shape[0]
+        i_mu, k_phi = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+        distance, exact = np.empty(n), np.empty(n, dtype=np.bool_)
+        _aerial_grid_kernels.aerial_grid_cells(
+            origin, points, sun, float(np.cos(np.radians(AERIAL_GRID_EXACT_DEG))),
+            t.bottom_radius_m, t.top_radius_m, AERIAL_GRID_MU, AERIAL_GRID_PHI, i_mu, k_phi,
+            distance, exact)
+        served = ~exact
+        if not served.any():
+            _table_lookup_kernels.surface_radiance_points(origin, points, normals, lit, albedo,
+                                                          sun, self._lookup, out)
+            return
+        i_first, i_last = int(i_mu[served].min()), int(i_mu[served].max()) + 1
+        k_first, k_last = int(k_phi[served].min()), int(k_phi[served].max()) + 1
+        d_max = float(distance[served].max())
+        r = float(np.linalg.norm(origin))
+        directions = _table_lookup_kernels.sky_view_grid_nodes(
+            r, AERIAL_GRID_MU, AERIAL_GRID_PHI, t.bottom_radius_m, t.top_radius_m)[
+                i_first:i_last + 1, k_first:k_last + 1] @ _sun_frame(origin / r, sun)
+        nodes = _aerial_grid_kernels.aerial_grid_node_points(
+            origin, np.ascontiguousarray(directions), d_max, t.bottom_radius_m,
+            t.top_radius_m, AERIAL_GRID_DEPTHS)
+        n_wl = self.profile.n_wavelengths
+        inscatter = np.empty((nodes.size // 3, n_wl))
+        transmittance = np.empty_like(inscatter)
+        _table_lookup_kernels.aerial_perspective_points(
+            origin[None], nodes.reshape(-1, 3), sun, self._lookup, inscatter, transmittance)
+        extinguished = 1.0 - transmittance
+        ratio = np.divide(inscatter, extinguished, out=np.zeros_like(inscatter),
+                          where=extinguished > 0.0).reshape(nodes.shape[:3] + (n_wl,))
+        ratio[:, :, 0] = ratio[:, :, 1]  # at the observer 0 / 0: the next node's
+        _aerial_grid_kernels.surface_radiance_from_grid(
+            origin, points, normals, lit, albedo, sun, self._lookup, ratio, AERIAL_GRID_MU,
+            AERIAL_GRID_PHI, i_first, k_first, d_max, exact, out)
 
     def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike,
                           normals: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -362,6 +431,13 @@ def _writable(array: np.ndarray) -> np.ndarray:
     then meet one array type and compile once."""
     array = np.ascontiguousarray(array, dtype=np.float64)
     return array if array.flags.writeable else array.copy()
+
+
+def _sun_frame(up: np.ndarray, sun: np.ndarray) -> np.ndarray:
+    """Rows: the local x (towards the sun's azimuth), y and z (up) axes of an observer whose
+    vertical is the unit `up`; `local @ frame` turns local directions into world ones."""
+    x_axis = horizontal_towards(up, sun)
+    return np.stack([x_axis, np.cross(up, x_axis), up])
 
 
 def _sun(sun_direction: ArrayLike) -> np.ndarray:
