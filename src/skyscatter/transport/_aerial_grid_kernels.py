@@ -91,12 +91,14 @@ def aerial_grid_node_points(origin, directions, d_max, bottom_radius, top_radius
 
 
 @njit(parallel=True, cache=True)
-def surface_radiance_from_grid(origin, points, normals, lit, albedo, sun_direction, tables,
-                               ratio_grid, n_mu, n_phi, i_first, k_first, d_max, exact, out):
-    """`surface_radiance_points` of one observer at `origin` (3,) inside the atmosphere, the
-    light scattered towards it in front of each point not `exact` from `ratio_grid`
-    (`_interpolated_segment`), the `exact` points' by `aerial_segment`.
-    `tables`: the `LookupTables` record."""
+def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction, tables,
+                            ratio_grid, n_mu, n_phi, i_first, k_first, d_max, exact, out):
+    """Radiance (n, n_wl) reaching `origin` (3,) from Lambertian surfaces at `points` (n, 3)
+    facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the sun
+    where `lit` (n,) (not in a terrain shadow): L_in + T albedo / pi (E_sun [lit] + E_sky)
+    (`add_reflected_light`), into out. L_in and T of the `exact` points by `aerial_segment`,
+    of the others from `ratio_grid` (`_interpolated_segment`; only for one observer inside the
+    atmosphere). `tables`: the `LookupTables` record."""
     n_points = points.shape[0]
     n_wl = out.shape[1]
     n_s = tables.phase_table.shape[0]

@@ -1187,29 +1187,6 @@ def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_
                            inscatter_out[i], transmittance_out[i])
 
 
-@njit(parallel=True, cache=True)
-def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction, tables, out):
-    """Radiance (n, n_wl) reaching `origin` (3,) from Lambertian surfaces at `points` (n, 3)
-    facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the sun
-    where `lit` (n,) (not in a terrain shadow):
-    L_in + T albedo / pi (E_sun [lit] + E_sky), `aerial_segment` and `surface_irradiance`
-    in one pass.
-    `tables`: the `LookupTables` record of the tables and the profile."""
-    n_points = points.shape[0]
-    n_wl = out.shape[1]
-    n_s = tables.phase_table.shape[0]
-    one_albedo = albedo.shape[0] == 1
-    n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
-    for block in prange(n_blocks):
-        work = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
-        t_view, direct, diffuse = np.empty(n_wl), np.empty(n_wl), np.empty(n_wl)
-        for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
-            aerial_segment(origin[0], origin[1], origin[2], points[i, 0], points[i, 1],
-                           points[i, 2], sun_direction, tables, work, out[i], t_view)
-            add_reflected_light(points[i], normals[i], lit[i], albedo[0 if one_albedo else i],
-                                sun_direction, tables, t_view, direct, diffuse, out[i])
-
-
 @njit(cache=True)
 def add_reflected_light(point, normal, sunlit, albedo, sun_direction, tables, t_view, direct,
                         diffuse, out):

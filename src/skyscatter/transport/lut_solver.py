@@ -337,9 +337,18 @@ class LutSolver:
             self._surface_radiance_from_grid(origin, targets, facing, sunlit, reflectance, sun,
                                              out)
         else:
-            _table_lookup_kernels.surface_radiance_points(origin, targets, facing, sunlit,
-                                                          reflectance, sun, self._lookup, out)
+            self._surface_radiance_per_point(origin, targets, facing, sunlit, reflectance, sun,
+                                             out)
         return out
+
+    def _surface_radiance_per_point(self, origin: np.ndarray, points: np.ndarray,
+                                    normals: np.ndarray, lit: np.ndarray, albedo: np.ndarray,
+                                    sun: np.ndarray, out: np.ndarray) -> None:
+        """`surface_radiance` with the aerial perspective of every point computed alone."""
+        no_grid = np.zeros((2, 2, 2, self.profile.n_wavelengths))
+        _aerial_grid_kernels.surface_radiance_points(
+            origin, points, normals, lit, albedo, sun, self._lookup, no_grid, 2, 2, 0, 0, 0.0,
+            np.ones(points.shape[0], dtype=np.bool_), out)
 
     def _uses_aerial_grid(self, origin: np.ndarray, sun: np.ndarray, n_points: int) -> bool:
         """Whether `surface_radiance` takes the aerial perspective from a grid (module
@@ -370,8 +379,7 @@ class LutSolver:
             distance, exact)
         served = ~exact
         if not served.any():
-            _table_lookup_kernels.surface_radiance_points(origin, points, normals, lit, albedo,
-                                                          sun, self._lookup, out)
+            self._surface_radiance_per_point(origin, points, normals, lit, albedo, sun, out)
             return
         i_first, i_last = int(i_mu[served].min()), int(i_mu[served].max()) + 1
         k_first, k_last = int(k_phi[served].min()), int(k_phi[served].max()) + 1
@@ -392,7 +400,7 @@ class LutSolver:
         ratio = np.divide(inscatter, extinguished, out=np.zeros_like(inscatter),
                           where=extinguished > 0.0).reshape(nodes.shape[:3] + (n_wl,))
         ratio[:, :, 0] = ratio[:, :, 1]  # at the observer 0 / 0: the next node's
-        _aerial_grid_kernels.surface_radiance_from_grid(
+        _aerial_grid_kernels.surface_radiance_points(
             origin, points, normals, lit, albedo, sun, self._lookup, ratio, AERIAL_GRID_MU,
             AERIAL_GRID_PHI, i_first, k_first, d_max, exact, out)
 
