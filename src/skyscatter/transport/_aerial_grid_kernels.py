@@ -103,6 +103,10 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
     n_wl = out.shape[1]
     n_s = tables.phase_table.shape[0]
     one_albedo = albedo.shape[0] == 1
+    # the observer's horizon, for the grid's cells
+    r = math.sqrt(origin[0] ** 2 + origin[1] ** 2 + origin[2] ** 2)
+    theta_h = horizon_zenith_angle(min(max(r, tables.bottom_radius), tables.top_radius),
+                                   tables.bottom_radius)
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
         work = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
@@ -114,29 +118,29 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
                                points[i, 2], sun_direction, tables, work, out[i], t_view)
             else:
                 _interpolated_segment(origin, points[i], sun_direction, tables, ratio_grid,
-                                      n_mu, n_phi, i_first, k_first, d_max, scratch, out[i],
-                                      t_view)
+                                      n_mu, n_phi, i_first, k_first, d_max, theta_h, scratch,
+                                      out[i], t_view)
             add_reflected_light(points[i], normals[i], lit[i], albedo[0 if one_albedo else i],
                                 sun_direction, tables, t_view, direct, diffuse, out[i])
 
 
 @njit(cache=True)
 def _interpolated_segment(origin, point, sun_direction, tables, ratio_grid, n_mu, n_phi,
-                          i_first, k_first, d_max, scratch, inscatter_out, transmittance_out):
+                          i_first, k_first, d_max, theta_h, scratch, inscatter_out,
+                          transmittance_out):
     """The segment from `origin` to `point`: its transmittance T from the table
     (`transmittance_along`) into transmittance_out, and the light scattered towards the
     observer in front of the point, (1 - T) times `ratio_grid` (n_a, n_b, n_depth, n_wl)
     interpolated trilinearly in the grid's mu and azimuth axes (cells from i_first and
-    k_first of a grid of n_mu x n_phi, `view_grid_cell`) and d / d_end (`grid_depth`), into
-    inscatter_out."""
+    k_first of a grid of n_mu x n_phi, `view_grid_cell`, the observer's horizon at zenith
+    angle theta_h) and d / d_end (`grid_depth`), into inscatter_out."""
     bottom_radius, top_radius = tables.bottom_radius, tables.top_radius
     r, mu, mu_s, nu, d, hits_ground = segment_start(
         origin[0], origin[1], origin[2], point[0], point[1], point[2], sun_direction,
         bottom_radius, top_radius)
     transmittance_along(r, mu, d, hits_ground, bottom_radius, top_radius, tables.transmittance,
                         transmittance_out, scratch)
-    i, a, k, b = view_grid_cell(mu, nu, mu_s, horizon_zenith_angle(r, bottom_radius),
-                                hits_ground, n_mu, n_phi)
+    i, a, k, b = view_grid_cell(mu, nu, mu_s, theta_h, hits_ground, n_mu, n_phi)
     i -= i_first
     k -= k_first
     n_depth = ratio_grid.shape[2]

@@ -959,12 +959,8 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                                                    dx, dy, dz, top_radius)
             if not inside:
                 continue
-            r = math.sqrt(x * x + y * y + z * z)
-            mu = (x * dx + y * dy + z * dz) / r
-            mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
-            nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
-            r = min(max(r, bottom_radius), top_radius)
-            hits_ground = ray_intersects_ground(r, mu, bottom_radius)
+            r, mu, mu_s, nu, hits_ground = ray_start(x, y, z, dx, dy, dz, sun_direction,
+                                                     bottom_radius, top_radius)
             phase_values(phase_table, nu, weights)
             marched = exact_single_weight(mu_s)
             for k in range(n_s * n_wl):
@@ -1035,6 +1031,18 @@ def aerial_scratch(n_t, n_wl, n_c, n_s):
             np.empty(n_wl), np.empty(n_wl), np.empty(n_c), np.empty((n_s, n_wl)))
 
 
+@njit(cache=True, inline="always")
+def ray_start(x, y, z, dx, dy, dz, sun_direction, bottom_radius, top_radius):
+    """(r, mu, mu_s, nu, hits_ground) of the unit ray (dx, dy, dz) from (x, y, z) in the
+    atmosphere, r clamped to the tables' range."""
+    r = math.sqrt(x * x + y * y + z * z)
+    mu = (x * dx + y * dy + z * dz) / r
+    mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
+    nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
+    r = min(max(r, bottom_radius), top_radius)
+    return r, mu, mu_s, nu, ray_intersects_ground(r, mu, bottom_radius)
+
+
 @njit(cache=True)
 def segment_start(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radius):
     """(r, mu, mu_s, nu, d, hits_ground) of the segment from o to p where it starts in the
@@ -1049,12 +1057,8 @@ def segment_start(ox, oy, oz, px, py, pz, sun_direction, bottom_radius, top_radi
     d -= travelled
     if not inside or d <= 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, False
-    r = math.sqrt(x * x + y * y + z * z)
-    mu = (x * dx + y * dy + z * dz) / r
-    mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
-    nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
-    r = min(max(r, bottom_radius), top_radius)
-    hits_ground = ray_intersects_ground(r, mu, bottom_radius)
+    r, mu, mu_s, nu, hits_ground = ray_start(x, y, z, dx, dy, dz, sun_direction, bottom_radius,
+                                             top_radius)
     if hits_ground:
         d = min(d, distance_to_bottom_boundary(r, mu, bottom_radius))
     else:

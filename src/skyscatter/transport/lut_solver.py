@@ -56,8 +56,8 @@ SUN_GRID_MIN_RAYS = 4 * SUN_GRID_PSI * SUN_GRID_CHI
 # scatters in front of them from a grid per frame (Hillaire 2020's aerial-perspective volume,
 # `_aerial_grid_kernels`): the sky-view grid's directions on AERIAL_GRID_MU view-zenith cells x
 # AERIAL_GRID_PHI azimuths, those the points fall in, x AERIAL_GRID_DEPTHS distances; the
-# points within SKY_GRID_EXACT_DEG of the sun are computed one by one (docs/performance.md,
-# "An aerial-perspective grid per frame").
+# points within AERIAL_GRID_EXACT_DEG of the sun, and every point in twilight, are computed one
+# by one (docs/performance.md, "An aerial-perspective grid per frame").
 AERIAL_GRID_MIN_POINTS = 1 << 16
 AERIAL_GRID_MU = 192
 AERIAL_GRID_PHI = 129
@@ -344,10 +344,11 @@ class LutSolver:
     def _surface_radiance_per_point(self, origin: np.ndarray, points: np.ndarray,
                                     normals: np.ndarray, lit: np.ndarray, albedo: np.ndarray,
                                     sun: np.ndarray, out: np.ndarray) -> None:
-        """`surface_radiance` with the aerial perspective of every point computed alone."""
-        no_grid = np.zeros((2, 2, 2, self.profile.n_wavelengths))
+        """`surface_radiance` with the aerial perspective of every point computed alone (all
+        `exact`: the kernel reads no grid)."""
+        no_grid = np.zeros((0, 0, 0, self.profile.n_wavelengths))
         _aerial_grid_kernels.surface_radiance_points(
-            origin, points, normals, lit, albedo, sun, self._lookup, no_grid, 2, 2, 0, 0, 0.0,
+            origin, points, normals, lit, albedo, sun, self._lookup, no_grid, 0, 0, 0, 0, 0.0,
             np.ones(points.shape[0], dtype=np.bool_), out)
 
     def _uses_aerial_grid(self, origin: np.ndarray, sun: np.ndarray, n_points: int) -> bool:
