@@ -38,6 +38,8 @@ import numpy as np
 
 from skyscatter.astro.mars_time import utc_from_mars_sol_date
 from skyscatter.astro.time import check_utc, parse_time
+from skyscatter.atmosphere.cloud_config import Clouds, list_cloud_presets, load_clouds
+from skyscatter.atmosphere.cloud_field import CloudField, cloud_field
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.gas import describe_gas
 from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS, Atmosphere
@@ -125,6 +127,7 @@ __all__ = [
     "VALIDATION_CASES",
     "ValidationSettings",
     "AlbedoMap",
+    "Clouds",
     "EquirectangularCamera",
     "FRAME_NAME",
     "FisheyeCamera",
@@ -140,7 +143,9 @@ __all__ = [
     "check_render_cost",
     "demo_mountains",
     "describe_gas",
+    "list_cloud_presets",
     "list_presets",
+    "load_clouds",
     "load_atmosphere",
     "load_solver",
     "look_at_direction",
@@ -162,6 +167,9 @@ __all__ = [
     "serve_viewer",
     "wavelength_grid",
 ]
+
+J2000_UTC = datetime.datetime(2000, 1, 1, 12, tzinfo=datetime.UTC)  # the clouds' epoch
+# (2000-01-01 12:00 UTC, within 64 s of J2000.0 in TT: a fixed origin is all they need)
 
 # The files of a time-lapse's frames folder: the folder holds these only, and is replaced whole
 FRAME_NAME = re.compile(r"frame_[0-9]{5,}\.png")
@@ -256,13 +264,16 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
            options: SolverOptions | None = None,
            progress: Callable[[int], None] | None = None,
            orbit_latitude_deg: float | None = None, orbit_longitude_deg: float = 0.0,
-           ground: Ground | None = None, allow_large: bool = False) -> SkyImage:
+           ground: Ground | None = None, allow_large: bool = False,
+           clouds: Clouds | None = None, cloud_time_s: float = 0.0) -> SkyImage:
     """Render what `camera` sees from `altitude_m` [m] above the ground, with the sun at
     `sun_zenith_deg` and `sun_azimuth_deg` (from north towards east) in the observer's local
     frame. Spectral, on `wavelengths_nm` (default: 16 bins over 360-830 nm). With
     `orbit_latitude_deg` the camera hangs above that latitude/longitude (views from space;
     pitch -90 looks at the planet's centre); otherwise above the north pole. `ground` adds an
-    albedo map and/or terrain (table solver). `options`: `solver_options(atmosphere)` by
+    albedo map and/or terrain (table solver). `clouds` (`load_clouds`) adds cloud layers as
+    the wind has moved them `cloud_time_s` [s] after their initial state (table solver).
+    `options`: `solver_options(atmosphere)` by
     default (the config's orders, tables cached). InputError, before any work, for a value
     out of range (`checks`) or an image too large (`check_render_cost`; `allow_large`)."""
     _check_atmosphere(atmosphere)
@@ -279,7 +290,28 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
     viewpoint = viewpoint_at(altitude_m, engine.profile.bottom_radius_m, orbit_latitude_deg,
                              orbit_longitude_deg)
     return render_sky(engine, camera, viewpoint, sun, atmosphere.planet.star, progress=progress,
-                      ground=ground)
+                      ground=ground,
+                      clouds=_cloud_field(clouds, engine, viewpoint, cloud_time_s, solver))
+
+
+def _cloud_field(clouds: Clouds | None, engine, viewpoint: Viewpoint, time_s: float,
+                 solver: str) -> CloudField | None:
+    """The field of `clouds` for this solver's wavelengths and planet, winds in the
+    viewpoint's frame; None without clouds. InputError unless the solver is "lut"."""
+    if clouds is None:
+        return None
+    checked_instance("clouds", clouds, Clouds, "Clouds", " from load_clouds(name or path)")
+    if solver != "lut":
+        raise InputError("clouds need the table solver (--solver lut)", key="solver",
+                         value=solver, allowed="lut")
+    profile = engine.profile
+    return cloud_field(clouds, profile.bottom_radius_m, profile.wavelengths_nm,
+                       to_world=viewpoint.to_world, time_s=time_s)
+
+
+def _seconds_since_j2000(observer: Observer) -> float:
+    """The clouds' time of a dated render: seconds since 2000-01-01T12:00 UTC."""
+    return (observer.time_utc - J2000_UTC).total_seconds()
 
 
 def make_observer(time: str | datetime.datetime, latitude_deg: float, longitude_deg: float,
@@ -327,12 +359,13 @@ def render_at(atmosphere: Atmosphere, camera: Camera, observer: Observer,
               options: SolverOptions | None = None,
               progress: Callable[[int], None] | None = None,
               orbit_altitude_m: float | None = None, ground: Ground | None = None,
-              allow_large: bool = False) -> SkyImage:
+              allow_large: bool = False, clouds: Clouds | None = None) -> SkyImage:
     """The whole sky for `observer` (`make_observer`): the atmosphere lit by the sun and the
     moon, the sun's and moon's disks, the stars (`objects`). The camera stands at the
     observer's elevation, or with `orbit_altitude_m` hangs that high above the observer's
-    latitude/longitude (pitch -90 looks at the planet's centre). Other arguments, and the
-    InputError for bad ones, as `render`."""
+    latitude/longitude (pitch -90 looks at the planet's centre). `clouds` drift with their
+    wind from their initial state at J2000 (2000-01-01T12:00 UTC): the same time gives the
+    same sky. Other arguments, and the InputError for bad ones, as `render`."""
     _check_atmosphere(atmosphere)
     _check_observer(observer)
     if orbit_altitude_m is not None:
@@ -340,14 +373,18 @@ def render_at(atmosphere: Atmosphere, camera: Camera, observer: Observer,
     wavelengths = _checked_wavelength_list(wavelengths_nm, False)
     check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
                       allow_large=allow_large)
+    if clouds is not None and solver != "lut":
+        raise InputError("clouds need the table solver (--solver lut)", key="solver",
+                         value=solver, allowed="lut")
     engine = load_solver(atmosphere, wavelengths, solver, options)
     return _render_at(engine, atmosphere, camera, observer, objects or SkyObjects(), progress,
-                      orbit_altitude_m, ground)
+                      orbit_altitude_m, ground, clouds)
 
 
 def _render_at(engine, atmosphere: Atmosphere, camera: Camera, observer: Observer,
                objects: SkyObjects, progress: Callable[[int], None] | None,
-               orbit_altitude_m: float | None, ground: Ground | None) -> SkyImage:
+               orbit_altitude_m: float | None, ground: Ground | None,
+               clouds: Clouds | None = None) -> SkyImage:
     sky = sky_ephemeris(atmosphere, observer)
     radius = engine.profile.bottom_radius_m
     if orbit_altitude_m is None:
@@ -356,9 +393,10 @@ def _render_at(engine, atmosphere: Atmosphere, camera: Camera, observer: Observe
         viewpoint = viewpoint_at(orbit_altitude_m, radius, observer.latitude_deg,
                                  observer.longitude_deg)
     optics = eclipse_optics(engine) if sky.moon is not None else None
+    field = _cloud_field(clouds, engine, viewpoint, _seconds_since_j2000(observer), "lut")
     return render_sky_at(engine, camera, viewpoint, atmosphere.planet.star, sky,
                          objects=objects, progress=progress, ground=ground,
-                         eclipse_optics=optics)
+                         eclipse_optics=optics, clouds=field)
 
 
 def _check_observer(observer: Observer) -> None:
@@ -384,7 +422,8 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
               compensation_ev: float = 1.0, operator: str = "aces", colour_space: str = "srgb",
               adaptation_time_s: float = 600.0,
               on_frame: Callable[[int, datetime.datetime, float], None] | None = None,
-              orbit_altitude_m: float | None = None, allow_large: bool = False) -> Timelapse:
+              orbit_altitude_m: float | None = None, allow_large: bool = False,
+              clouds: Clouds | None = None) -> Timelapse:
     """Render the sky at each of `times` (aware datetimes) for one place and write the frames
     (PNG, `frames_dir/frame_00001.png` ...) and a video (`video_path`, .mp4 or .gif).
 
@@ -392,8 +431,8 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     night-adapted meter (`night_adapted_exposure`) through a first-order low-pass of time
     constant `adaptation_time_s` in simulated time (`adapted_ev100`), so day, twilight and
     night flow into each other. With `objects.scintillation` (a random generator) the stars
-    twinkle, a new draw each frame. `on_frame(index, time, ev100)` is called after each
-    frame.
+    twinkle, a new draw each frame. `clouds` drift with their wind from frame to frame
+    (`render_at`). `on_frame(index, time, ev100)` is called after each frame.
 
     `image` (an `ImageOptions`) holds the display choices in one object and, when given, is
     used instead of `compensation_ev`, `operator` and `colour_space` (kept for existing
@@ -429,13 +468,16 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     wavelengths = _checked_wavelength_list(wavelengths_nm, False)
     check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
                       allow_large=allow_large, frames=len(times))
+    if clouds is not None and solver != "lut":
+        raise InputError("clouds need the table solver (--solver lut)", key="solver",
+                         value=solver, allowed="lut")
     engine = load_solver(atmosphere, wavelengths, solver, options)
     objects = objects or SkyObjects()
     frames_dir = Path(frames_dir)
 
     def render_frame(observer: Observer) -> SkyImage:
         return _render_at(engine, atmosphere, camera, observer, objects, None, orbit_altitude_m,
-                          None)
+                          None, clouds)
 
     with staged_outputs() as stage, VideoWriter(video_path, fps, stage) as video:
         frames, exposures = write_frames(

@@ -208,6 +208,7 @@ def _look_at(text: str) -> tuple[float, float, float]:
 _ALTITUDE_KM = Bounds(checks.ELEVATION_M.low / 1e3, checks.ELEVATION_M.high / 1e3)
 _DISTANCE_KM = Bounds(0.0, checks.ALTITUDE_M.high / 1e3, low_open=True)
 _TERRAIN_M = Bounds(0.0, 1e5, low_open=True)  # m; heightmap spacing and height (100 km)
+_CLOUD_TIME_S = Bounds(-1e12, 1e12)  # s; years 1-9999 from J2000, as the dated renders
 _MAGNITUDE = Bounds(-30.0, 30.0)  # V magnitudes: the sun is -26.7, Hipparcos ends near 14
 _MINUTES = Bounds(0.0, 1e7)  # simulated minutes (19 years)
 _POSITIVE = Bounds(0.0, None, low_open=True)
@@ -406,6 +407,10 @@ def build_parser() -> argparse.ArgumentParser:
                         metavar="M",
                         help="height of full white in the heightmap in metres; for 'demo', "
                         "the highest peak (default 4500)")
+    _add_cloud_argument(render)
+    render.add_argument("--cloud-time", type=_number(_CLOUD_TIME_S), default=0.0, metavar="S",
+                        help="seconds the wind has moved the clouds from their initial state "
+                        "(default 0; with --time the clouds' time is the date's)")
     _add_sky_object_arguments(render)
     render.add_argument("--exposure", type=_exposure, default=None, metavar="EV100|auto",
                         help="exposure value EV100, or auto (default auto)")
@@ -445,6 +450,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_camera_arguments(timelapse, CAMERAS[:3], 384)
     _add_wavelength_argument(timelapse)
     _add_solver_arguments(timelapse, 64)
+    _add_cloud_argument(timelapse)
     _add_sky_object_arguments(timelapse)
     timelapse.add_argument("--fps", type=_number(_POSITIVE), default=12.0,
                            help="video frames per second (default 12)")
@@ -649,6 +655,7 @@ def _render(args: argparse.Namespace) -> None:
     api.check_render_cost(camera, args.wavelengths, solver=args.solver, n_samples=args.samples,
                           allow_large=args.allow_large)  # memory and time, before allocating
     ground = _ground(args, radius)
+    clouds = _clouds(args)
     objects = _sky_objects(args)  # checked before the tables are computed
     with _solver_options(args, atmosphere) as options, progress(
             int(camera.valid_mask().sum()), "rendering", unit="ray") as bar:
@@ -657,14 +664,15 @@ def _render(args: argparse.Namespace) -> None:
                                   wavelengths_nm=args.wavelengths, solver=args.solver,
                                   options=options, progress=bar.update,
                                   orbit_altitude_m=altitude if orbit else None, ground=ground,
-                                  allow_large=args.allow_large)
+                                  allow_large=args.allow_large, clouds=clouds)
         else:
             image = api.render(atmosphere, camera, zenith, sun_azimuth_deg=args.sun_azimuth,
                                altitude_m=altitude, wavelengths_nm=args.wavelengths,
                                solver=args.solver, options=options, progress=bar.update,
                                orbit_latitude_deg=latitude if orbit else None,
                                orbit_longitude_deg=longitude, ground=ground,
-                               allow_large=args.allow_large)
+                               allow_large=args.allow_large, clouds=clouds,
+                               cloud_time_s=args.cloud_time)
     ev100 = api.save_image(image, image_target, args.exr, options=image_options)
     written = ["the PNG to standard output" if image_target is not args.output
                else str(args.output)] + ([str(args.exr)] if args.exr else [])
@@ -756,7 +764,8 @@ def _timelapse(args: argparse.Namespace) -> None:
             image=api.ImageOptions(compensation_ev=args.exposure_compensation,
                                    operator=args.tonemap, colour_space=args.colour_space),
             adaptation_time_s=args.adaptation_minutes * 60.0,
-            on_frame=lambda *_: bar.update(1), allow_large=args.allow_large)
+            on_frame=lambda *_: bar.update(1), allow_large=args.allow_large,
+            clouds=_clouds(args))
     print(f"wrote {result.video} and {len(result.frames)} frames in {frames_dir} (EV100 "
           f"{min(result.ev100):.1f} to {max(result.ev100):.1f})", file=sys.stderr)
 
@@ -778,6 +787,23 @@ def _orbit_camera(args: argparse.Namespace, altitude_m: float, radius_m: float,
     up = (0.0, 0.0, 1.0) if abs(forward[2]) < 0.99 else (0.0, 1.0, 0.0)  # level horizon
     width = max(1, round(args.size * args.aspect))
     return api.PerspectiveCamera.from_forward_up(width, args.size, fov, forward, up)
+
+
+def _add_cloud_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--clouds", default=None, metavar="FILE|PRESET",
+                        help="cloud layers: a TOML file or a preset (cumulus, stratocumulus, "
+                        "altocumulus, cirrus, stratus; docs/clouds.md); table solver only")
+
+
+def _clouds(args: argparse.Namespace):
+    """The Clouds of --clouds, or None; checked before any table work."""
+    from skyscatter import api
+    if args.clouds is None:
+        return None
+    if args.solver != "lut":
+        raise InputError("--clouds needs the table solver (--solver lut)", key="solver",
+                         value=args.solver, allowed="lut")
+    return api.load_clouds(args.clouds)
 
 
 def _ground(args: argparse.Namespace, radius_m: float):

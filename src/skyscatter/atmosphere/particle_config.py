@@ -13,7 +13,13 @@ from skyscatter.atmosphere import config_ranges as ranges
 from skyscatter.atmosphere.config_table import ConfigTable
 from skyscatter.checks import Bounds
 from skyscatter.errors import ConfigError, InputError
-from skyscatter.optics.mie import METHODS, PHASE_AVERAGES, MieOptics, particle_optics
+from skyscatter.optics.mie import (
+    METHODS,
+    MIE_WAVELENGTHS_NM,
+    PHASE_AVERAGES,
+    MieOptics,
+    particle_optics,
+)
 from skyscatter.optics.particle_index import (
     MATERIALS,
     ComplexIndex,
@@ -33,7 +39,6 @@ __all__ = ["MIE_WAVELENGTHS_NM", "parse_mie_optics"]
 
 # Wavelengths [nm] of the Mie table of a config: Meyran 2022's 10 nm grid from 360 nm, extended to
 # 900 nm so that the 880 nm filter of the Mars rovers is inside it.
-MIE_WAVELENGTHS_NM = np.arange(360.0, 901.0, 10.0)
 MIE_REFERENCE_NM = Bounds(float(MIE_WAVELENGTHS_NM[0]), float(MIE_WAVELENGTHS_NM[-1]))
 MICROMETRE_M = 1e-6
 DISTRIBUTIONS = ("log-normal", "gamma", "modified-gamma", "junge")

@@ -73,6 +73,7 @@ __all__ = [
     "METHODS",
     "MIE_ANGLES_DEG",
     "MIE_CODE_VERSION",
+    "MIE_WAVELENGTHS_NM",
     "PHASE_AVERAGES",
     "MieOptics",
     "ParticleOpticsTable",
@@ -91,6 +92,8 @@ MIE_ANGLES_DEG = np.concatenate([np.linspace(0.0, 2.0, 101)[:-1],
                                  np.linspace(2.0, 10.0, 81)[:-1],
                                  np.linspace(10.0, 180.0, 681)])
 MIE_ANGLES_DEG.flags.writeable = False
+MIE_WAVELENGTHS_NM = np.arange(360.0, 901.0, 10.0)  # configs' Mie tables, interpolated between
+MIE_WAVELENGTHS_NM.flags.writeable = False
 
 
 @dataclass(frozen=True, eq=False)

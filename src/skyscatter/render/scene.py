@@ -17,17 +17,20 @@ from functools import lru_cache
 import numpy as np
 
 from skyscatter.checks import ANGLE_DEG, ELEVATION_M, LATITUDE_DEG, ZENITH_DEG, checked_number
+from skyscatter.errors import InputError
 from skyscatter.render.camera import Camera
 from skyscatter.render.lunar_eclipse import circle_overlap_area
 from skyscatter.render.surfaces import Ground, surface_radiance
 from skyscatter.spectrum.colour import spectral_to_xyz, white_balance, xyz_to_rgb
 from skyscatter.spectrum.star import Star
+from skyscatter.transport.clouds import CloudField, cloud_transmittance, clouds_in_front
 from skyscatter.transport.geometry import (
     disk_fraction_above,
     horizon_cos_zenith,
     towards_visible_sun,
 )
 from skyscatter.transport.single_scattering import observer_position
+from skyscatter.transport.solvers import SurfaceSolver
 
 __all__ = [
     "SkyImage",
@@ -123,17 +126,18 @@ def orbit_viewpoint(altitude_m: float, latitude_deg: float, longitude_deg: float
 
 def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray, star: Star, *,
                progress: Callable[[int], None] | None = None,
-               ground: Ground | None = None) -> SkyImage:
+               ground: Ground | None = None, clouds: CloudField | None = None) -> SkyImage:
     """Spectral image seen by `camera` from `viewpoint` with the sun along `sun_dir` (both in
     the viewpoint's local frame). `solver` answers `sky_radiance` and `transmittance`; with
     `ground` (an albedo map and/or terrain) the rays that meet it are shaded by
-    `surfaces.surface_radiance` (table solver only)."""
+    `surfaces.surface_radiance`, with `clouds` the clouds are put in front
+    (`transport.clouds.clouds_in_front`; both table solver only)."""
     profile = solver.profile
     directions, valid = camera.directions()
     world_sun = viewpoint.direction_to_world(sun_dir)
     spectral = camera_image(directions, valid, profile.n_wavelengths, lambda rays: (
         diffuse_radiance(solver, viewpoint.position_m, rays, world_sun, ground=ground,
-                         progress=progress)),
+                         clouds=clouds, progress=progress)),
         viewpoint)
     # The visible part of a setting disk shines along the grazing ray; the planet hides the rest
     position = viewpoint.position_m
@@ -142,6 +146,9 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     if ground is not None and ground.terrain is not None and ground.terrain.shadowed(
             position, world_sun)[0]:
         sun_transmittance = np.zeros_like(sun_transmittance)  # the sun is behind a mountain
+    if clouds is not None:
+        sun_transmittance = sun_transmittance * cloud_transmittance(clouds, position,
+                                                                    world_sun)[0]
     add_sun_disk(spectral, camera, directions, valid, sun_dir, star=star,
                  wavelengths_nm=profile.wavelengths_nm, transmittance=sun_transmittance,
                  horizon_cos_zenith=horizon_cos_zenith(float(np.linalg.norm(position)),
@@ -164,11 +171,16 @@ def camera_image(directions: np.ndarray, valid: np.ndarray, n_wavelengths: int,
 
 
 def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light: np.ndarray,
-                     *, ground: Ground | None = None,
+                     *, ground: Ground | None = None, clouds: CloudField | None = None,
                      progress: Callable[[int], None] | None = None) -> np.ndarray:
     """Sky (and, with `ground`, surface) radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along world
     `rays` (n, 3) from `position`, lit from `world_light` with the profile's top-of-atmosphere
-    irradiance."""
+    irradiance; with `clouds` in front (`transport.clouds.clouds_in_front`)."""
+    if clouds is not None:
+        _check_cloud_solver(solver)
+        behind = diffuse_radiance(solver, position, rays, world_light, ground=ground,
+                                  progress=progress)
+        return clouds_in_front(solver, clouds, position, rays, world_light, behind)
     if ground is None:
         return solver.sky_radiance(position, rays, world_light, progress)
     radiance = np.empty((rays.shape[0], solver.profile.n_wavelengths))
@@ -179,6 +191,12 @@ def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light
         progress(hits.size)
     radiance[misses] = solver.sky_radiance(position, rays[misses], world_light, progress)
     return radiance
+
+
+def _check_cloud_solver(solver) -> None:
+    if not isinstance(solver, SurfaceSolver):
+        raise InputError("clouds need the table solver (--solver lut)", key="solver",
+                         value=getattr(solver, "name", solver), allowed="lut")
 
 
 def sky_image(spectral: np.ndarray, directions: np.ndarray, valid: np.ndarray,

@@ -71,6 +71,7 @@ from skyscatter.render.stars import (
 from skyscatter.render.surfaces import Ground
 from skyscatter.spectrum.magnitudes import colour_temperature_from_b_minus_v, stellar_irradiance
 from skyscatter.spectrum.star import Star
+from skyscatter.transport.clouds import CloudField, cloud_transmittance
 from skyscatter.transport.limb import grazing_deflection_rad, grazing_transmittance
 from skyscatter.transport.solvers import Solver, TableSolver
 
@@ -203,12 +204,14 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
                   objects: SkyObjects | None = None,
                   progress: Callable[[int], None] | None = None,
                   ground: Ground | None = None,
-                  eclipse_optics: EclipseOptics | None = None) -> SkyImage:
+                  eclipse_optics: EclipseOptics | None = None,
+                  clouds: CloudField | None = None) -> SkyImage:
     """Spectral image of the sky of `sky` (an `ephemeris`) seen by `camera` from `viewpoint`
     (its local frame is the observer's east-north-up frame). `star` is the planet's star as
     configured; its distance is replaced by the date's. `eclipse_optics` gives the grazing
     transmittance and refraction of the planet's air for the light in the umbra (lunar
-    eclipses; None: the umbra is dark)."""
+    eclipses; None: the umbra is dark). `clouds` are lit by the sun and the moon and hide
+    what lies behind them (`transport.clouds`)."""
     objects = objects or SkyObjects()
     profile = solver.profile
     wavelengths = profile.wavelengths_nm
@@ -238,6 +241,7 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
         total = np.zeros((rays.shape[0], profile.n_wavelengths)) if not lights else None
         for index, (world_light, scale) in enumerate(lights):  # the solver chunks the rays
             lit = diffuse_radiance(solver, position, rays, world_light, ground=ground,
+                                   clouds=clouds,
                                    progress=progress if index == 0 else None)  # count once
             lit *= scale
             if index == 0:
@@ -248,7 +252,7 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
             chunk = rays[start:start + _CHUNK_RAYS]
             airglow = airglow_radiance(chunk @ position / observer_radius, wavelengths,
                                        observer_radius, profile.bottom_radius_m)
-            airglow *= _world_transmittance(solver, position, chunk, ground)
+            airglow *= _world_transmittance(solver, position, chunk, ground, clouds)
             total[start:start + _CHUNK_RAYS] += airglow
         return total
 
@@ -258,22 +262,24 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     moon_seen = None if moon is None else refract(sky.moon.direction(), pressure, temperature)
     add_sun_disk(spectral, camera, directions, valid, sun_seen, star=sun_today,
                  wavelengths_nm=wavelengths,
-                 transmittance=_transmittance(solver, viewpoint, sun_seen[None], ground)[0],
+                 transmittance=_transmittance(solver, viewpoint, sun_seen[None], ground,
+                                              clouds)[0],
                  occluder=None if moon is None else (moon_seen,
                                                      moon.geometry.angular_radius_rad))
     if moon is not None:
         seen = dataclasses.replace(moon.geometry, moon_direction=moon_seen)
         add_moon_disk(spectral, camera, directions, valid, seen, wavelengths_nm=wavelengths,
                       solar_irradiance_at_moon=moon.solar_irradiance,
-                      transmittance=_transmittance(solver, viewpoint, moon_seen[None], ground)[0],
+                      transmittance=_transmittance(solver, viewpoint, moon_seen[None], ground,
+                                                    clouds)[0],
                       eclipse=moon.eclipse, irradiance=moon.irradiance)
     if objects.stars:
         _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky, objects,
-                             wavelengths, ground)
+                             wavelengths, ground, clouds)
     if objects.milky_way:
         add_star_background(spectral, valid, directions, sky.to_horizon, wavelengths,
-                            transmittance_of=lambda rays: _transmittance(solver, viewpoint,
-                                                                         rays, ground),
+                            transmittance_of=lambda rays: _transmittance(
+                                solver, viewpoint, rays, ground, clouds),
                             magnitude_limit=objects.magnitude_limit)
     return sky_image(spectral, directions, valid, viewpoint, profile)
 
@@ -286,16 +292,19 @@ def _sun_lights_the_sky(solver: Solver, sun_true: np.ndarray) -> bool:
 
 
 def _transmittance(solver, viewpoint: Viewpoint, local_directions: np.ndarray,
-                   ground: Ground | None) -> np.ndarray:
+                   ground: Ground | None, clouds: CloudField | None = None) -> np.ndarray:
     """Transmittance (n, n_wl) from the observer out of the atmosphere along local directions;
     0 where the planet (or terrain) is in the way."""
     world = viewpoint.direction_to_world(np.asarray(local_directions, dtype=np.float64))
-    return _world_transmittance(solver, viewpoint.position_m, world, ground)
+    return _world_transmittance(solver, viewpoint.position_m, world, ground, clouds)
 
 
 def _world_transmittance(solver, position: np.ndarray, world: np.ndarray,
-                         ground: Ground | None) -> np.ndarray:
-    """`_transmittance` for world directions (n, 3) from `position`."""
+                         ground: Ground | None, clouds: CloudField | None = None) -> np.ndarray:
+    """`_transmittance` for world directions (n, 3) from `position`, through `clouds` too."""
+    if clouds is not None:
+        return (_world_transmittance(solver, position, world, ground)
+                * cloud_transmittance(clouds, position, world))
     along = world @ position
     radius = solver.profile.bottom_radius_m
     blocked = (along < 0.0) & (position @ position - along**2 < radius**2)
@@ -381,9 +390,9 @@ def star_field(sky: Ephemeris, magnitude_limit: float | None,
 
 
 def _add_catalogue_stars(spectral, camera, valid, solver, viewpoint, sky: Ephemeris,
-                         objects: SkyObjects, wavelengths, ground):
+                         objects: SkyObjects, wavelengths, ground, clouds):
     seen, irradiance = star_field(sky, objects.magnitude_limit, wavelengths)
-    transmittance = _transmittance(solver, viewpoint, seen, ground)
+    transmittance = _transmittance(solver, viewpoint, seen, ground, clouds)
     twinkle = None
     if objects.scintillation is not None:
         airmass = airmass_kasten_young_1989(np.degrees(np.arccos(seen[:, 2])))

@@ -1,0 +1,245 @@
+"""Cloud descriptions: layers of liquid or ice cloud read from TOML (`--clouds FILE|PRESET`).
+
+A clouds file holds one or more `[[layer]]` tables (docs/clouds.md lists every key):
+
+    [[layer]]
+    name = "cumulus"
+    type = "volume"                  # or "sheet": a thin high layer (cirrus), one sample deep
+    base_altitude_m = 1200.0
+    top_altitude_m = 2800.0
+    coverage = 0.4                   # fraction of the sky the layer covers [0-1]
+    water_content_g_m3 = 0.5         # liquid or ice water content where the cloud is densest
+    profile = [[0.0, 0.0], [0.1, 1.0], [0.6, 0.9], [1.0, 0.1]]  # (height fraction, factor)
+    [layer.shape]                    # procedural noise (`atmosphere.cloud_noise`)
+    seed = 1
+    scale_m = 9000.0                 # one tile of the shape noise
+    detail_scale_m = 1500.0          # one tile of the edge-eroding detail noise
+    detail_strength = 0.35           # how much the detail erodes the edges [0-1]
+    edge = 0.3                       # density ramps from 0 to full over this share of the
+                                     # noise values a cloud covers [0-1]: soft to sharp edges
+    coverage_variation = 0.4         # coverage varies by this share over 7.3 tiles [0-1]
+    stretch = 1.0                    # horizontal stretch along the wind (cirrus streaks)
+    [layer.wind]
+    east_m_s = 5.0
+    north_m_s = 2.0
+    [layer.particles]
+    phase = "liquid"                 # Mie droplets; or "ice" (`optics.cloud_optics`)
+    effective_radius_um = 8.0
+    effective_variance = 0.1         # liquid only
+
+Layers may not overlap in altitude: the renderer takes them in the order a ray meets them.
+Presets live in `atmosphere/cloud_presets/*.toml` and cite the observations behind their
+numbers.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from skyscatter.atmosphere.config_file import read_toml
+from skyscatter.atmosphere.config_table import ConfigTable
+from skyscatter.checks import Bounds
+from skyscatter.errors import ConfigError, InputError
+
+__all__ = [
+    "CLOUD_PRESETS_DIR",
+    "CloudLayer",
+    "CloudParticles",
+    "CloudShape",
+    "Clouds",
+    "list_cloud_presets",
+    "load_clouds",
+    "parse_clouds",
+]
+
+CLOUD_PRESETS_DIR = Path(__file__).parent / "cloud_presets"
+MAX_CLOUD_LAYERS = 8  # each layer is one more march per ray
+MAX_PROFILE_NODES = 32
+
+# Ranges, each with its reason:
+CLOUD_ALTITUDE_M = Bounds(0.0, 100e3)  # tropospheric to polar-mesospheric clouds (~83 km)
+FRACTION = Bounds(0.0, 1.0)
+EDGE = Bounds(0.01, 1.0)  # a ramp over less than 1 % of the noise is a step the march aliases
+# Liquid water contents of clouds reach ~5 g m^-3 in deep convection (Pruppacher & Klett 1997,
+# ch. 2); 50 leaves room for dense fog or dust and catches kg for g.
+WATER_CONTENT_G_M3 = Bounds(0.0, 50.0, low_open=True)
+NOISE_SCALE_M = Bounds(10.0, 1e7)  # a tile from a 10 m wisp to a planet-wide pattern
+STRETCH = Bounds(0.1, 20.0)  # cirrus uncinus streaks are ~10 x longer than wide
+WIND_M_S = Bounds(-200.0, 200.0)  # jet streams reach ~100 m/s; Venus' superrotation ~100 m/s
+LIQUID_RADIUS_UM = Bounds(1.0, 40.0)  # `optics.cloud_optics.liquid_cloud_optics`
+ICE_RADIUS_UM = Bounds(5.0, 100.0)  # `optics.cloud_optics.ice_cloud_optics`
+EFFECTIVE_VARIANCE = Bounds(0.01, 0.45)  # Hansen & Travis's b; clouds 0.05-0.2
+LAYER_TYPES = ("volume", "sheet")
+PHASES = ("liquid", "ice")
+
+
+@dataclass(frozen=True)
+class CloudShape:
+    """Procedural noise of a layer: seed, tile sizes [m], detail erosion, edge width and
+    coverage variation [0-1], stretch along the wind [-] (module docstring)."""
+
+    seed: int = 1
+    scale_m: float = 9000.0
+    detail_scale_m: float = 1500.0
+    detail_strength: float = 0.35
+    edge: float = 0.3
+    coverage_variation: float = 0.4
+    stretch: float = 1.0
+
+
+@dataclass(frozen=True)
+class CloudParticles:
+    """Microphysics: "liquid" (Mie, effective radius [um] and variance) or "ice"."""
+
+    phase: str = "liquid"
+    effective_radius_um: float = 10.0
+    effective_variance: float = 0.1
+
+
+@dataclass(frozen=True)
+class CloudLayer:
+    """One cloud layer (module docstring); altitudes [m], water content [g m^-3], wind in the
+    observer's east-north frame [m s^-1], profile nodes (height fraction 0-1, factor 0-1)."""
+
+    name: str
+    kind: str
+    base_altitude_m: float
+    top_altitude_m: float
+    coverage: float
+    water_content_g_m3: float
+    profile: tuple[tuple[float, float], ...]
+    shape: CloudShape
+    particles: CloudParticles
+    wind_m_s: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Clouds:
+    """The layers of a clouds file, lowest first, and where they came from."""
+
+    layers: tuple[CloudLayer, ...]
+    name: str = ""
+    description: str = ""
+
+
+def list_cloud_presets() -> dict[str, str]:
+    """Cloud preset name -> one-line description, sorted by name."""
+    return {path.stem: str(read_toml(path).get("description", ""))
+            for path in sorted(CLOUD_PRESETS_DIR.glob("*.toml"))}
+
+
+def load_clouds(name_or_path: str | Path) -> Clouds:
+    """Clouds of a preset (`list_cloud_presets`) or a TOML file; InputError naming the presets
+    for an unknown name, ConfigError naming the key for a bad value."""
+    text = str(name_or_path)
+    path = Path(text)
+    if not path.suffix and not path.exists():
+        path = CLOUD_PRESETS_DIR / f"{text}.toml"
+        if not path.exists():
+            names = sorted(p.stem for p in CLOUD_PRESETS_DIR.glob("*.toml"))
+            close = difflib.get_close_matches(text, names, n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise InputError(f"unknown cloud preset '{text}'{hint} (presets: "
+                             f"{', '.join(names)}; or give the path of a .toml file)",
+                             key="clouds", value=text, allowed=", ".join(names))
+    if not path.exists():
+        raise InputError(f"clouds file '{path}' does not exist", key="clouds", value=text)
+    return parse_clouds(read_toml(path), path)
+
+
+def parse_clouds(data: dict, path: Path) -> Clouds:
+    """`Clouds` from the parsed TOML of a clouds file at `path` (module docstring)."""
+    top = ConfigTable(dict(data), path, "")
+    name = top.text("name", path.stem)
+    description = top.text("description", "")
+    if top.has("sources"):
+        top.data.pop("sources")
+    tables = top.tables("layer", MAX_CLOUD_LAYERS, "each layer is one more march per ray")
+    top.finish()
+    if not tables:
+        raise ConfigError("a clouds file needs at least one [[layer]]", path=path, key="layer")
+    layers = sorted((_parse_layer(table) for table in tables),
+                    key=lambda layer: layer.base_altitude_m)
+    for lower, upper in zip(layers, layers[1:], strict=False):
+        if upper.base_altitude_m < lower.top_altitude_m:
+            raise ConfigError(f"cloud layers '{lower.name}' ({lower.base_altitude_m:g}-"
+                              f"{lower.top_altitude_m:g} m) and '{upper.name}' "
+                              f"({upper.base_altitude_m:g}-{upper.top_altitude_m:g} m) overlap: "
+                              "give each its own altitudes", path=path, key="layer")
+    return Clouds(tuple(layers), name, description)
+
+
+def _parse_layer(table: ConfigTable) -> CloudLayer:
+    name = table.text("name", table.prefix)
+    kind = table.text("type", "volume", LAYER_TYPES)
+    base = table.number("base_altitude_m", CLOUD_ALTITUDE_M)
+    top = table.number("top_altitude_m", CLOUD_ALTITUDE_M)
+    if not top > base:
+        raise table.error("top_altitude_m", top, f"above base_altitude_m = {base:g}")
+    coverage = table.number("coverage", FRACTION)
+    water = table.number("water_content_g_m3", WATER_CONTENT_G_M3)
+    profile = _parse_profile(table)
+    shape = _parse_shape(table.table("shape", required=False))
+    particles = _parse_particles(table.table("particles", required=False))
+    wind_table = table.table("wind", required=False)
+    wind = (0.0, 0.0)
+    if wind_table is not None:
+        wind = (wind_table.number("east_m_s", WIND_M_S, 0.0),
+                wind_table.number("north_m_s", WIND_M_S, 0.0))
+        wind_table.finish()
+    table.finish()
+    return CloudLayer(name, kind, base, top, coverage, water, profile, shape, particles, wind)
+
+
+def _parse_profile(table: ConfigTable) -> tuple[tuple[float, float], ...]:
+    """(height fraction, factor) nodes, fractions increasing from 0 to 1; default flat."""
+    table.asked.add("profile")
+    if "profile" not in table.data:
+        return ((0.0, 1.0), (1.0, 1.0))
+    value = table.data.pop("profile")
+    allowed = (f"a list of 2 to {MAX_PROFILE_NODES} [height fraction, factor] pairs, fractions "
+               "increasing from 0 to 1, factors 0-1")
+    try:
+        nodes = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise table.error("profile", value, allowed) from None
+    if (nodes.ndim != 2 or nodes.shape[1] != 2 or not 2 <= nodes.shape[0] <= MAX_PROFILE_NODES
+            or not np.all(np.isfinite(nodes)) or nodes[0, 0] != 0.0 or nodes[-1, 0] != 1.0
+            or np.any(np.diff(nodes[:, 0]) <= 0.0) or np.any(nodes[:, 1] < 0.0)
+            or np.any(nodes[:, 1] > 1.0)):
+        raise table.error("profile", value, allowed)
+    return tuple((float(h), float(f)) for h, f in nodes)
+
+
+def _parse_shape(table: ConfigTable | None) -> CloudShape:
+    if table is None:
+        return CloudShape()
+    default = CloudShape()
+    shape = CloudShape(
+        seed=table.integer("seed", default.seed, low=0, high=2**32 - 1),
+        scale_m=table.number("scale_m", NOISE_SCALE_M, default.scale_m),
+        detail_scale_m=table.number("detail_scale_m", NOISE_SCALE_M, default.detail_scale_m),
+        detail_strength=table.number("detail_strength", FRACTION, default.detail_strength),
+        edge=table.number("edge", EDGE, default.edge),
+        coverage_variation=table.number("coverage_variation", FRACTION,
+                                        default.coverage_variation),
+        stretch=table.number("stretch", STRETCH, default.stretch))
+    table.finish()
+    return shape
+
+
+def _parse_particles(table: ConfigTable | None) -> CloudParticles:
+    if table is None:
+        return CloudParticles()
+    phase = table.text("phase", "liquid", PHASES)
+    if phase == "liquid":
+        particles = CloudParticles(phase, table.number("effective_radius_um", LIQUID_RADIUS_UM),
+                                   table.number("effective_variance", EFFECTIVE_VARIANCE, 0.1))
+    else:
+        particles = CloudParticles(phase, table.number("effective_radius_um", ICE_RADIUS_UM))
+    table.finish()
+    return particles

@@ -1,0 +1,334 @@
+"""Kernels that march rays through cloud layers (`transport.clouds`).
+
+`march_clouds` integrates, per ray and wavelength, the light the clouds scatter towards the
+observer and their transmittance, layer by layer in the order the ray meets them:
+
+    L = sum_k T_k omega J_k (1 - exp(-sigma_k dt)),   T_{k+1} = T_k exp(-sigma_k dt)
+
+(the exact integral of a source J constant over each step, Hillaire 2016 eq. 4), with
+sigma = k_ext w the extinction coefficient of the water content w (`atmosphere.cloud_field`)
+and J the light each sample scatters per unit scattering:
+
+    J = E_sun T_air(h, mu_s) sum_i a^i p_i(nu) exp(-b^i k_ext W_sun)
+        + [E_down(h, mu_s) D(W_up) + E_up(h, mu_s) D(W_down)] / (2 pi)
+
+- sunlight: the star's top-of-atmosphere irradiance through the air (transmittance table) and
+  through the water path W_sun [g m^-2] towards the sun inside the layer (`LIGHT_STEPS`
+  samples). Light scattered many times inside the cloud by Wrenninge et al.'s (2013)
+  approximation ("Oz: the great and volumetric", SIGGRAPH talk; Hillaire 2016 §5.4.2): octave
+  i scatters a^i of the light, sees b^i of the optical depth and has the phase function of
+  asymmetry c^i g (octave 0 is the particles' own phase function, p_0: the Mie table with its
+  diffraction peak, the silver lining). It is an approximation, judged against the Monte
+  Carlo reference (docs/clouds.md).
+- sky light: the clear sky's diffuse irradiance from above (indirect-irradiance table) and the
+  light the ground reflects from below, as if isotropic (a sample scatters half of an
+  isotropic hemisphere's radiance E / pi, whatever its phase function), each dimmed by the
+  water above and below it (W_up, W_down [g m^-2], `AMBIENT_STEPS` samples) as a conservative
+  two-stream slab transmits diffuse light, D = 2 / (2 + (1 - g) k_ext W) (Bohren 1987,
+  Am. J. Phys. 55, 524, eq. 18, doi:10.1119/1.15109).
+
+A sheet layer (cirrus) is sampled once per ray, in the middle of its chord through the
+shell, with its water paths to the sun and to the shell's faces taken as uniform.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from skyscatter.atmosphere.cloud_field import (
+    BASE_R,
+    SHEET,
+    TOP_R,
+    layer_water,
+    phase_table_index,
+)
+from skyscatter.atmosphere.cloud_noise import hash32
+from skyscatter.optics.phase import henyey_greenstein
+
+__all__ = [
+    "AMBIENT_STEPS",
+    "LIGHT_MAX_M",
+    "LIGHT_STEPS",
+    "MAX_STEPS",
+    "MIN_STEPS",
+    "OCTAVES",
+    "STEP_M",
+    "TRANSMITTANCE_CUTOFF",
+    "cloud_water_paths",
+    "march_clouds",
+]
+
+STEP_M = 80.0  # target step along view rays [m]: a cumulus edge ramp is ~100-300 m
+MIN_STEPS = 8  # per layer crossed
+MAX_STEPS = 160  # per layer crossed: grazing rays take longer steps (their clouds are small)
+LIGHT_STEPS = 6  # samples of the water path towards the sun, spaced quadratically
+LIGHT_MAX_M = 6000.0  # the sun's path is followed this far (W beyond is light long lost) [m]
+AMBIENT_STEPS = 3  # samples of the water above and below each sample
+OCTAVES = 4  # Wrenninge et al. 2013 octaves, with a = b = c = 0.5 (their values)
+OCTAVE_A, OCTAVE_B, OCTAVE_C = 0.5, 0.5, 0.5
+TRANSMITTANCE_CUTOFF = 1e-4  # a ray stops when every wavelength's transmittance is below this
+
+
+@njit(cache=True, inline="always")
+def _sphere_roots(b, c, radius):
+    """Roots (t0, t1) of |o + t v|^2 = radius^2 with b = o . v, c = |o|^2; (nan, nan) if none."""
+    disc = b * b - c + radius * radius
+    if disc < 0.0:
+        return math.nan, math.nan
+    root = math.sqrt(disc)
+    return -b - root, -b + root
+
+
+@njit(cache=True)
+def _shell_intervals(o, v, base_r, top_r, t_max, out):
+    """The (at most two) intervals of t in [0, t_max] where o + t v lies between the spheres
+    base_r and top_r, into `out` (2, 2); returns their number."""
+    b = o[0] * v[0] + o[1] * v[1] + o[2] * v[2]
+    c = o[0] * o[0] + o[1] * o[1] + o[2] * o[2]
+    t0, t1 = _sphere_roots(b, c, top_r)
+    if math.isnan(t0):
+        return 0
+    s0, s1 = _sphere_roots(b, c, base_r)
+    if math.isnan(s0):  # the ray's line misses the inner sphere
+        s0, s1 = t1, t1
+    count = _add_interval(max(t0, 0.0), min(t1, s0, t_max), out, 0)
+    return _add_interval(max(t0, s1, 0.0), min(t1, t_max), out, count)
+
+
+@njit(cache=True, inline="always")
+def _add_interval(lo, hi, out, count):
+    if hi > lo:
+        out[count, 0], out[count, 1] = lo, hi
+        count += 1
+    return count
+
+
+@njit(cache=True)
+def _path_water(params, profiles, textures, layer, x, y, z, dx, dy, dz, length, steps):
+    """Water path [g m^-2] of `layer` from (x, y, z) along the unit (dx, dy, dz) over
+    `length` [m], sampled at `steps` points spaced quadratically (dense near the start)."""
+    total = 0.0
+    previous = 0.0
+    for k in range(steps):
+        edge = length * ((k + 1.0) / steps) ** 2
+        s = 0.5 * (previous + edge)
+        px, py, pz = x + s * dx, y + s * dy, z + s * dz
+        r = math.sqrt(px * px + py * py + pz * pz)
+        total += layer_water(params, profiles, textures, layer, px, py, pz, r) * (edge - previous)
+        previous = edge
+    return total
+
+
+@njit(cache=True)
+def _exit_length(x, y, z, r, dx, dy, dz, base_r, top_r):
+    """Distance from a point inside a shell along (dx, dy, dz) to the shell's edge."""
+    b = x * dx + y * dy + z * dz
+    c = r * r
+    t_top = _sphere_roots(b, c, top_r)[1]
+    s0, _ = _sphere_roots(b, c, base_r)
+    if not math.isnan(s0) and s0 > 0.0:
+        return min(t_top, s0)
+    return t_top
+
+
+@njit(cache=True)
+def _table_lookup(table, r_nodes, mu_nodes, r, mu, out):
+    """out[:] = bilinear `table` (n_r, n_mu, n_wl) at (r, mu), clamped; nodes uniform."""
+    n_r, n_mu = r_nodes.size, mu_nodes.size
+    x = (r - r_nodes[0]) / (r_nodes[-1] - r_nodes[0]) * (n_r - 1) if n_r > 1 else 0.0
+    y = (mu - mu_nodes[0]) / (mu_nodes[-1] - mu_nodes[0]) * (n_mu - 1)
+    x = min(max(x, 0.0), n_r - 1.0)
+    y = min(max(y, 0.0), n_mu - 1.0)
+    i = min(int(x), max(n_r - 2, 0))
+    j = min(int(y), n_mu - 2)
+    fx = x - i if n_r > 1 else 0.0
+    fy = y - j
+    i1 = min(i + 1, n_r - 1)
+    for k in range(out.size):
+        value = ((table[i, j, k] * (1 - fy) + table[i, j + 1, k] * fy) * (1 - fx)
+                 + (table[i1, j, k] * (1 - fy) + table[i1, j + 1, k] * fy) * fx)
+        out[k] = value
+
+
+@njit(cache=True, inline="always")
+def _jitter(index):
+    """A per-ray offset in [0, 1) from an integer hash of the ray's index: turns the banding
+    of fixed steps into fine grain."""
+    return float(hash32(index)) / 4294967296.0
+
+
+@njit(cache=True, inline="always")
+def _ground_distance(o, v, bottom_r):
+    """Distance along the ray to the planet's ground (inf if it does not meet it; 0 for a
+    ray from the ground into it)."""
+    b = o[0] * v[0] + o[1] * v[1] + o[2] * v[2]
+    c = o[0] * o[0] + o[1] * o[1] + o[2] * o[2]
+    if b >= 0.0:
+        return math.inf
+    t0 = _sphere_roots(b, c, bottom_r)[0]
+    return math.inf if math.isnan(t0) else max(t0, 0.0)
+
+
+@njit(cache=True, parallel=True)
+def march_clouds(origin, directions, max_distance, bottom_r, sun, params, profiles, textures,
+                 extinction, albedo, asymmetry, phase, r_nodes, mu_nodes, sun_air,
+                 sky_down, ground_up, sun_toa, radiance, transmittance, depth, hit):
+    """Light scattered by the clouds towards `origin` (3,) along unit `directions` (n, 3), up
+    to `max_distance` (n,) [m] or the ground of radius `bottom_r` [m] (module docstring), lit
+    by a sun along unit `sun` (3,).
+
+    `r_nodes` (n_r,) radii [m] and `mu_nodes` (n_mu,) sun zenith cosines, both uniform, index
+    the lighting tables (n_r, n_mu, n_wl): `sun_air` the air's transmittance towards the
+    sun [-], `sky_down` the clear sky's diffuse irradiance from above and `ground_up` the
+    irradiance the ground reflects up [W m^-2 nm^-1]; `sun_toa` (n_wl,) [W m^-2 nm^-1].
+    Writes radiance (n, n_wl) [W m^-2 sr^-1 nm^-1], transmittance (n, n_wl) [-], depth (n,)
+    the transmittance-weighted distance of the scattering [m] and hit (n,) whether any cloud
+    was met."""
+    n_wl = sun_toa.size
+    n_layers = params.shape[0]
+    mid = n_wl // 2
+    for i in prange(directions.shape[0]):
+        v = directions[i]
+        nu = v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2]
+        j_phase, w_phase = phase_table_index(nu)
+        trans = np.ones(n_wl)
+        light = np.zeros(n_wl)
+        source = np.empty(n_wl)
+        sigma = np.empty(n_wl)
+        down = np.empty(n_wl)
+        up = np.empty(n_wl)
+        intervals = np.empty((2 * n_layers, 3))
+        pieces = np.empty((2, 2))
+        count = 0
+        t_max = min(max_distance[i], _ground_distance(origin, v, bottom_r))
+        for layer in range(n_layers):
+            found = _shell_intervals(origin, v, params[layer, BASE_R], params[layer, TOP_R],
+                                     t_max, pieces)
+            for k in range(found):
+                intervals[count, 0], intervals[count, 1] = pieces[k, 0], pieces[k, 1]
+                intervals[count, 2] = layer
+                count += 1
+        order = np.argsort(intervals[:count, 0])
+        weight_sum = 0.0
+        weighted_t = 0.0
+        met = False
+        jitter = _jitter(i)
+        for o in range(count):
+            t0, t1 = intervals[order[o], 0], intervals[order[o], 1]
+            layer = int(intervals[order[o], 2])
+            sheet = params[layer, SHEET] > 0.0
+            base_r, top_r = params[layer, BASE_R], params[layer, TOP_R]
+            thickness = top_r - base_r
+            steps = 1 if sheet else min(MAX_STEPS, max(MIN_STEPS,
+                                                       int(math.ceil((t1 - t0) / STEP_M))))
+            dt = (t1 - t0) / steps
+            g_layer = asymmetry[layer, mid]
+            for step in range(steps):
+                t = t0 + (step + (0.5 if sheet else jitter)) * dt
+                x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
+                r = math.sqrt(x * x + y * y + z * z)
+                water = layer_water(params, profiles, textures, layer, x, y, z, r)
+                if water <= 0.0:
+                    continue
+                met = True
+                mu_s = (x * sun[0] + y * sun[1] + z * sun[2]) / r
+                ux, uy, uz = x / r, y / r, z / r
+                if sheet:
+                    half = 0.5 * thickness
+                    w_sun = water * min(half / max(mu_s, 0.05), LIGHT_MAX_M)
+                    w_up = water * half
+                    w_down = w_up
+                else:
+                    length = min(_exit_length(x, y, z, r, sun[0], sun[1], sun[2], base_r,
+                                              top_r), LIGHT_MAX_M)
+                    w_sun = _path_water(params, profiles, textures, layer, x, y, z, sun[0],
+                                        sun[1], sun[2], length, LIGHT_STEPS)
+                    w_up = _path_water(params, profiles, textures, layer, x, y, z, ux, uy, uz,
+                                       top_r - r, AMBIENT_STEPS)
+                    w_down = _path_water(params, profiles, textures, layer, x, y, z, -ux, -uy,
+                                         -uz, r - base_r, AMBIENT_STEPS)
+                _table_lookup(sun_air, r_nodes, mu_nodes, r, mu_s, source)
+                for k in range(n_wl):
+                    k_ext = extinction[layer, k]
+                    g = asymmetry[layer, k]
+                    p0 = (phase[layer, j_phase, k] * (1.0 - w_phase)
+                          + phase[layer, j_phase + 1, k] * w_phase)
+                    tau_sun = k_ext * w_sun
+                    octaves = p0 * math.exp(-tau_sun)
+                    a, b, c = OCTAVE_A, OCTAVE_B, OCTAVE_C
+                    for _ in range(1, OCTAVES):
+                        octaves += a * henyey_greenstein(nu, c * g) * math.exp(-b * tau_sun)
+                        a *= OCTAVE_A
+                        b *= OCTAVE_B
+                        c *= OCTAVE_C
+                    source[k] *= sun_toa[k] * octaves
+                    sigma[k] = k_ext * water
+                _add_ambient(sky_down, ground_up, r_nodes, mu_nodes, r, mu_s, extinction[layer],
+                             g_layer, w_up, w_down, source, down, up)
+                step_length = (t1 - t0) if sheet else dt
+                extinct = math.exp(-sigma[mid] * step_length)
+                weight = trans[mid] * (1.0 - extinct)
+                weight_sum += weight
+                weighted_t += weight * t
+                alive = False
+                for k in range(n_wl):
+                    e = math.exp(-sigma[k] * step_length)
+                    light[k] += trans[k] * albedo[layer, k] * source[k] * (1.0 - e)
+                    trans[k] *= e
+                    alive |= trans[k] > TRANSMITTANCE_CUTOFF
+                if not alive:
+                    break
+            if trans.max() <= TRANSMITTANCE_CUTOFF:
+                break
+        radiance[i] = light
+        transmittance[i] = trans
+        depth[i] = weighted_t / weight_sum if weight_sum > 0.0 else 0.0
+        hit[i] = met
+
+
+@njit(cache=True)
+def _add_ambient(sky_down, ground_up, r_nodes, mu_nodes, r, mu_s, extinction, g, w_up,
+                 w_down, source, down, up):
+    """source += [E_down D(W_up) + E_up D(W_down)] / (2 pi) (module docstring); `down` and
+    `up` (n_wl,) are scratch."""
+    n_wl = source.size
+    _table_lookup(sky_down, r_nodes, mu_nodes, r, mu_s, down)
+    _table_lookup(ground_up, r_nodes, mu_nodes, r, mu_s, up)
+    for k in range(n_wl):
+        d_up = 2.0 / (2.0 + (1.0 - g) * extinction[k] * w_up)
+        d_down = 2.0 / (2.0 + (1.0 - g) * extinction[k] * w_down)
+        source[k] += (down[k] * d_up + up[k] * d_down) / (2.0 * math.pi)
+
+
+@njit(cache=True, parallel=True)
+def cloud_water_paths(origins, directions, max_distance, bottom_r, params, profiles, textures,
+                      out):
+    """Water path [g m^-2] (n, n_layers) of each layer along the rays from `origins` (n, 3)
+    along unit `directions` (n, 3) up to `max_distance` (n,) [m] or the ground of radius
+    `bottom_r`, marched as `march_clouds`
+    marches a view ray (the sun's transmittance through the clouds, cloud shadows)."""
+    n_layers = params.shape[0]
+    for i in prange(directions.shape[0]):
+        o = origins[i]
+        v = directions[i]
+        pieces = np.empty((2, 2))
+        t_max = min(max_distance[i], _ground_distance(o, v, bottom_r))
+        for layer in range(n_layers):
+            found = _shell_intervals(o, v, params[layer, BASE_R], params[layer, TOP_R],
+                                     t_max, pieces)
+            total = 0.0
+            sheet = params[layer, SHEET] > 0.0
+            for k in range(found):
+                t0, t1 = pieces[k, 0], pieces[k, 1]
+                steps = 1 if sheet else min(MAX_STEPS, max(MIN_STEPS,
+                                                           int(math.ceil((t1 - t0) / STEP_M))))
+                dt = (t1 - t0) / steps
+                for step in range(steps):
+                    t = t0 + (step + 0.5) * dt
+                    x, y, z = o[0] + t * v[0], o[1] + t * v[1], o[2] + t * v[2]
+                    r = math.sqrt(x * x + y * y + z * z)
+                    total += layer_water(params, profiles, textures, layer, x, y, z, r) * dt
+            out[i, layer] = total
