@@ -181,12 +181,12 @@ def layer_water(params, profiles, textures, layer, x, y, z, r):
     if variation > 0.0:
         large = tile / COVERAGE_TILE_RATIO
         # a different slice of the same tile: axes permuted, so no common period
-        weather = sample_texture(textures[layer], 0, z * large, x * large, y * large)
+        weather = sample_texture(textures, layer, 0, z * large, x * large, y * large)
         coverage *= 1.0 + variation * (2.0 * weather - 1.0)
     if coverage <= 0.0:
         return 0.0
     coverage = min(coverage, 1.0)
-    shape = sample_texture(textures[layer], 0, x * tile, y * tile, z * tile)
+    shape = sample_texture(textures, layer, 0, x * tile, y * tile, z * tile)
     d = (shape - (1.0 - coverage)) / (params[layer, EDGE] * coverage)
     if d <= 0.0:
         return 0.0
@@ -194,7 +194,7 @@ def layer_water(params, profiles, textures, layer, x, y, z, r):
     strength = params[layer, DETAIL]
     if strength > 0.0:
         fine = params[layer, INV_DETAIL_SCALE] * n
-        erosion = strength * sample_texture(textures[layer], 1, x * fine, y * fine, z * fine)
+        erosion = strength * sample_texture(textures, layer, 1, x * fine, y * fine, z * fine)
         d = (d - erosion) / (1.0 - erosion)
         if d <= 0.0:
             return 0.0

@@ -21,12 +21,14 @@ wrap-around at texel coordinates.
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import numpy as np
 from numba import njit, prange
 
 from skyscatter.checks import checked_integer
+from skyscatter.errors import InputError
 
 __all__ = ["NOISE_TEXTURE_SIZE", "hash32", "noise_texture", "sample_texture"]
 
@@ -53,107 +55,106 @@ def hash32(x):
     return x
 
 
-@njit(cache=True, inline="always")
-def _cell_hash(i, j, k, period, seed, salt):
-    """Hash of the lattice cell (i, j, k) modulo `period`, for `seed` and `salt`."""
-    h = hash32(np.uint64(seed) ^ np.uint64((salt * 0x9E3779B9) & 0xFFFFFFFF))
-    h = hash32(h ^ np.uint64(i % period))
-    h = hash32(h ^ np.uint64(j % period))
-    return hash32(h ^ np.uint64(k % period))
+@njit(cache=True)
+def _lattice(period, seed, salt):
+    """Three uniform numbers in [0, 1) per cell of a periodic lattice (period, period,
+    period, 3), from hashes of the cell, `seed` and `salt`."""
+    out = np.empty((period, period, period, 3))
+    base = hash32(np.uint64(seed) ^ np.uint64((salt * 0x9E3779B9) & 0xFFFFFFFF))
+    for i in range(period):
+        for j in range(period):
+            for k in range(period):
+                h = hash32(hash32(hash32(base ^ np.uint64(i)) ^ np.uint64(j)) ^ np.uint64(k))
+                for c in range(3):
+                    out[i, j, k, c] = float(h) / 4294967296.0
+                    h = hash32(h)
+    return out
+
+
+def _gradients(period: int, seed: int, salt: int) -> np.ndarray:
+    """Unit gradient vectors (period, period, period, 3), uniform on the sphere."""
+    u = _lattice(period, seed, salt)
+    z = 2.0 * u[..., 0] - 1.0
+    phi = 2.0 * np.pi * u[..., 1]
+    s = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
 
 
 @njit(cache=True, inline="always")
-def _unit(h: np.uint32) -> float:
-    return float(h) / 4294967296.0
-
-
-@njit(cache=True, inline="always")
-def _fade(t: float) -> float:
+def _fade(t):
     return t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
 
 
-@njit(cache=True)
-def _gradient_dot(i, j, k, period, seed, salt, dx, dy, dz):
-    """Dot product of the cell corner's pseudo-random unit gradient with the offset."""
-    h = _cell_hash(i, j, k, period, seed, salt)
-    z = 2.0 * _unit(h) - 1.0
-    phi = 2.0 * np.pi * _unit(hash32(h))
-    s = np.sqrt(max(0.0, 1.0 - z * z))
-    return s * np.cos(phi) * dx + s * np.sin(phi) * dy + z * dz
-
-
-@njit(cache=True)
-def _perlin(x, y, z, period, seed, salt):
-    """Periodic gradient noise at lattice coordinates (x, y, z), period `period` cells;
-    roughly in [-1, 1]."""
-    i0, j0, k0 = int(np.floor(x)), int(np.floor(y)), int(np.floor(z))
-    fx, fy, fz = x - i0, y - j0, z - k0
-    u, v, w = _fade(fx), _fade(fy), _fade(fz)
-    total = 0.0
-    for a in range(2):
-        wa = u if a else 1.0 - u
-        for b in range(2):
-            wb = v if b else 1.0 - v
-            for c in range(2):
-                wc = w if c else 1.0 - w
-                total += wa * wb * wc * _gradient_dot(i0 + a, j0 + b, k0 + c, period, seed,
-                                                      salt, fx - a, fy - b, fz - c)
-    return total
-
-
-@njit(cache=True)
-def _worley(x, y, z, period, seed, salt):
-    """Periodic cellular noise: distance to the nearest feature point (one per cell), in
-    cells, at lattice coordinates (x, y, z); 0 at a feature point, ~1 at most."""
-    i0, j0, k0 = int(np.floor(x)), int(np.floor(y)), int(np.floor(z))
-    nearest = 3.0
-    for a in range(-1, 2):
-        for b in range(-1, 2):
-            for c in range(-1, 2):
-                h = _cell_hash(i0 + a, j0 + b, k0 + c, period, seed, salt)
-                h2 = hash32(h)
-                px = i0 + a + _unit(h)
-                py = j0 + b + _unit(h2)
-                pz = k0 + c + _unit(hash32(h2))
-                d = np.sqrt((px - x) ** 2 + (py - y) ** 2 + (pz - z) ** 2)
-                nearest = min(nearest, d)
-    return min(nearest, 1.0)
-
-
-@njit(cache=True)
-def _worley_fbm(x, y, z, cells, seed, salt):
-    """Inverted Worley noise summed over octaves (weights 0.625, 0.25, 0.125), in [0, 1]."""
-    total = 0.0
-    weight_sum = 0.0
-    weight = 0.625
-    for octave in range(_WORLEY_OCTAVES):
-        scale = cells * (1 << octave)
-        total += weight * (1.0 - _worley(x * scale, y * scale, z * scale, scale, seed,
-                                         salt + octave))
-        weight_sum += weight
-        weight = 0.25 if octave == 0 else weight * 0.5
-    return total / weight_sum
-
-
 @njit(cache=True, parallel=True)
-def _bake(n, seed, out):
-    """Shape (before equalisation) and detail channels at the texel centres of a tile."""
+def _add_perlin(n, gradients, amplitude, out):
+    """out (n, n, n) += amplitude x periodic gradient noise (Perlin 2002) of the lattice of
+    `gradients` over the tile, at the texel centres; roughly in [-1, 1]."""
+    period = gradients.shape[0]
     for i in prange(n):
         for j in range(n):
             for k in range(n):
-                x, y, z = (i + 0.5) / n, (j + 0.5) / n, (k + 0.5) / n
-                perlin = 0.0
-                amplitude = 1.0
-                for octave in range(_PERLIN_OCTAVES):
-                    cells = _BASE_CELLS << octave
-                    perlin += amplitude * _perlin(x * cells, y * cells, z * cells, cells, seed,
-                                                  octave)
-                    amplitude *= 0.5
-                perlin = min(max(0.5 + 0.5 * perlin, 0.0), 1.0)
-                worley = _worley_fbm(x, y, z, _BASE_CELLS, seed, 16)
-                # Perlin-Worley: the Perlin field remapped from [worley - 1, 1] to [0, 1]
-                out[i, j, k, 0] = (perlin - (worley - 1.0)) / (2.0 - worley)
-                out[i, j, k, 1] = _worley_fbm(x, y, z, _DETAIL_CELLS, seed, 32)
+                x, y, z = (i + 0.5) / n * period, (j + 0.5) / n * period, (k + 0.5) / n * period
+                i0, j0, k0 = int(x), int(y), int(z)
+                fx, fy, fz = x - i0, y - j0, z - k0
+                u, v, w = _fade(fx), _fade(fy), _fade(fz)
+                total = 0.0
+                for a in range(2):
+                    wa = u if a else 1.0 - u
+                    for b in range(2):
+                        wb = v if b else 1.0 - v
+                        for c in range(2):
+                            wc = w if c else 1.0 - w
+                            g = gradients[(i0 + a) % period, (j0 + b) % period,
+                                          (k0 + c) % period]
+                            total += wa * wb * wc * (g[0] * (fx - a) + g[1] * (fy - b)
+                                                     + g[2] * (fz - c))
+                out[i, j, k] += amplitude * total
+
+
+@njit(cache=True, parallel=True)
+def _add_inverted_worley(n, features, weight, out):
+    """out (n, n, n) += weight x (1 - F1), F1 the distance [cells] to the nearest feature
+    point (one per cell at the offsets `features`; Worley 1996), capped at 1, at the texel
+    centres of the periodic tile."""
+    period = features.shape[0]
+    for i in prange(n):
+        for j in range(n):
+            for k in range(n):
+                x, y, z = (i + 0.5) / n * period, (j + 0.5) / n * period, (k + 0.5) / n * period
+                i0, j0, k0 = int(x), int(y), int(z)
+                nearest = 1.0
+                for a in range(-1, 2):
+                    for b in range(-1, 2):
+                        for c in range(-1, 2):
+                            f = features[(i0 + a) % period, (j0 + b) % period,
+                                         (k0 + c) % period]
+                            d2 = ((i0 + a + f[0] - x) ** 2 + (j0 + b + f[1] - y) ** 2
+                                  + (k0 + c + f[2] - z) ** 2)
+                            nearest = min(nearest, d2)
+                out[i, j, k] += weight * (1.0 - np.sqrt(nearest))
+
+
+def _worley_fbm(n: int, cells: int, seed: int, salt: int) -> np.ndarray:
+    """Inverted Worley noise over `_WORLEY_OCTAVES` octaves from `cells` cells per tile
+    (weights 0.625, 0.25, 0.125, normalised), in [0, 1]."""
+    out = np.zeros((n, n, n))
+    weights = (0.625, 0.25, 0.125)[:_WORLEY_OCTAVES]
+    for octave, weight in enumerate(weights):
+        _add_inverted_worley(n, _lattice(cells << octave, seed, salt + octave),
+                             weight / sum(weights), out)
+    return out
+
+
+def _bake(n: int, seed: int) -> np.ndarray:
+    """Shape (before equalisation) and detail channels (n, n, n, 2) at the texel centres."""
+    perlin = np.zeros((n, n, n))
+    for octave in range(_PERLIN_OCTAVES):
+        _add_perlin(n, _gradients(_BASE_CELLS << octave, seed, octave), 0.5**octave, perlin)
+    perlin = np.clip(0.5 + 0.5 * perlin, 0.0, 1.0)
+    worley = _worley_fbm(n, _BASE_CELLS, seed, 16)
+    # Perlin-Worley: the Perlin field remapped from [worley - 1, 1] to [0, 1]
+    shape = (perlin - (worley - 1.0)) / (2.0 - worley)
+    return np.stack([shape, _worley_fbm(n, _DETAIL_CELLS, seed, 32)], axis=-1)
 
 
 @lru_cache(maxsize=4)
@@ -162,8 +163,10 @@ def noise_texture(seed: int, size: int = NOISE_TEXTURE_SIZE) -> np.ndarray:
     channel 0 the equalised shape, channel 1 the detail, both in [0, 1]."""
     seed = checked_integer("seed", seed, 0, 2**32 - 1)
     size = checked_integer("size", size, 8, 512)
-    texture = np.empty((size, size, size, 2), dtype=np.float64)
-    _bake(size, seed, texture)
+    if size & (size - 1):
+        raise InputError(f"noise texture size {size} must be a power of two", key="size",
+                         value=size, allowed="8, 16, ..., 512")
+    texture = _bake(size, seed)
     shape = texture[..., 0].reshape(-1)
     ranks = np.empty(shape.size)
     ranks[np.argsort(shape, kind="stable")] = (np.arange(shape.size) + 0.5) / shape.size
@@ -174,19 +177,19 @@ def noise_texture(seed: int, size: int = NOISE_TEXTURE_SIZE) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def sample_texture(texture, channel, x, y, z):
-    """Trilinear sample of `texture[..., channel]` at texel coordinates (x, y, z), wrapping
-    around (texel centres at i + 0.5)."""
-    n = texture.shape[0]
+def sample_texture(textures, tile, channel, x, y, z):
+    """Trilinear sample of `textures[tile, ..., channel]` ((n_tiles, n, n, n, 2), n a power
+    of two) at texel coordinates (x, y, z), wrapping around (texel centres at i + 0.5)."""
+    mask = textures.shape[1] - 1
     x -= 0.5
     y -= 0.5
     z -= 0.5
-    fx, fy, fz = np.floor(x), np.floor(y), np.floor(z)
+    fx, fy, fz = math.floor(x), math.floor(y), math.floor(z)
     tx, ty, tz = x - fx, y - fy, z - fz
-    i0, j0, k0 = int(fx) % n, int(fy) % n, int(fz) % n
-    i1, j1, k1 = (i0 + 1) % n, (j0 + 1) % n, (k0 + 1) % n
-    c00 = texture[i0, j0, k0, channel] * (1 - tz) + texture[i0, j0, k1, channel] * tz
-    c01 = texture[i0, j1, k0, channel] * (1 - tz) + texture[i0, j1, k1, channel] * tz
-    c10 = texture[i1, j0, k0, channel] * (1 - tz) + texture[i1, j0, k1, channel] * tz
-    c11 = texture[i1, j1, k0, channel] * (1 - tz) + texture[i1, j1, k1, channel] * tz
+    i0, j0, k0 = int(fx) & mask, int(fy) & mask, int(fz) & mask
+    i1, j1, k1 = (i0 + 1) & mask, (j0 + 1) & mask, (k0 + 1) & mask
+    c00 = textures[tile, i0, j0, k0, channel] * (1 - tz) + textures[tile, i0, j0, k1, channel] * tz
+    c01 = textures[tile, i0, j1, k0, channel] * (1 - tz) + textures[tile, i0, j1, k1, channel] * tz
+    c10 = textures[tile, i1, j0, k0, channel] * (1 - tz) + textures[tile, i1, j0, k1, channel] * tz
+    c11 = textures[tile, i1, j1, k0, channel] * (1 - tz) + textures[tile, i1, j1, k1, channel] * tz
     return ((c00 * (1 - ty) + c01 * ty) * (1 - tx)) + ((c10 * (1 - ty) + c11 * ty) * tx)

@@ -178,13 +178,21 @@ def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light
     irradiance; with `clouds` in front (`transport.clouds.clouds_in_front`)."""
     if clouds is not None:
         _check_cloud_solver(solver)
-        behind = diffuse_radiance(solver, position, rays, world_light, ground=ground,
-                                  progress=progress)
+        behind = _sky_and_surfaces(solver, position, rays, world_light, ground or Ground(),
+                                   clouds, progress)
         return clouds_in_front(solver, clouds, position, rays, world_light, behind)
     if ground is None:
         return solver.sky_radiance(position, rays, world_light, progress)
+    return _sky_and_surfaces(solver, position, rays, world_light, ground, None, progress)
+
+
+def _sky_and_surfaces(solver, position: np.ndarray, rays: np.ndarray, world_light: np.ndarray,
+                      ground: Ground, clouds: CloudField | None,
+                      progress: Callable[[int], None] | None) -> np.ndarray:
+    """The sky along the rays that miss `ground`, the surfaces (in the shadows of `clouds`)
+    along those that meet it."""
     radiance = np.empty((rays.shape[0], solver.profile.n_wavelengths))
-    surface, hit = surface_radiance(solver, position, rays, world_light, ground)
+    surface, hit = surface_radiance(solver, position, rays, world_light, ground, clouds)
     hits, misses = np.flatnonzero(hit), np.flatnonzero(~hit)
     radiance[hits] = surface
     if progress is not None:

@@ -22,6 +22,7 @@ import numpy as np
 from skyscatter.errors import InputError
 from skyscatter.render.albedo_map import AlbedoMap
 from skyscatter.render.terrain import Heightfield
+from skyscatter.transport.clouds import CloudField, cloud_transmittance
 from skyscatter.transport.geometry import ground_distances
 from skyscatter.transport.solvers import Solver, SurfaceRadianceSolver
 
@@ -37,11 +38,13 @@ class Ground:
 
 
 def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarray,
-                     sun_direction: np.ndarray, ground: Ground
-                     ) -> tuple[np.ndarray, np.ndarray]:
+                     sun_direction: np.ndarray, ground: Ground,
+                     clouds: CloudField | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(radiance (n_hit, n_wl) [W m^-2 sr^-1 nm^-1], hit (n,) bool) of the rays from
-    `position` along unit `directions` (n, 3) that meet the ground or the terrain; InputError
-    unless the solver is a `SurfaceRadianceSolver`."""
+    `position` along unit `directions` (n, 3) that meet the ground or the terrain, in the
+    shadows of the terrain and of `clouds` (their transmittance towards the sun at the middle
+    wavelength: the droplets' extinction varies by ~2 % over the visible); InputError unless
+    the solver is a `SurfaceRadianceSolver`."""
     if not isinstance(solver, SurfaceRadianceSolver):
         raise InputError("an albedo map or terrain needs the table solver (--solver lut)",
                          key="solver", value=getattr(solver, "name", solver), allowed="lut")
@@ -58,6 +61,9 @@ def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarra
         points = origin + distance[hit, None] * directions[hit]
         normals = points / np.linalg.norm(points, axis=1, keepdims=True)
         lit = np.ones(points.shape[0], dtype=bool)
+    if clouds is not None:
+        middle = clouds.wavelengths_nm.size // 2
+        lit = lit * cloud_transmittance(clouds, points, sun_direction)[:, middle]
     if ground.albedo_map is not None:
         albedo = ground.albedo_map.spectral(points, profile.wavelengths_nm)
     else:

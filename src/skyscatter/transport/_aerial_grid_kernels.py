@@ -94,8 +94,9 @@ def aerial_grid_node_points(origin, directions, d_max, bottom_radius, top_radius
 def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction, tables,
                             ratio_grid, n_mu, n_phi, i_first, k_first, d_max, exact, out):
     """Radiance (n, n_wl) reaching `origin` (3,) from Lambertian surfaces at `points` (n, 3)
-    facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the sun
-    where `lit` (n,) (not in a terrain shadow): L_in + T albedo / pi (E_sun [lit] + E_sky)
+    facing `normals` (n, 3), with spectral `albedo` ((n, n_wl) or (1, n_wl)), lit by the
+    part `lit` (n,) in [0, 1] of the sunlight (0 in a terrain shadow, a cloud's transmittance
+    under a cloud): L_in + T albedo / pi (lit E_sun + E_sky)
     (`add_reflected_light`), into out. L_in and T of the `exact` points by `aerial_segment`,
     of the others from `ratio_grid` (`_interpolated_segment`; only for one observer inside the
     atmosphere). `tables`: the `LookupTables` record."""

@@ -5,7 +5,9 @@ observer and their transmittance, layer by layer in the order the ray meets them
 
     L = sum_k T_k omega J_k (1 - exp(-sigma_k dt)),   T_{k+1} = T_k exp(-sigma_k dt)
 
-(the exact integral of a source J constant over each step, Hillaire 2016 eq. 4), with
+(the exact integral of a source J constant over each step, Hillaire 2016 eq. 4; J_k at a
+point drawn per ray from the step's own attenuation, so that the mean over pixels is exact
+for a source that varies within an optically thick step), with
 sigma = k_ext w the extinction coefficient of the water content w (`atmosphere.cloud_field`)
 and J the light each sample scatters per unit scattering:
 
@@ -13,18 +15,18 @@ and J the light each sample scatters per unit scattering:
         + [E_down(h, mu_s) D(W_up) + E_up(h, mu_s) D(W_down)] / (2 pi)
 
 - sunlight: the star's top-of-atmosphere irradiance through the air (transmittance table) and
-  through the water path W_sun [g m^-2] towards the sun inside the layer (`LIGHT_STEPS`
-  samples). Light scattered many times inside the cloud by Wrenninge et al.'s (2013)
-  approximation ("Oz: the great and volumetric", SIGGRAPH talk; Hillaire 2016 §5.4.2): octave
-  i scatters a^i of the light, sees b^i of the optical depth and has the phase function of
-  asymmetry c^i g (octave 0 is the particles' own phase function, p_0: the Mie table with its
-  diffraction peak, the silver lining). It is an approximation, judged against the Monte
-  Carlo reference (docs/clouds.md).
+  through the water path W_sun [g m^-2] towards the sun inside the layer (segments from
+  `LIGHT_FIRST_M`, doubling). Light scattered many times inside the cloud by Wrenninge et
+  al.'s (2013) approximation ("Oz: the great and volumetric", SIGGRAPH talk; Hillaire 2016
+  §5.4.2): octave i scatters a^i of the light, sees b^i of the optical depth and has the
+  phase function of asymmetry c^i g (octave 0 is the particles' own phase function, p_0: the
+  Mie table with its diffraction peak, the silver lining). It is an approximation, judged
+  against the Monte Carlo reference (docs/clouds.md).
 - sky light: the clear sky's diffuse irradiance from above (indirect-irradiance table) and the
   light the ground reflects from below, as if isotropic (a sample scatters half of an
   isotropic hemisphere's radiance E / pi, whatever its phase function), each dimmed by the
-  water above and below it (W_up, W_down [g m^-2], `AMBIENT_STEPS` samples) as a conservative
-  two-stream slab transmits diffuse light, D = 2 / (2 + (1 - g) k_ext W) (Bohren 1987,
+  water above and below it (W_up, W_down [g m^-2], segments from `AMBIENT_FIRST_M`) as a
+  conservative two-stream slab transmits diffuse light, D = 2 / (2 + (1 - g) k_ext W) (Bohren 1987,
   Am. J. Phys. 55, 524, eq. 18, doi:10.1119/1.15109).
 
 A sheet layer (cirrus) is sampled once per ray, in the middle of its chord through the
@@ -49,11 +51,13 @@ from skyscatter.atmosphere.cloud_noise import hash32
 from skyscatter.optics.phase import henyey_greenstein
 
 __all__ = [
-    "AMBIENT_STEPS",
+    "AMBIENT_FIRST_M",
+    "LIGHT_FIRST_M",
     "LIGHT_MAX_M",
-    "LIGHT_STEPS",
+    "COARSE_STEPS",
+    "EMPTY_TO_COARSE",
     "MAX_STEPS",
-    "MIN_STEPS",
+    "STEP_GROWTH",
     "OCTAVES",
     "STEP_M",
     "TRANSMITTANCE_CUTOFF",
@@ -61,14 +65,16 @@ __all__ = [
     "march_clouds",
 ]
 
-STEP_M = 80.0  # target step along view rays [m]: a cumulus edge ramp is ~100-300 m
-MIN_STEPS = 8  # per layer crossed
-MAX_STEPS = 160  # per layer crossed: grazing rays take longer steps (their clouds are small)
-LIGHT_STEPS = 6  # samples of the water path towards the sun, spaced quadratically
-LIGHT_MAX_M = 6000.0  # the sun's path is followed this far (W beyond is light long lost) [m]
-AMBIENT_STEPS = 3  # samples of the water above and below each sample
-OCTAVES = 4  # Wrenninge et al. 2013 octaves, with a = b = c = 0.5 (their values)
-OCTAVE_A, OCTAVE_B, OCTAVE_C = 0.5, 0.5, 0.5
+STEP_M = 80.0  # step along view rays near the observer [m]: a cumulus edge ramp is ~100-300 m
+STEP_GROWTH = 0.006  # steps grow with distance as the pixels' footprint: 80 m at 13 km
+COARSE_STEPS = 3  # in empty air the march takes steps this many times longer ...
+EMPTY_TO_COARSE = 3  # ... after this many empty samples, and backs up when it meets a cloud
+MAX_STEPS = 256  # per layer crossed
+LIGHT_FIRST_M = 12.0  # the water path towards the sun: segments from 12 m, doubling ...
+LIGHT_MAX_M = 6000.0  # ... up to this far (9 samples; the light beyond is long lost) [m]
+AMBIENT_FIRST_M = 25.0  # the water above and below each sample: segments from 25 m, doubling
+OCTAVES = 4  # Wrenninge et al. 2013 octaves, with a = b = c = 0.5 (their values); the
+OCTAVE_A, OCTAVE_C = 0.5, 0.5  # kernel takes b = 1/2 as square roots of exp(-tau)
 TRANSMITTANCE_CUTOFF = 1e-4  # a ray stops when every wavelength's transmittance is below this
 
 
@@ -107,18 +113,21 @@ def _add_interval(lo, hi, out, count):
 
 
 @njit(cache=True)
-def _path_water(params, profiles, textures, layer, x, y, z, dx, dy, dz, length, steps):
+def _path_water(params, profiles, textures, layer, x, y, z, dx, dy, dz, length, first):
     """Water path [g m^-2] of `layer` from (x, y, z) along the unit (dx, dy, dz) over
-    `length` [m], sampled at `steps` points spaced quadratically (dense near the start)."""
+    `length` [m], midpoint sums on segments that start `first` [m] long and double: fine
+    where the light is lost (a cumulus's sunlit skin is ~10 m deep), coarse beyond."""
     total = 0.0
-    previous = 0.0
-    for k in range(steps):
-        edge = length * ((k + 1.0) / steps) ** 2
-        s = 0.5 * (previous + edge)
+    start = 0.0
+    segment = first
+    while start < length:
+        end = min(start + segment, length)
+        s = 0.5 * (start + end)
         px, py, pz = x + s * dx, y + s * dy, z + s * dz
         r = math.sqrt(px * px + py * py + pz * pz)
-        total += layer_water(params, profiles, textures, layer, px, py, pz, r) * (edge - previous)
-        previous = edge
+        total += layer_water(params, profiles, textures, layer, px, py, pz, r) * (end - start)
+        start = end
+        segment *= 2.0
     return total
 
 
@@ -154,10 +163,29 @@ def _table_lookup(table, r_nodes, mu_nodes, r, mu, out):
 
 
 @njit(cache=True, inline="always")
+def _fine_step(t):
+    """Step [m] of the march at distance t [m] from the observer (module constants)."""
+    return max(STEP_M, STEP_GROWTH * t)
+
+
+@njit(cache=True, inline="always")
+def _seen_offset(u, sigma, step):
+    """Where in a segment of length `step` [m] and extinction `sigma` [m^-1] to evaluate its
+    light: the quantile u in (0, 1) of the density sigma e^(-sigma x) / (1 - e^(-sigma step))
+    of the light that leaves it towards the observer, so that over the jitters u the sampled
+    source is weighted as the exact integral weights it (an optically thick segment is seen
+    only near its front: a cumulus's sunlit skin is ~10 m deep, a step 80 m)."""
+    optical = sigma * step
+    if optical < 1e-6:
+        return u * step
+    return -math.log1p(-u * -math.expm1(-optical)) / sigma
+
+
+@njit(cache=True, inline="always")
 def _jitter(index):
-    """A per-ray offset in [0, 1) from an integer hash of the ray's index: turns the banding
-    of fixed steps into fine grain."""
-    return float(hash32(index)) / 4294967296.0
+    """A per-ray offset in (0, 1) from an integer hash of the ray's index: turns the banding
+    of fixed steps into fine grain (never 0: a sample on a layer's boundary could miss it)."""
+    return (float(hash32(index)) + 0.5) / 4294967296.0
 
 
 @njit(cache=True, inline="always")
@@ -193,7 +221,7 @@ def march_clouds(origin, directions, max_distance, bottom_r, sun, params, profil
     for i in prange(directions.shape[0]):
         v = directions[i]
         nu = v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2]
-        j_phase, w_phase = phase_table_index(nu)
+        octave_phase = _octave_phases(nu, phase, asymmetry)
         trans = np.ones(n_wl)
         light = np.zeros(n_wl)
         source = np.empty(n_wl)
@@ -221,72 +249,101 @@ def march_clouds(origin, directions, max_distance, bottom_r, sun, params, profil
             layer = int(intervals[order[o], 2])
             sheet = params[layer, SHEET] > 0.0
             base_r, top_r = params[layer, BASE_R], params[layer, TOP_R]
-            thickness = top_r - base_r
-            steps = 1 if sheet else min(MAX_STEPS, max(MIN_STEPS,
-                                                       int(math.ceil((t1 - t0) / STEP_M))))
-            dt = (t1 - t0) / steps
             g_layer = asymmetry[layer, mid]
-            for step in range(steps):
-                t = t0 + (step + (0.5 if sheet else jitter)) * dt
+            # Segments [s, s + step) cover [t0, t1]; each is sampled at a jittered point in it
+            s = t0
+            coarse = not sheet
+            empties = 0
+            steps = 0
+            while s < t1 and steps < MAX_STEPS:
+                steps += 1
+                step = t1 - t0 if sheet else max(
+                    _fine_step(s) * (COARSE_STEPS if coarse else 1),
+                    (t1 - s) / (MAX_STEPS + 1 - steps))  # the last steps reach t1
+                step = min(step, t1 - s)
+                t = s + (0.5 if sheet else jitter) * step
                 x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
                 r = math.sqrt(x * x + y * y + z * z)
                 water = layer_water(params, profiles, textures, layer, x, y, z, r)
                 if water <= 0.0:
+                    empties += 1
+                    coarse |= empties >= EMPTY_TO_COARSE
+                    s += step
                     continue
+                if coarse:  # stepped into a cloud: walk this segment again in fine steps
+                    coarse = False
+                    continue
+                empties = 0
                 met = True
+                if not sheet:  # light the segment where it is seen (in-segment attenuation)
+                    t = s + _seen_offset(jitter, extinction[layer, mid] * water, step)
+                    x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
+                    r = math.sqrt(x * x + y * y + z * z)
                 mu_s = (x * sun[0] + y * sun[1] + z * sun[2]) / r
-                ux, uy, uz = x / r, y / r, z / r
                 if sheet:
-                    half = 0.5 * thickness
+                    half = 0.5 * (top_r - base_r)
                     w_sun = water * min(half / max(mu_s, 0.05), LIGHT_MAX_M)
                     w_up = water * half
                     w_down = w_up
                 else:
+                    ux, uy, uz = x / r, y / r, z / r
                     length = min(_exit_length(x, y, z, r, sun[0], sun[1], sun[2], base_r,
                                               top_r), LIGHT_MAX_M)
                     w_sun = _path_water(params, profiles, textures, layer, x, y, z, sun[0],
-                                        sun[1], sun[2], length, LIGHT_STEPS)
+                                        sun[1], sun[2], length, LIGHT_FIRST_M)
                     w_up = _path_water(params, profiles, textures, layer, x, y, z, ux, uy, uz,
-                                       top_r - r, AMBIENT_STEPS)
+                                       top_r - r, AMBIENT_FIRST_M)
                     w_down = _path_water(params, profiles, textures, layer, x, y, z, -ux, -uy,
-                                         -uz, r - base_r, AMBIENT_STEPS)
+                                         -uz, r - base_r, AMBIENT_FIRST_M)
                 _table_lookup(sun_air, r_nodes, mu_nodes, r, mu_s, source)
                 for k in range(n_wl):
                     k_ext = extinction[layer, k]
-                    g = asymmetry[layer, k]
-                    p0 = (phase[layer, j_phase, k] * (1.0 - w_phase)
-                          + phase[layer, j_phase + 1, k] * w_phase)
-                    tau_sun = k_ext * w_sun
-                    octaves = p0 * math.exp(-tau_sun)
-                    a, b, c = OCTAVE_A, OCTAVE_B, OCTAVE_C
-                    for _ in range(1, OCTAVES):
-                        octaves += a * henyey_greenstein(nu, c * g) * math.exp(-b * tau_sun)
-                        a *= OCTAVE_A
-                        b *= OCTAVE_B
-                        c *= OCTAVE_C
+                    seen = math.exp(-k_ext * w_sun)  # exp(-b^o tau): square roots, b = 1/2
+                    octaves = octave_phase[layer, 0, k] * seen
+                    for octave in range(1, OCTAVES):
+                        seen = math.sqrt(seen)
+                        octaves += octave_phase[layer, octave, k] * seen
                     source[k] *= sun_toa[k] * octaves
                     sigma[k] = k_ext * water
                 _add_ambient(sky_down, ground_up, r_nodes, mu_nodes, r, mu_s, extinction[layer],
                              g_layer, w_up, w_down, source, down, up)
-                step_length = (t1 - t0) if sheet else dt
-                extinct = math.exp(-sigma[mid] * step_length)
+                extinct = math.exp(-sigma[mid] * step)
                 weight = trans[mid] * (1.0 - extinct)
                 weight_sum += weight
                 weighted_t += weight * t
                 alive = False
                 for k in range(n_wl):
-                    e = math.exp(-sigma[k] * step_length)
+                    e = math.exp(-sigma[k] * step)
                     light[k] += trans[k] * albedo[layer, k] * source[k] * (1.0 - e)
                     trans[k] *= e
                     alive |= trans[k] > TRANSMITTANCE_CUTOFF
                 if not alive:
                     break
+                s += step
             if trans.max() <= TRANSMITTANCE_CUTOFF:
                 break
         radiance[i] = light
         transmittance[i] = trans
         depth[i] = weighted_t / weight_sum if weight_sum > 0.0 else 0.0
         hit[i] = met
+
+
+@njit(cache=True)
+def _octave_phases(nu, phase, asymmetry):
+    """a^o p_o(nu) (n_layers, OCTAVES, n_wl) [sr^-1]: octave 0 the particles' phase table,
+    octave o >= 1 Henyey-Greenstein of asymmetry c^o g (module docstring)."""
+    n_layers, n_wl = asymmetry.shape
+    out = np.empty((n_layers, OCTAVES, n_wl))
+    j, w = phase_table_index(nu)
+    for layer in range(n_layers):
+        for k in range(n_wl):
+            out[layer, 0, k] = phase[layer, j, k] * (1.0 - w) + phase[layer, j + 1, k] * w
+            a, c = OCTAVE_A, OCTAVE_C
+            for octave in range(1, OCTAVES):
+                out[layer, octave, k] = a * henyey_greenstein(nu, c * asymmetry[layer, k])
+                a *= OCTAVE_A
+                c *= OCTAVE_C
+    return out
 
 
 @njit(cache=True)
@@ -323,8 +380,7 @@ def cloud_water_paths(origins, directions, max_distance, bottom_r, params, profi
             sheet = params[layer, SHEET] > 0.0
             for k in range(found):
                 t0, t1 = pieces[k, 0], pieces[k, 1]
-                steps = 1 if sheet else min(MAX_STEPS, max(MIN_STEPS,
-                                                           int(math.ceil((t1 - t0) / STEP_M))))
+                steps = 1 if sheet else min(MAX_STEPS, max(1, int(math.ceil((t1 - t0) / STEP_M))))
                 dt = (t1 - t0) / steps
                 for step in range(steps):
                     t = t0 + (step + 0.5) * dt

@@ -1194,15 +1194,15 @@ def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_
 @njit(cache=True)
 def add_reflected_light(point, normal, sunlit, albedo, sun_direction, tables, t_view, direct,
                         diffuse, out):
-    """out (n_wl,) += T albedo / pi (E_sun [sunlit] + E_sky), the light a Lambertian surface
-    at `point` facing `normal` reflects towards the observer through the transmittance t_view
+    """out (n_wl,) += T albedo / pi (V E_sun + E_sky), the light a Lambertian surface at
+    `point` facing `normal` reflects towards the observer through the transmittance t_view,
+    with V = `sunlit` in [0, 1] the part of the sunlight that terrain and clouds let through
     (`surface_irradiance`; direct and diffuse are scratch)."""
     surface_irradiance(point, normal, sun_direction, tables.bottom_radius, tables.top_radius,
                        tables.transmittance, tables.irradiance, tables.sun_irradiance,
                        tables.sun_angular_radius, direct, diffuse)
-    sun = 1.0 if sunlit else 0.0
     for w in range(out.size):
-        out[w] += t_view[w] * albedo[w] / math.pi * (sun * direct[w] + diffuse[w])
+        out[w] += t_view[w] * albedo[w] / math.pi * (sunlit * direct[w] + diffuse[w])
 
 
 @njit(cache=True)

@@ -113,12 +113,12 @@ def _clouds_over(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray
 
 def cloud_transmittance(field: CloudField, origins: np.ndarray, directions: np.ndarray,
                         max_distance: np.ndarray | float = np.inf) -> np.ndarray:
-    """Transmittance [-] (n, n_wl) of the clouds from `origins` ((n, 3) or (3,)) along unit
-    `directions` (n, 3) up to `max_distance` [m] (the sun disk behind clouds, cloud
-    shadows)."""
-    directions = np.ascontiguousarray(np.atleast_2d(directions), dtype=np.float64)
-    n = directions.shape[0]
-    starts = np.ascontiguousarray(np.broadcast_to(origins, (n, 3)), dtype=np.float64)
+    """Transmittance [-] (n, n_wl) of the clouds from `origins` along unit `directions` (each
+    (n, 3) or (3,)) up to `max_distance` [m] (the sun disk behind clouds, cloud shadows)."""
+    starts, directions = np.broadcast_arrays(np.atleast_2d(origins), np.atleast_2d(directions))
+    n = starts.shape[0]
+    starts = np.ascontiguousarray(starts, dtype=np.float64)
+    directions = np.ascontiguousarray(directions, dtype=np.float64)
     limits = np.ascontiguousarray(np.broadcast_to(max_distance, (n,)), dtype=np.float64)
     water = np.empty((n, field.n_layers))
     _cloud_kernels.cloud_water_paths(starts, directions, limits, field.bottom_radius_m,

@@ -318,18 +318,19 @@ class LutSolver:
                          lit: ArrayLike | None = None) -> np.ndarray:
         """Radiance [W m^-2 sr^-1 nm^-1] (n, n_wl) that reaches the observer at `position` (3,)
         from Lambertian surfaces at `points` (n, 3) facing unit `normals` (n, 3), with spectral
-        `albedo` ((n, n_wl) or (n_wl,)), in sunlight where `lit` (n,) (default everywhere):
-        aerial perspective plus the reflected sun and sky light seen through it,
-        L_in + T albedo / pi (E_sun + E_sky) (`aerial_perspective`, `ground_irradiance`; one
-        pass over the points)."""
+        `albedo` ((n, n_wl) or (n_wl,)), receiving the part `lit` (n,) in [0, 1] of the
+        sunlight (True/False for in or out of a terrain shadow, a cloud's transmittance;
+        default 1): aerial perspective plus the reflected sun and sky light seen through it,
+        L_in + T albedo / pi (lit E_sun + E_sky) (`aerial_perspective`, `ground_irradiance`;
+        one pass over the points)."""
         p = self.profile
         targets = _writable(np.asarray(points, dtype=np.float64).reshape(-1, 3))
         n = targets.shape[0]
         facing = _writable(np.broadcast_to(np.asarray(normals, dtype=np.float64), (n, 3)))
         reflectance = _writable(np.asarray(albedo, dtype=np.float64).reshape(
             -1, p.n_wavelengths))
-        sunlit = (np.ones(n, dtype=np.bool_) if lit is None
-                  else np.ascontiguousarray(np.broadcast_to(lit, (n,)), dtype=np.bool_))
+        sunlit = (np.ones(n) if lit is None
+                  else np.ascontiguousarray(np.broadcast_to(lit, (n,)), dtype=np.float64))
         out = np.empty((n, p.n_wavelengths))
         origin = _writable(np.asarray(position, dtype=np.float64).reshape(3))
         sun = _sun(sun_direction)

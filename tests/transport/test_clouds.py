@@ -1,0 +1,168 @@
+"""The cloud march (`transport._cloud_kernels`, `transport.clouds`) against closed forms of its
+own equations in a horizontally uniform slab, and the composition over the sky."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from transport_cases import SMALL, exponential_earth
+
+from skyscatter.atmosphere.cloud_config import CloudLayer, CloudParticles, Clouds, CloudShape
+from skyscatter.atmosphere.cloud_field import DETAIL, cloud_field
+from skyscatter.transport import _cloud_kernels
+from skyscatter.transport.clouds import cloud_transmittance, clouds_in_front
+from skyscatter.transport.lut_solver import LutSolver
+
+RADIUS_M = 6_360_000.0  # as transport_cases
+BASE_M, TOP_M = 1000.0, 1500.0
+WAVELENGTHS_NM = np.array([440.0, 550.0, 680.0])
+
+
+def uniform_slab(water_g_m3: float):
+    """A layer of ice cloud with water content `water_g_m3` everywhere between BASE_M and
+    TOP_M: the noise replaced by ones, no erosion, full coverage."""
+    layer = CloudLayer("slab", "volume", BASE_M, TOP_M, 1.0, water_g_m3,
+                       ((0.0, 1.0), (1.0, 1.0)),
+                       CloudShape(detail_strength=0.0, coverage_variation=0.0),
+                       CloudParticles("ice", 30.0))
+    field = cloud_field(Clouds((layer,)), RADIUS_M, WAVELENGTHS_NM, texture_size=8)
+    params = field.params.copy()
+    params[:, DETAIL] = 0.0
+    return dataclasses.replace(field, textures=np.ones_like(field.textures), params=params)
+
+
+def _direction(zenith_deg: float, azimuth_deg: float = 0.0) -> np.ndarray:
+    z, a = np.radians(zenith_deg), np.radians(azimuth_deg)
+    return np.array([np.sin(z) * np.cos(a), np.sin(z) * np.sin(a), np.cos(z)])
+
+
+def _chord_in_slab(origin: np.ndarray, direction: np.ndarray) -> float:
+    """Exact length [m] of the ray from `origin` (below the slab, going up) inside the
+    spherical shell BASE_M-TOP_M."""
+    b, c = origin @ direction, origin @ origin
+    far = [-b + np.sqrt(b * b - c + (RADIUS_M + h) ** 2) for h in (BASE_M, TOP_M)]
+    return far[1] - far[0]
+
+
+def _march_sunlight_only(field, view, sun, n_rays):
+    """march_clouds lit by a sun of 1 above the air (no air, no sky light), for `n_rays`
+    copies of `view` from the ground (each with its own jitter)."""
+    n_wl = WAVELENGTHS_NM.size
+    origin = np.array([0.0, 0.0, RADIUS_M + 1.0])
+    rays = np.ascontiguousarray(np.broadcast_to(view, (n_rays, 3)))
+    mu_nodes = np.linspace(-0.2, 1.0, 241)
+    r_nodes = np.array([RADIUS_M + BASE_M, RADIUS_M + TOP_M])
+    ones = np.ones((2, mu_nodes.size, n_wl))
+    zeros = np.zeros_like(ones)
+    radiance, transmittance = np.empty((n_rays, n_wl)), np.empty((n_rays, n_wl))
+    depth, hit = np.empty(n_rays), np.empty(n_rays, dtype=np.bool_)
+    _cloud_kernels.march_clouds(
+        origin, rays, np.full(n_rays, np.inf), RADIUS_M, sun, field.params, field.profiles,
+        field.textures, field.mass_extinction_m2_g, field.single_scattering_albedo,
+        field.asymmetry, field.phase, r_nodes, mu_nodes, ones, zeros, zeros, np.ones(n_wl),
+        radiance, transmittance, depth, hit)
+    return radiance, transmittance, depth, hit
+
+
+def _slab_sunlight_closed_form(field, view, sun):
+    """The kernel's equations in a plane-parallel slab of vertical optical depth tau*, seen from
+    below at mu_v, sun at mu_s above: L = omega sum_o A_o (e^(-beta_o tau*) - e^(-tau*/mu_v))
+    / (1 - beta_o mu_v), beta_o = b^o / mu_s, A_o the octave's weighted phase function."""
+    tau = field.mass_extinction_m2_g[0] * field.params[0, 3] * (TOP_M - BASE_M)
+    mu_v, mu_s = view[2], sun[2]
+    nu = float(view @ sun)
+    octaves = _cloud_kernels._octave_phases(nu, field.phase, field.asymmetry)[0]
+    total = np.zeros(WAVELENGTHS_NM.size)
+    for o in range(_cloud_kernels.OCTAVES):
+        beta = 0.5**o / mu_s
+        total += octaves[o] * (np.exp(-beta * tau) - np.exp(-tau / mu_v)) / (1.0 - beta * mu_v)
+    return field.single_scattering_albedo[0] * total, np.exp(-tau / mu_v)
+
+
+@pytest.mark.parametrize("water, view_zenith, sun_zenith", [
+    (0.02, 0.0, 30.0),   # optical depth 0.55: thin
+    (0.1, 40.0, 50.0),   # 2.7
+    (0.3, 20.0, 60.0),   # 8.2: one 80 m step is 1.4 optical depths
+    (1.0, 30.0, 45.0),   # 27: a step is 5 optical depths (a cumulus)
+])
+def test_a_uniform_slab_matches_the_closed_form_of_the_march(water, view_zenith, sun_zenith):
+    # Reference: the integral of the kernel's source (sunlight through the slab's water in
+    # Wrenninge octaves) along the view ray, in closed form for a plane-parallel slab.
+    # Transmittance: exact for a uniform slab (every segment's exp(-sigma dt) multiplies to
+    # exp(-sigma chord), the chord through the spherical shell). Radiance: each ray
+    # samples its source at one point per 80 m segment, drawn from the segment's own
+    # attenuation, so the mean over jitters is the exact integral: over 4096 rays it is off by
+    # 0.05-0.22 %, within 1.5 standard errors of the jitter's noise (0.03-0.24 %); tolerance
+    # 1 %, four of them.
+    field = uniform_slab(water)
+    view, sun = _direction(view_zenith), _direction(sun_zenith, 120.0)
+    radiance, transmittance, depth, hit = _march_sunlight_only(field, view, sun, 4096)
+    expected_radiance, expected_transmittance = _slab_sunlight_closed_form(field, view, sun)
+    assert hit.all()
+    sigma = field.mass_extinction_m2_g[0] * water
+    chord = _chord_in_slab(np.array([0.0, 0.0, RADIUS_M + 1.0]), view)
+    exact = np.exp(-sigma * chord)
+    if exact.max() > _cloud_kernels.TRANSMITTANCE_CUTOFF:
+        np.testing.assert_allclose(transmittance, np.broadcast_to(exact, transmittance.shape),
+                                   rtol=1e-9)
+    else:  # the march stops once every wavelength is below the cutoff
+        assert np.all(transmittance <= _cloud_kernels.TRANSMITTANCE_CUTOFF)
+    # the plane-parallel closed form's optical depth differs from the sphere's by the
+    # curvature, ~tan^2(zenith) h / R < 1.5e-4 here
+    np.testing.assert_allclose(sigma * chord, -np.log(expected_transmittance), rtol=3e-4)
+    np.testing.assert_allclose(radiance.mean(axis=0), expected_radiance, rtol=1e-2)
+    start = (BASE_M - 1.0) / view[2] * (1.0 - 1e-3)  # from 1 m up, with the curvature
+    assert np.all((depth > start) & (depth < start + chord * (1.0 + 1e-3)))
+
+
+def test_the_transmittance_towards_the_sun_is_exp_of_the_slant_optical_depth():
+    # Reference: Beer-Lambert through a uniform slab, exp(-k w L) with L the exact chord
+    # through the spherical shell (midpoint sums of a constant are exact).
+    field = uniform_slab(0.05)
+    origin = np.array([0.0, 0.0, RADIUS_M + 10.0])
+    for zenith in (0.0, 45.0, 70.0):
+        direction = _direction(zenith, 30.0)
+        t = cloud_transmittance(field, origin, direction)[0]
+        expected = np.exp(-field.mass_extinction_m2_g[0] * 0.05
+                          * _chord_in_slab(origin, direction))
+        np.testing.assert_allclose(t, expected, rtol=1e-9)
+    above = cloud_transmittance(field, np.array([0.0, 0.0, RADIUS_M + 2000.0]),
+                                _direction(10.0))
+    np.testing.assert_array_equal(above, 1.0)
+
+
+@pytest.fixture(scope="module")
+def solver():
+    return LutSolver(exponential_earth(), resolution=SMALL, orders=2)
+
+
+def test_clouds_without_water_change_nothing(solver):
+    # Coverage 0: no sample has water, so every pixel keeps the radiance behind.
+    layer = CloudLayer("none", "volume", BASE_M, TOP_M, 0.0, 0.3, ((0.0, 1.0), (1.0, 1.0)),
+                       CloudShape(), CloudParticles("liquid", 8.0))
+    field = cloud_field(Clouds((layer,)), RADIUS_M, WAVELENGTHS_NM, texture_size=16)
+    rng = np.random.default_rng(3)
+    rays = rng.normal(size=(500, 3))
+    rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+    origin = np.array([0.0, 0.0, RADIUS_M + 2.0])
+    sun = _direction(40.0)
+    behind = solver.sky_radiance(origin, rays, sun)
+    np.testing.assert_array_equal(clouds_in_front(solver, field, origin, rays, sun, behind),
+                                  behind)
+
+
+def test_an_opaque_deck_hides_the_sky_but_not_the_air_in_front(solver):
+    # Reference: the composition L = T_c L_behind + (1 - T_c) S + T_air L_c with T_c ~ 0
+    # (optical depth 55-85 through the slab): what lies behind must not show, so L is the air
+    # in front of the deck (S) plus the deck's own light seen through it; L changes with
+    # L_behind only by the transmittance at which the march stops (TRANSMITTANCE_CUTOFF).
+    field = uniform_slab(2.0)
+    origin = np.array([0.0, 0.0, RADIUS_M + 2.0])
+    rays = np.array([_direction(10.0), _direction(50.0, 90.0)])
+    sun = _direction(30.0)
+    behind = solver.sky_radiance(origin, rays, sun)
+    once = clouds_in_front(solver, field, origin, rays, sun, behind)
+    twice = clouds_in_front(solver, field, origin, rays, sun, 10.0 * behind)
+    leak = 9.0 * behind * _cloud_kernels.TRANSMITTANCE_CUTOFF
+    assert np.all(np.abs(twice - once) <= leak)
+    assert np.all(once > 0.0)
