@@ -7,9 +7,10 @@ import dataclasses
 import numpy as np
 import pytest
 
+from skyscatter.atmosphere._cloud_sampling import sample_texture
 from skyscatter.atmosphere.cloud_config import CloudLayer, CloudParticles, Clouds, CloudShape
 from skyscatter.atmosphere.cloud_field import cloud_field, layer_water
-from skyscatter.atmosphere.cloud_noise import noise_texture, sample_texture
+from skyscatter.atmosphere.cloud_noise import noise_texture
 
 RADIUS_M = 6_371_000.0
 WAVELENGTHS_NM = np.array([450.0, 550.0, 650.0])

@@ -147,7 +147,7 @@ def test_clouds_without_water_change_nothing(solver):
     origin = np.array([0.0, 0.0, RADIUS_M + 2.0])
     sun = _direction(40.0)
     behind = solver.sky_radiance(origin, rays, sun)
-    np.testing.assert_array_equal(clouds_in_front(solver, field, origin, rays, sun, behind),
+    np.testing.assert_array_equal(clouds_in_front(solver, field, origin, rays, sun, behind=behind),
                                   behind)
 
 
@@ -161,8 +161,8 @@ def test_an_opaque_deck_hides_the_sky_but_not_the_air_in_front(solver):
     rays = np.array([_direction(10.0), _direction(50.0, 90.0)])
     sun = _direction(30.0)
     behind = solver.sky_radiance(origin, rays, sun)
-    once = clouds_in_front(solver, field, origin, rays, sun, behind)
-    twice = clouds_in_front(solver, field, origin, rays, sun, 10.0 * behind)
+    once = clouds_in_front(solver, field, origin, rays, sun, behind=behind)
+    twice = clouds_in_front(solver, field, origin, rays, sun, behind=10.0 * behind)
     leak = 9.0 * behind * _cloud_kernels.TRANSMITTANCE_CUTOFF
     assert np.all(np.abs(twice - once) <= leak)
     assert np.all(once > 0.0)

@@ -2,8 +2,9 @@
 
 `cloud_field` turns `Clouds` (`atmosphere.cloud_config`) into arrays: per layer its shell, the
 parameters of its shape, its noise tile (`atmosphere.cloud_noise`), and its optics per gram of
-water on the render's wavelengths (`optics.cloud_optics`). `layer_water` is the one definition
-of the water content w(p) [g m^-3] that the renderer and the Monte Carlo reference both read:
+water on the render's wavelengths (`optics.cloud_optics`). `layer_water` (a kernel of
+`atmosphere._cloud_sampling`, re-exported here) is the one definition of the water content
+w(p) [g m^-3] that the renderer and the Monte Carlo reference both read:
 
     h   = (|p| - r_base) / (r_top - r_base)                  height fraction in the layer
     q   = S (p - u t) / scale                                 tile coordinates (world frame)
@@ -27,29 +28,40 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from skyscatter.atmosphere._cloud_sampling import (
+    ALONG_X,
+    BASE_R,
+    DETAIL,
+    N_PARAMS,
+    PHASE_ANGLES,
+    SHEET,
+    TOP_R,
+    WATER,
+    layer_water,
+    phase_table_index,
+)
 from skyscatter.atmosphere.cloud_config import MAX_PROFILE_NODES, CloudLayer, Clouds
-from skyscatter.atmosphere.cloud_noise import NOISE_TEXTURE_SIZE, noise_texture, sample_texture
+from skyscatter.atmosphere.cloud_noise import NOISE_TEXTURE_SIZE, noise_texture
 from skyscatter.checks import checked_number
 from skyscatter.optics.cloud_optics import CloudOptics, ice_cloud_optics, liquid_cloud_optics
 
-__all__ = [
+__all__ = [  # the sampling kernels and the columns of `CloudField.params` re-exported
+    "ALONG_X",
+    "BASE_R",
+    "DETAIL",
+    "N_PARAMS",
     "PHASE_ANGLES",
+    "SHEET",
+    "TOP_R",
+    "WATER",
     "CloudField",
     "cloud_field",
+    "layer_optics",
     "layer_water",
     "phase_table_index",
 ]
 
-PHASE_ANGLES = 1024  # phase table nodes, theta = pi (i / (n - 1))^2: 0.0017 deg steps at 0
-COVERAGE_TILE_RATIO = 7.31  # the coverage varies on tiles this much larger (no common period)
-
-# Columns of `CloudField.params`
-BASE_R, TOP_R, COVERAGE, WATER, INV_SCALE, INV_DETAIL_SCALE, DETAIL = 0, 1, 2, 3, 4, 5, 6
-EDGE, VARIATION, SHEET, N_PROFILE, OFFSET_X, OFFSET_Y, OFFSET_Z = 7, 8, 9, 10, 11, 12, 13
-ALONG_X, ALONG_Y, ALONG_Z, STRETCH_MINUS_ONE = 14, 15, 16, 17
-N_PARAMS = 18
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,70 +144,3 @@ def cloud_field(clouds: Clouds, bottom_radius_m: float, wavelengths_nm: np.ndarr
         phase[i] = optics.phase.evaluate(np.cos(theta), wl)
     return CloudField(clouds, radius, wl, params, profiles, textures, extinction, albedo,
                       asymmetry, phase)
-
-
-@njit(cache=True, inline="always")
-def phase_table_index(nu):
-    """(index, weight) of cos(scattering angle) `nu` in the phase table's angle nodes."""
-    theta = np.arccos(min(1.0, max(-1.0, nu)))
-    x = np.sqrt(theta / np.pi) * (PHASE_ANGLES - 1)
-    i = min(int(x), PHASE_ANGLES - 2)
-    return i, x - i
-
-
-@njit(cache=True)
-def _profile(profiles, layer, n_nodes, h):
-    """Piecewise-linear profile factor at height fraction h in [0, 1]."""
-    for k in range(1, n_nodes):
-        h1 = profiles[layer, k, 0]
-        if h <= h1:
-            h0 = profiles[layer, k - 1, 0]
-            t = (h - h0) / (h1 - h0)
-            return profiles[layer, k - 1, 1] * (1.0 - t) + profiles[layer, k, 1] * t
-    return profiles[layer, n_nodes - 1, 1]
-
-
-@njit(cache=True)
-def layer_water(params, profiles, textures, layer, x, y, z, r):
-    """Water content w [g m^-3] of `layer` at the world point (x, y, z), |p| = r [m]
-    (module docstring); 0 outside the layer's shell."""
-    base, top = params[layer, BASE_R], params[layer, TOP_R]
-    if r < base or r > top:
-        return 0.0
-    h = 0.5 if params[layer, SHEET] > 0.0 else (r - base) / (top - base)
-    # moved by the wind, stretched along it
-    x -= params[layer, OFFSET_X]
-    y -= params[layer, OFFSET_Y]
-    z -= params[layer, OFFSET_Z]
-    ax, ay, az = params[layer, ALONG_X], params[layer, ALONG_Y], params[layer, ALONG_Z]
-    shrink = params[layer, STRETCH_MINUS_ONE] / (1.0 + params[layer, STRETCH_MINUS_ONE])
-    along = (x * ax + y * ay + z * az) * shrink
-    x -= along * ax
-    y -= along * ay
-    z -= along * az
-    n = textures.shape[1]
-    tile = params[layer, INV_SCALE] * n
-    coverage = params[layer, COVERAGE] * _profile(profiles, layer, int(params[layer, N_PROFILE]),
-                                                  h)
-    variation = params[layer, VARIATION]
-    if variation > 0.0:
-        large = tile / COVERAGE_TILE_RATIO
-        # a different slice of the same tile: axes permuted, so no common period
-        weather = sample_texture(textures, layer, 0, z * large, x * large, y * large)
-        coverage *= 1.0 + variation * (2.0 * weather - 1.0)
-    if coverage <= 0.0:
-        return 0.0
-    coverage = min(coverage, 1.0)
-    shape = sample_texture(textures, layer, 0, x * tile, y * tile, z * tile)
-    d = (shape - (1.0 - coverage)) / (params[layer, EDGE] * coverage)
-    if d <= 0.0:
-        return 0.0
-    d = min(d, 1.0)
-    strength = params[layer, DETAIL]
-    if strength > 0.0:
-        fine = params[layer, INV_DETAIL_SCALE] * n
-        erosion = strength * sample_texture(textures, layer, 1, x * fine, y * fine, z * fine)
-        d = (d - erosion) / (1.0 - erosion)
-        if d <= 0.0:
-            return 0.0
-    return params[layer, WATER] * d

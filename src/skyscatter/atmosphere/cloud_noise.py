@@ -15,13 +15,12 @@ cloudscapes of Horizon Zero Dawn", SIGGRAPH Advances in Real-Time Rendering; Hil
 
 Every lattice gradient and Worley feature point comes from an integer hash of its (periodic)
 cell and the seed (the "lowbias32" mixer, Wellons 2018, https://nullprogram.com/blog/2018/07/31/),
-so the texture is the same on every machine. `sample_texture` reads it trilinearly with
-wrap-around at texel coordinates.
+so the texture is the same on every machine. `atmosphere._cloud_sampling.sample_texture`
+reads it trilinearly with wrap-around at texel coordinates.
 """
 
 from __future__ import annotations
 
-import math
 from functools import lru_cache
 
 import numpy as np
@@ -30,7 +29,7 @@ from numba import njit, prange
 from skyscatter.checks import checked_integer
 from skyscatter.errors import InputError
 
-__all__ = ["NOISE_TEXTURE_SIZE", "hash32", "noise_texture", "sample_texture"]
+__all__ = ["NOISE_TEXTURE_SIZE", "hash32", "noise_texture"]
 
 NOISE_TEXTURE_SIZE = 128  # texels per side: 8 MiB of float32 x 2 channels; baked in ~1 s
 _PERLIN_OCTAVES = 4
@@ -174,22 +173,3 @@ def noise_texture(seed: int, size: int = NOISE_TEXTURE_SIZE) -> np.ndarray:
     result = texture.astype(np.float32)
     result.flags.writeable = False
     return result
-
-
-@njit(cache=True, inline="always")
-def sample_texture(textures, tile, channel, x, y, z):
-    """Trilinear sample of `textures[tile, ..., channel]` ((n_tiles, n, n, n, 2), n a power
-    of two) at texel coordinates (x, y, z), wrapping around (texel centres at i + 0.5)."""
-    mask = textures.shape[1] - 1
-    x -= 0.5
-    y -= 0.5
-    z -= 0.5
-    fx, fy, fz = math.floor(x), math.floor(y), math.floor(z)
-    tx, ty, tz = x - fx, y - fy, z - fz
-    i0, j0, k0 = int(fx) & mask, int(fy) & mask, int(fz) & mask
-    i1, j1, k1 = (i0 + 1) & mask, (j0 + 1) & mask, (k0 + 1) & mask
-    c00 = textures[tile, i0, j0, k0, channel] * (1 - tz) + textures[tile, i0, j0, k1, channel] * tz
-    c01 = textures[tile, i0, j1, k0, channel] * (1 - tz) + textures[tile, i0, j1, k1, channel] * tz
-    c10 = textures[tile, i1, j0, k0, channel] * (1 - tz) + textures[tile, i1, j0, k1, channel] * tz
-    c11 = textures[tile, i1, j1, k0, channel] * (1 - tz) + textures[tile, i1, j1, k1, channel] * tz
-    return ((c00 * (1 - ty) + c01 * ty) * (1 - tx)) + ((c10 * (1 - ty) + c11 * ty) * tx)

@@ -180,7 +180,7 @@ def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light
         _check_cloud_solver(solver)
         behind = _sky_and_surfaces(solver, position, rays, world_light, ground or Ground(),
                                    clouds, progress)
-        return clouds_in_front(solver, clouds, position, rays, world_light, behind)
+        return clouds_in_front(solver, clouds, position, rays, world_light, behind=behind)
     if ground is None:
         return solver.sky_radiance(position, rays, world_light, progress)
     return _sky_and_surfaces(solver, position, rays, world_light, ground, None, progress)
@@ -192,7 +192,8 @@ def _sky_and_surfaces(solver, position: np.ndarray, rays: np.ndarray, world_ligh
     """The sky along the rays that miss `ground`, the surfaces (in the shadows of `clouds`)
     along those that meet it."""
     radiance = np.empty((rays.shape[0], solver.profile.n_wavelengths))
-    surface, hit = surface_radiance(solver, position, rays, world_light, ground, clouds)
+    surface, hit = surface_radiance(solver, position, rays, world_light, ground,
+                                    clouds=clouds)
     hits, misses = np.flatnonzero(hit), np.flatnonzero(~hit)
     radiance[hits] = surface
     if progress is not None:

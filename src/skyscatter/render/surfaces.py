@@ -38,7 +38,7 @@ class Ground:
 
 
 def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarray,
-                     sun_direction: np.ndarray, ground: Ground,
+                     sun_direction: np.ndarray, ground: Ground, *,
                      clouds: CloudField | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(radiance (n_hit, n_wl) [W m^-2 sr^-1 nm^-1], hit (n,) bool) of the rays from
     `position` along unit `directions` (n, 3) that meet the ground or the terrain, in the

@@ -40,7 +40,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skyscatter.atmosphere.cloud_field import (
+from skyscatter.atmosphere._cloud_sampling import (
     BASE_R,
     SHEET,
     TOP_R,

@@ -75,7 +75,7 @@ def cloud_lighting(solver, field: CloudField) -> CloudLighting:
 
 
 def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray,
-                    sun: np.ndarray, behind: np.ndarray,
+                    sun: np.ndarray, *, behind: np.ndarray,
                     lighting: CloudLighting | None = None) -> np.ndarray:
     """Radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along unit world `rays` (n, 3) from `origin`
     (3,) with the clouds of `field` in front of `behind` (n, n_wl), the radiance without them
