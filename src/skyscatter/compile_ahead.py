@@ -4,8 +4,8 @@ numba compiles each kernel on its first call and keeps the machine code in its c
 the sources, or where `jit_cache` points it), so only the first run on a machine pays for it:
 about a minute of CPU before the first picture of a fresh install. `compile_kernels` runs, at a
 tiny size (16 x 16 pixels, one wavelength, tables in a temporary folder), the commands a new
-user runs first: a render of each camera, the sky at a date, Mars's Mie dust, a radiance
-table. Every later run loads those kernels from the cache. The Makefile calls it at install
+user runs first: a render of each camera, the sky at a date, Mars's Mie dust, clouds, a
+radiance table. Every later run loads those kernels from the cache. The Makefile calls it at install
 time; a package installed with pip can call it once, or let the first run compile.
 
 A marker file in the cache folder records that the kernels were compiled (by this command or
@@ -68,6 +68,8 @@ WARM_UP_COMMANDS: tuple[tuple[str, tuple[str, ...]], ...] = (
                                              "2024-01-25T23:00+01:00", "--lat", "52.52",
                                              "--lon", "13.40", *_TINY)),
     ("Mie dust", ("render", "mars-physical", *_TINY)),
+    ("clouds, their shadows on the ground", ("render", "earth", "--clouds", "cumulus",
+                                             "--altitude", "2", *_TINY)),
     ("radiance", ("radiance", "earth", "--sun-zenith", "30", "--wavelengths", "550")),
 )
 

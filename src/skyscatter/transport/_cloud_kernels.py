@@ -5,9 +5,9 @@ observer and their transmittance, layer by layer in the order the ray meets them
 
     L = sum_k T_k omega J_k (1 - exp(-sigma_k dt)),   T_{k+1} = T_k exp(-sigma_k dt)
 
-(the exact integral of a source J constant over each step, Hillaire 2016 eq. 4; J_k at a
-point drawn per ray from the step's own attenuation, so that the mean over pixels is exact
-for a source that varies within an optically thick step), with
+(Hillaire 2016 eq. 4, for a source J constant over each step; here J is taken at both ends
+of each step and integrated as exponential in between, so that an optically thick step - a
+cumulus's sunlit skin is ~10 m deep - gets its light right without noise), with
 sigma = k_ext w the extinction coefficient of the water content w (`atmosphere.cloud_field`)
 and J the light each sample scatters per unit scattering:
 
@@ -55,8 +55,11 @@ __all__ = [
     "LIGHT_FIRST_M",
     "LIGHT_MAX_M",
     "COARSE_STEPS",
+    "EDGE_BISECTIONS",
     "EMPTY_TO_COARSE",
     "MAX_STEPS",
+    "MIN_STEP_M",
+    "OPTICAL_STEP",
     "STEP_GROWTH",
     "OCTAVES",
     "STEP_M",
@@ -70,6 +73,9 @@ STEP_GROWTH = 0.006  # steps grow with distance as the pixels' footprint: 80 m a
 COARSE_STEPS = 3  # in empty air the march takes steps this many times longer ...
 EMPTY_TO_COARSE = 3  # ... after this many empty samples, and backs up when it meets a cloud
 MAX_STEPS = 256  # per layer crossed
+EDGE_BISECTIONS = 7  # a cloud's edge is found to 1/128 of the step that met it
+OPTICAL_STEP = 1.5  # inside a cloud a step spans at most this optical depth ...
+MIN_STEP_M = 5.0  # ... and is at least this long [m]: a cumulus's skin in 4-6 samples
 LIGHT_FIRST_M = 12.0  # the water path towards the sun: segments from 12 m, doubling ...
 LIGHT_MAX_M = 6000.0  # ... up to this far (9 samples; the light beyond is long lost) [m]
 AMBIENT_FIRST_M = 25.0  # the water above and below each sample: segments from 25 m, doubling
@@ -169,19 +175,6 @@ def _fine_step(t):
 
 
 @njit(cache=True, inline="always")
-def _seen_offset(u, sigma, step):
-    """Where in a segment of length `step` [m] and extinction `sigma` [m^-1] to evaluate its
-    light: the quantile u in (0, 1) of the density sigma e^(-sigma x) / (1 - e^(-sigma step))
-    of the light that leaves it towards the observer, so that over the jitters u the sampled
-    source is weighted as the exact integral weights it (an optically thick segment is seen
-    only near its front: a cumulus's sunlit skin is ~10 m deep, a step 80 m)."""
-    optical = sigma * step
-    if optical < 1e-6:
-        return u * step
-    return -math.log1p(-u * -math.expm1(-optical)) / sigma
-
-
-@njit(cache=True, inline="always")
 def _jitter(index):
     """A per-ray offset in (0, 1) from an integer hash of the ray's index: turns the banding
     of fixed steps into fine grain (never 0: a sample on a layer's boundary could miss it)."""
@@ -201,33 +194,32 @@ def _ground_distance(o, v, bottom_r):
 
 
 @njit(cache=True, parallel=True)
-def march_clouds(origin, directions, max_distance, bottom_r, sun, params, profiles, textures,
-                 extinction, albedo, asymmetry, phase, r_nodes, mu_nodes, sun_air,
-                 sky_down, ground_up, sun_toa, radiance, transmittance, depth, hit):
+def march_clouds(origin, directions, max_distance, bottom_r, sun, cloud, light, radiance,
+                 transmittance, depth, hit):
     """Light scattered by the clouds towards `origin` (3,) along unit `directions` (n, 3), up
     to `max_distance` (n,) [m] or the ground of radius `bottom_r` [m] (module docstring), lit
     by a sun along unit `sun` (3,).
 
-    `r_nodes` (n_r,) radii [m] and `mu_nodes` (n_mu,) sun zenith cosines, both uniform, index
-    the lighting tables (n_r, n_mu, n_wl): `sun_air` the air's transmittance towards the
-    sun [-], `sky_down` the clear sky's diffuse irradiance from above and `ground_up` the
-    irradiance the ground reflects up [W m^-2 nm^-1]; `sun_toa` (n_wl,) [W m^-2 nm^-1].
-    Writes radiance (n, n_wl) [W m^-2 sr^-1 nm^-1], transmittance (n, n_wl) [-], depth (n,)
-    the transmittance-weighted distance of the scattering [m] and hit (n,) whether any cloud
-    was met."""
-    n_wl = sun_toa.size
+    `cloud` = (params, profiles, textures, mass extinction [m^2 g^-1], single-scattering
+    albedo, asymmetry, phase table) of a `CloudField`; `light` = (r_nodes (n_r,) radii [m],
+    mu_nodes (n_mu,) sun zenith cosines, both uniform; then over them (n_r, n_mu, n_wl) the
+    air's transmittance towards the sun [-], the clear sky's diffuse irradiance from above
+    and the irradiance the ground reflects up [W m^-2 nm^-1]; the sun's top-of-atmosphere
+    irradiance (n_wl,) [W m^-2 nm^-1]) (`transport.clouds.cloud_lighting`). Writes radiance
+    (n, n_wl) [W m^-2 sr^-1 nm^-1], transmittance (n, n_wl) [-], depth (n,) the
+    transmittance-weighted distance of the scattering [m] and hit (n,) whether any cloud was
+    met."""
+    params = cloud[0]
+    n_wl = cloud[3].shape[1]
     n_layers = params.shape[0]
-    mid = n_wl // 2
     for i in prange(directions.shape[0]):
         v = directions[i]
-        nu = v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2]
-        octave_phase = _octave_phases(nu, phase, asymmetry)
+        octave_phase = _octave_phases(v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2], cloud[6],
+                                      cloud[5])
+        state = np.zeros(4)  # transmittance-weighted distance and weight, hit, stop
         trans = np.ones(n_wl)
-        light = np.zeros(n_wl)
-        source = np.empty(n_wl)
-        sigma = np.empty(n_wl)
-        down = np.empty(n_wl)
-        up = np.empty(n_wl)
+        glow = np.zeros(n_wl)
+        scratch = np.empty((5, n_wl))
         intervals = np.empty((2 * n_layers, 3))
         pieces = np.empty((2, 2))
         count = 0
@@ -240,92 +232,220 @@ def march_clouds(origin, directions, max_distance, bottom_r, sun, params, profil
                 intervals[count, 2] = layer
                 count += 1
         order = np.argsort(intervals[:count, 0])
-        weight_sum = 0.0
-        weighted_t = 0.0
-        met = False
-        jitter = _jitter(i)
         for o in range(count):
-            t0, t1 = intervals[order[o], 0], intervals[order[o], 1]
-            layer = int(intervals[order[o], 2])
-            sheet = params[layer, SHEET] > 0.0
-            base_r, top_r = params[layer, BASE_R], params[layer, TOP_R]
-            g_layer = asymmetry[layer, mid]
-            # Segments [s, s + step) cover [t0, t1]; each is sampled at a jittered point in it
-            s = t0
-            coarse = not sheet
-            empties = 0
-            steps = 0
-            while s < t1 and steps < MAX_STEPS:
-                steps += 1
-                step = t1 - t0 if sheet else max(
-                    _fine_step(s) * (COARSE_STEPS if coarse else 1),
-                    (t1 - s) / (MAX_STEPS + 1 - steps))  # the last steps reach t1
-                step = min(step, t1 - s)
-                t = s + (0.5 if sheet else jitter) * step
-                x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
-                r = math.sqrt(x * x + y * y + z * z)
-                water = layer_water(params, profiles, textures, layer, x, y, z, r)
-                if water <= 0.0:
-                    empties += 1
-                    coarse |= empties >= EMPTY_TO_COARSE
-                    s += step
-                    continue
-                if coarse:  # stepped into a cloud: walk this segment again in fine steps
-                    coarse = False
-                    continue
-                empties = 0
-                met = True
-                if not sheet:  # light the segment where it is seen (in-segment attenuation)
-                    t = s + _seen_offset(jitter, extinction[layer, mid] * water, step)
-                    x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
-                    r = math.sqrt(x * x + y * y + z * z)
-                mu_s = (x * sun[0] + y * sun[1] + z * sun[2]) / r
-                if sheet:
-                    half = 0.5 * (top_r - base_r)
-                    w_sun = water * min(half / max(mu_s, 0.05), LIGHT_MAX_M)
-                    w_up = water * half
-                    w_down = w_up
-                else:
-                    ux, uy, uz = x / r, y / r, z / r
-                    length = min(_exit_length(x, y, z, r, sun[0], sun[1], sun[2], base_r,
-                                              top_r), LIGHT_MAX_M)
-                    w_sun = _path_water(params, profiles, textures, layer, x, y, z, sun[0],
-                                        sun[1], sun[2], length, LIGHT_FIRST_M)
-                    w_up = _path_water(params, profiles, textures, layer, x, y, z, ux, uy, uz,
-                                       top_r - r, AMBIENT_FIRST_M)
-                    w_down = _path_water(params, profiles, textures, layer, x, y, z, -ux, -uy,
-                                         -uz, r - base_r, AMBIENT_FIRST_M)
-                _table_lookup(sun_air, r_nodes, mu_nodes, r, mu_s, source)
-                for k in range(n_wl):
-                    k_ext = extinction[layer, k]
-                    seen = math.exp(-k_ext * w_sun)  # exp(-b^o tau): square roots, b = 1/2
-                    octaves = octave_phase[layer, 0, k] * seen
-                    for octave in range(1, OCTAVES):
-                        seen = math.sqrt(seen)
-                        octaves += octave_phase[layer, octave, k] * seen
-                    source[k] *= sun_toa[k] * octaves
-                    sigma[k] = k_ext * water
-                _add_ambient(sky_down, ground_up, r_nodes, mu_nodes, r, mu_s, extinction[layer],
-                             g_layer, w_up, w_down, source, down, up)
-                extinct = math.exp(-sigma[mid] * step)
-                weight = trans[mid] * (1.0 - extinct)
-                weight_sum += weight
-                weighted_t += weight * t
-                alive = False
-                for k in range(n_wl):
-                    e = math.exp(-sigma[k] * step)
-                    light[k] += trans[k] * albedo[layer, k] * source[k] * (1.0 - e)
-                    trans[k] *= e
-                    alive |= trans[k] > TRANSMITTANCE_CUTOFF
-                if not alive:
-                    break
-                s += step
-            if trans.max() <= TRANSMITTANCE_CUTOFF:
+            row = intervals[order[o]]
+            if params[int(row[2]), SHEET] > 0.0:
+                _cross_sheet(origin, v, row[0], row[1], int(row[2]), sun, cloud, light,
+                             octave_phase, trans, glow, scratch, state)
+            else:
+                _march_layer(origin, v, row[0], row[1], int(row[2]), _jitter(i), sun, cloud,
+                             light, octave_phase, trans, glow, scratch, state)
+            if state[3] > 0.0:
                 break
-        radiance[i] = light
+        radiance[i] = glow
         transmittance[i] = trans
-        depth[i] = weighted_t / weight_sum if weight_sum > 0.0 else 0.0
-        hit[i] = met
+        depth[i] = state[0] / state[1] if state[1] > 0.0 else 0.0
+        hit[i] = state[2] > 0.0
+
+
+@njit(cache=True)
+def _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, octave_phase, trans,
+                 glow, scratch, state):
+    """March one crossing [t0, t1] of a volume layer (module docstring) in segments that
+    cover it: coarse in empty air; where a sample meets cloud, the segments restart at the
+    cloud's edge (`_cloud_edge`) and go at most `OPTICAL_STEP` deep. Each segment's
+    extinction comes from the water at a jittered point in it; its source J is taken at both
+    ends (the end of one is the start of the next) and integrated as exponential in between,
+    against the segment's attenuation."""
+    params, profiles, textures = cloud[0], cloud[1], cloud[2]
+    extinction, albedo = cloud[3], cloud[4]
+    n_wl = trans.size
+    mid = n_wl // 2
+    start_source, end_source = scratch[0], scratch[1]
+    s = t0
+    last_empty = t0  # where the water was last seen to be 0 (or the layer's edge)
+    coarse = True
+    inside = False  # the last sample was in a cloud whose edge has been found
+    have_start = False
+    empties = 0
+    steps = 0
+    thick_cap = math.inf  # step cap from the last sample's extinction
+    refined = False
+    while s < t1 and steps < MAX_STEPS:
+        steps += 1
+        step = max(min(_fine_step(s) * (COARSE_STEPS if coarse else 1), thick_cap),
+                   (t1 - s) / (MAX_STEPS + 1 - steps))  # the last steps reach t1
+        step = min(step, t1 - s)
+        t = s + jitter * step
+        water = _water_along(origin, v, t, layer, params, profiles, textures)
+        if water <= 0.0:
+            empties += 1
+            coarse |= empties >= EMPTY_TO_COARSE
+            thick_cap = math.inf
+            refined = have_start = inside = False
+            last_empty = t
+            s += step
+            continue
+        if not inside:  # entering a cloud: start the segments at its edge
+            s = _cloud_edge(origin, v, last_empty, t, layer, params, profiles, textures)
+            inside = True
+            coarse = False
+            continue
+        thick_cap = max(OPTICAL_STEP / (extinction[layer, mid] * water), MIN_STEP_M)
+        if step > 1.5 * thick_cap and not refined:  # too thick: walk it again, shorter
+            refined = True
+            continue
+        refined = False
+        empties = 0
+        state[2] = 1.0
+        if not have_start:
+            _source_at(origin, v, s, layer, sun, cloud, light, octave_phase, start_source,
+                       scratch[2], scratch[3])
+        _source_at(origin, v, s + step, layer, sun, cloud, light, octave_phase, end_source,
+                   scratch[2], scratch[3])
+        sigma_mid = extinction[layer, mid] * water
+        extinct_mid = math.exp(-sigma_mid * step)
+        weight = trans[mid] * (1.0 - extinct_mid)
+        state[0] += weight * (s + _mean_depth(sigma_mid, step, extinct_mid))
+        state[1] += weight
+        alive = False
+        for k in range(n_wl):
+            sigma = extinction[layer, k] * water
+            e = math.exp(-sigma * step)
+            glow[k] += trans[k] * albedo[layer, k] * _segment_integral(
+                start_source[k], end_source[k], sigma, step, e)
+            trans[k] *= e
+            alive |= trans[k] > TRANSMITTANCE_CUTOFF
+        if not alive:
+            state[3] = 1.0
+            return
+        start_source[:] = end_source
+        have_start = True
+        s += step
+
+
+@njit(cache=True, inline="always")
+def _water_along(origin, v, t, layer, params, profiles, textures):
+    """Water content [g m^-3] of `layer` at distance t along the ray."""
+    x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
+    return layer_water(params, profiles, textures, layer, x, y, z,
+                       math.sqrt(x * x + y * y + z * z))
+
+
+@njit(cache=True)
+def _cloud_edge(origin, v, outside, inside, layer, params, profiles, textures):
+    """Where the ray enters cloud between `outside` (no water) and `inside` (water) [m]:
+    `EDGE_BISECTIONS` halvings, the end inside the cloud. Every ray then lights a cloud from
+    its edge, whatever its jitter (else the sunlit skin, ~10 m deep, is caught by some pixels
+    and stepped over by their neighbours: grain)."""
+    for _ in range(EDGE_BISECTIONS):
+        middle = 0.5 * (outside + inside)
+        if _water_along(origin, v, middle, layer, params, profiles, textures) > 0.0:
+            inside = middle
+        else:
+            outside = middle
+    return inside
+
+
+@njit(cache=True, inline="always")
+def _segment_integral(j0, j1, sigma, step, e):
+    """int_0^step J(x) sigma e^(-sigma x) dx with J exponential from j0 to j1 (linear when
+    either is 0); `e` = e^(-sigma step)."""
+    if j0 > 0.0 and j1 > 0.0:
+        a = math.log(j0 / j1) / step
+        rate = sigma + a
+        if abs(rate * step) < 1e-8:
+            return j0 * sigma * step
+        return j0 * sigma * -math.expm1(-rate * step) / rate
+    if sigma * step < 1e-8:
+        return 0.5 * (j0 + j1) * sigma * step
+    slope = (j1 - j0) / step
+    return j0 * (1.0 - e) + slope * (1.0 - e * (1.0 + sigma * step)) / sigma
+
+
+@njit(cache=True, inline="always")
+def _mean_depth(sigma, step, e):
+    """Mean depth [m] of the light's extinction in a segment: int x sigma e^(-sigma x) /
+    (1 - e^(-sigma step)) over [0, step]."""
+    if sigma * step < 1e-6:
+        return 0.5 * step
+    return 1.0 / sigma - step * e / (1.0 - e)
+
+
+@njit(cache=True)
+def _cross_sheet(origin, v, t0, t1, layer, sun, cloud, light, octave_phase, trans, glow,
+                 scratch, state):
+    """A sheet layer's crossing [t0, t1]: one sample in the middle of the chord, its water
+    uniform across the shell's thickness (module docstring)."""
+    params, profiles, textures = cloud[0], cloud[1], cloud[2]
+    extinction, albedo = cloud[3], cloud[4]
+    t = 0.5 * (t0 + t1)
+    x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
+    r = math.sqrt(x * x + y * y + z * z)
+    water = layer_water(params, profiles, textures, layer, x, y, z, r)
+    if water <= 0.0:
+        return
+    state[2] = 1.0
+    mu_s = (x * sun[0] + y * sun[1] + z * sun[2]) / r
+    half = 0.5 * (params[layer, TOP_R] - params[layer, BASE_R])
+    source = scratch[0]
+    _light_source(r, mu_s, water * min(half / max(mu_s, 0.05), LIGHT_MAX_M), water * half,
+                  water * half, layer, cloud, light, octave_phase, source, scratch[2],
+                  scratch[3])
+    length = t1 - t0
+    mid = trans.size // 2
+    state[0] += trans[mid] * (1.0 - math.exp(-extinction[layer, mid] * water * length)) * t
+    state[1] += trans[mid] * (1.0 - math.exp(-extinction[layer, mid] * water * length))
+    for k in range(trans.size):
+        e = math.exp(-extinction[layer, k] * water * length)
+        glow[k] += trans[k] * albedo[layer, k] * source[k] * (1.0 - e)
+        trans[k] *= e
+
+
+@njit(cache=True)
+def _source_at(origin, v, t, layer, sun, cloud, light, octave_phase, out, down, up):
+    """J (n_wl,) (module docstring) at distance t along the view ray inside a volume layer:
+    the water towards the sun, above and below marched from there."""
+    params, profiles, textures = cloud[0], cloud[1], cloud[2]
+    x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
+    r = math.sqrt(x * x + y * y + z * z)
+    base_r, top_r = params[layer, BASE_R], params[layer, TOP_R]
+    r = min(max(r, base_r), top_r)
+    ux, uy, uz = x / r, y / r, z / r
+    length = min(_exit_length(x, y, z, r, sun[0], sun[1], sun[2], base_r, top_r), LIGHT_MAX_M)
+    w_sun = _path_water(params, profiles, textures, layer, x, y, z, sun[0], sun[1], sun[2],
+                        length, LIGHT_FIRST_M)
+    w_up = _path_water(params, profiles, textures, layer, x, y, z, ux, uy, uz, top_r - r,
+                       AMBIENT_FIRST_M)
+    w_down = _path_water(params, profiles, textures, layer, x, y, z, -ux, -uy, -uz, r - base_r,
+                         AMBIENT_FIRST_M)
+    mu_s = (x * sun[0] + y * sun[1] + z * sun[2]) / r
+    _light_source(r, mu_s, w_sun, w_up, w_down, layer, cloud, light, octave_phase, out, down,
+                  up)
+
+
+@njit(cache=True)
+def _light_source(r, mu_s, w_sun, w_up, w_down, layer, cloud, light, octave_phase, out, down,
+                  up):
+    """J (n_wl,) at radius r [m] and sun zenith cosine mu_s from the water paths towards the
+    sun, above and below [g m^-2] (module docstring); `down` and `up` are scratch."""
+    extinction, asymmetry = cloud[3], cloud[5]
+    r_nodes, mu_nodes, sun_air, sky_down, ground_up, sun_toa = light
+    _table_lookup(sun_air, r_nodes, mu_nodes, r, mu_s, out)
+    _table_lookup(sky_down, r_nodes, mu_nodes, r, mu_s, down)
+    _table_lookup(ground_up, r_nodes, mu_nodes, r, mu_s, up)
+    g = asymmetry[layer, out.size // 2]
+    for k in range(out.size):
+        k_ext = extinction[layer, k]
+        seen = math.exp(-k_ext * w_sun)  # exp(-b^o tau): square roots, b = 1/2
+        octaves = octave_phase[layer, 0, k] * seen
+        for octave in range(1, OCTAVES):
+            seen = math.sqrt(seen)
+            octaves += octave_phase[layer, octave, k] * seen
+        d_up = 2.0 / (2.0 + (1.0 - g) * k_ext * w_up)
+        d_down = 2.0 / (2.0 + (1.0 - g) * k_ext * w_down)
+        out[k] = (sun_toa[k] * out[k] * octaves
+                  + (down[k] * d_up + up[k] * d_down) / (2.0 * math.pi))
 
 
 @njit(cache=True)
@@ -344,20 +464,6 @@ def _octave_phases(nu, phase, asymmetry):
                 a *= OCTAVE_A
                 c *= OCTAVE_C
     return out
-
-
-@njit(cache=True)
-def _add_ambient(sky_down, ground_up, r_nodes, mu_nodes, r, mu_s, extinction, g, w_up,
-                 w_down, source, down, up):
-    """source += [E_down D(W_up) + E_up D(W_down)] / (2 pi) (module docstring); `down` and
-    `up` (n_wl,) are scratch."""
-    n_wl = source.size
-    _table_lookup(sky_down, r_nodes, mu_nodes, r, mu_s, down)
-    _table_lookup(ground_up, r_nodes, mu_nodes, r, mu_s, up)
-    for k in range(n_wl):
-        d_up = 2.0 / (2.0 + (1.0 - g) * extinction[k] * w_up)
-        d_down = 2.0 / (2.0 + (1.0 - g) * extinction[k] * w_down)
-        source[k] += (down[k] * d_up + up[k] * d_down) / (2.0 * math.pi)
 
 
 @njit(cache=True, parallel=True)

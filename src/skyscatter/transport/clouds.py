@@ -30,7 +30,7 @@ from skyscatter.atmosphere.cloud_field import CloudField
 from skyscatter.transport import _cloud_kernels
 
 __all__ = ["CloudField", "CloudLighting", "cloud_lighting", "cloud_transmittance",
-           "clouds_in_front"]
+           "clouds_in_front", "kernel_arrays"]
 
 CHUNK_RAYS = 1 << 17  # rays per march: bounds the temporaries (n, n_wl) x 4
 LIGHTING_RADII = 8  # nodes across the cloud layers
@@ -97,11 +97,9 @@ def _clouds_over(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray
     radiance, transmittance = np.empty((n, n_wl)), np.empty((n, n_wl))
     depth, hit = np.empty(n), np.empty(n, dtype=np.bool_)
     _cloud_kernels.march_clouds(
-        origin, rays, np.full(n, np.inf), field.bottom_radius_m, sun, field.params,
-        field.profiles, field.textures, field.mass_extinction_m2_g,
-        field.single_scattering_albedo, field.asymmetry, field.phase, light.r_nodes,
-        light.mu_nodes, light.sun_air, light.sky_down, light.ground_up, light.sun_toa,
-        radiance, transmittance, depth, hit)
+        origin, rays, np.full(n, np.inf), field.bottom_radius_m, sun, kernel_arrays(field),
+        (light.r_nodes, light.mu_nodes, light.sun_air, light.sky_down, light.ground_up,
+         light.sun_toa), radiance, transmittance, depth, hit)
     seen = np.flatnonzero(hit)
     if seen.size:
         points = origin + depth[seen, None] * rays[seen]
@@ -109,6 +107,12 @@ def _clouds_over(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray
         clouds_t = transmittance[seen]
         result[seen] = (clouds_t * result[seen] + (1.0 - clouds_t) * air_light
                         + air_transmittance * radiance[seen])
+
+
+def kernel_arrays(field: CloudField) -> tuple:
+    """The arrays of `field` in the order the kernels take them (`_cloud_kernels`)."""
+    return (field.params, field.profiles, field.textures, field.mass_extinction_m2_g,
+            field.single_scattering_albedo, field.asymmetry, field.phase)
 
 
 def cloud_transmittance(field: CloudField, origins: np.ndarray, directions: np.ndarray,
