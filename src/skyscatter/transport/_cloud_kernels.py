@@ -337,7 +337,10 @@ def _cloud_edge(origin, v, outside, inside, layer, params, profiles, textures):
     """Where the ray enters cloud between `outside` (no water) and `inside` (water) [m]:
     `EDGE_BISECTIONS` halvings, the end inside the cloud. Every ray then lights a cloud from
     its edge, whatever its jitter (else the sunlit skin, ~10 m deep, is caught by some pixels
-    and stepped over by their neighbours: grain)."""
+    and stepped over by their neighbours: grain). A cloud that reaches the layer's boundary
+    (`outside` is t0 there) starts at it."""
+    if _water_along(origin, v, outside, layer, params, profiles, textures) > 0.0:
+        return outside
     for _ in range(EDGE_BISECTIONS):
         middle = 0.5 * (outside + inside)
         if _water_along(origin, v, middle, layer, params, profiles, textures) > 0.0:
