@@ -178,28 +178,29 @@ def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light
     irradiance; with `clouds` in front (`transport.clouds.clouds_in_front`)."""
     if clouds is not None:
         _check_cloud_solver(solver)
-        behind = _sky_and_surfaces(solver, position, rays, world_light, ground or Ground(),
-                                   clouds, progress)
-        return clouds_in_front(solver, clouds, position, rays, world_light, behind=behind)
+        behind, distance = _sky_and_surfaces(solver, position, rays, world_light,
+                                             ground or Ground(), clouds, progress)
+        return clouds_in_front(solver, clouds, position, rays, world_light, behind=behind,
+                               max_distance=distance)
     if ground is None:
         return solver.sky_radiance(position, rays, world_light, progress)
-    return _sky_and_surfaces(solver, position, rays, world_light, ground, None, progress)
+    return _sky_and_surfaces(solver, position, rays, world_light, ground, None, progress)[0]
 
 
 def _sky_and_surfaces(solver, position: np.ndarray, rays: np.ndarray, world_light: np.ndarray,
                       ground: Ground, clouds: CloudField | None,
-                      progress: Callable[[int], None] | None) -> np.ndarray:
-    """The sky along the rays that miss `ground`, the surfaces (in the shadows of `clouds`)
-    along those that meet it."""
+                      progress: Callable[[int], None] | None) -> tuple[np.ndarray, np.ndarray]:
+    """(radiance (n, n_wl), distance (n,) [m]): the sky along the rays that miss `ground`
+    (distance inf), the surfaces (in the shadows of `clouds`) along those that meet it."""
     radiance = np.empty((rays.shape[0], solver.profile.n_wavelengths))
-    surface, hit = surface_radiance(solver, position, rays, world_light, ground,
-                                    clouds=clouds)
+    surface, hit, distance = surface_radiance(solver, position, rays, world_light, ground,
+                                              clouds=clouds, with_distance=True)
     hits, misses = np.flatnonzero(hit), np.flatnonzero(~hit)
     radiance[hits] = surface
     if progress is not None:
         progress(hits.size)
     radiance[misses] = solver.sky_radiance(position, rays[misses], world_light, progress)
-    return radiance
+    return radiance, distance
 
 
 def _check_cloud_solver(solver) -> None:

@@ -39,12 +39,14 @@ class Ground:
 
 def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarray,
                      sun_direction: np.ndarray, ground: Ground, *,
-                     clouds: CloudField | None = None) -> tuple[np.ndarray, np.ndarray]:
+                     clouds: CloudField | None = None,
+                     with_distance: bool = False) -> tuple[np.ndarray, ...]:
     """(radiance (n_hit, n_wl) [W m^-2 sr^-1 nm^-1], hit (n,) bool) of the rays from
     `position` along unit `directions` (n, 3) that meet the ground or the terrain, in the
     shadows of the terrain and of `clouds` (their transmittance towards the sun at the middle
-    wavelength: the droplets' extinction varies by ~2 % over the visible); InputError unless
-    the solver is a `SurfaceRadianceSolver`."""
+    wavelength: the droplets' extinction varies by ~2 % over the visible); with
+    `with_distance` also the distance (n,) [m] to the surface (inf for a miss). InputError
+    unless the solver is a `SurfaceRadianceSolver`."""
     if not isinstance(solver, SurfaceRadianceSolver):
         raise InputError("an albedo map or terrain needs the table solver (--solver lut)",
                          key="solver", value=getattr(solver, "name", solver), allowed="lut")
@@ -68,4 +70,9 @@ def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarra
         albedo = ground.albedo_map.spectral(points, profile.wavelengths_nm)
     else:
         albedo = profile.ground_albedo
-    return solver.surface_radiance(origin, points, normals, albedo, sun_direction, lit=lit), hit
+    radiance = solver.surface_radiance(origin, points, normals, albedo, sun_direction, lit=lit)
+    if not with_distance:
+        return radiance, hit
+    distance = np.full(hit.shape, np.inf)
+    distance[hit] = np.linalg.norm(points - origin, axis=1)
+    return radiance, hit, distance

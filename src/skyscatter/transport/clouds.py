@@ -76,28 +76,34 @@ def cloud_lighting(solver, field: CloudField) -> CloudLighting:
 
 def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray,
                     sun: np.ndarray, *, behind: np.ndarray,
+                    max_distance: np.ndarray | None = None,
                     lighting: CloudLighting | None = None) -> np.ndarray:
     """Radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along unit world `rays` (n, 3) from `origin`
     (3,) with the clouds of `field` in front of `behind` (n, n_wl), the radiance without them
-    (module docstring), the sun along unit `sun` (3,). Rays stop at the planet's ground."""
+    (module docstring), the sun along unit `sun` (3,). Rays stop at the planet's ground or
+    at `max_distance` (n,) [m] (terrain)."""
     origin = np.ascontiguousarray(origin, dtype=np.float64)
     sun = np.ascontiguousarray(sun, dtype=np.float64)
     light = cloud_lighting(solver, field) if lighting is None else lighting
     result = np.array(behind, dtype=np.float64)
+    limits = (np.full(rays.shape[0], np.inf) if max_distance is None
+              else np.asarray(max_distance, dtype=np.float64))
     for start in range(0, rays.shape[0], CHUNK_RAYS):
-        chunk = np.ascontiguousarray(rays[start:start + CHUNK_RAYS], dtype=np.float64)
-        _clouds_over(solver, field, origin, chunk, sun, light, result[start:start + CHUNK_RAYS])
+        chunk = slice(start, start + CHUNK_RAYS)
+        _clouds_over(solver, field, origin, np.ascontiguousarray(rays[chunk], dtype=np.float64),
+                     np.ascontiguousarray(limits[chunk]), sun, light, result[chunk])
     return result
 
 
 def _clouds_over(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray,
-                 sun: np.ndarray, light: CloudLighting, result: np.ndarray) -> None:
+                 limits: np.ndarray, sun: np.ndarray, light: CloudLighting,
+                 result: np.ndarray) -> None:
     """`clouds_in_front` of one chunk of rays, over `result` in place."""
     n, n_wl = rays.shape[0], field.wavelengths_nm.size
     radiance, transmittance = np.empty((n, n_wl)), np.empty((n, n_wl))
     depth, hit = np.empty(n), np.empty(n, dtype=np.bool_)
     _cloud_kernels.march_clouds(
-        origin, rays, np.full(n, np.inf), field.bottom_radius_m, sun, kernel_arrays(field),
+        origin, rays, limits, field.bottom_radius_m, sun, kernel_arrays(field),
         (light.r_nodes, light.mu_nodes, light.sun_air, light.sky_down, light.ground_up,
          light.sun_toa), radiance, transmittance, depth, hit)
     seen = np.flatnonzero(hit)
