@@ -197,6 +197,10 @@ def test_solver_help_lists_every_registered_solver(capsys, command):
       "--lat", "0", "--lon", "0", "--step", "10 parsecs"], "is not a duration"),
     (["timelapse", "earth", "--start", "2024-06-21T20:00Z", "--end", "2024-06-21T21:00Z",
       "--lat", "0", "--lon", "0", "-o", "sky.avi"], ".mp4 or .gif"),
+    (["render", "earth", "--clouds", "cumuls"], "did you mean 'cumulus'"),
+    (["render", "earth", "--clouds", "cumulus", "--solver", "single"], "needs the table solver"),
+    (["render", "earth", "--clouds", "/nonexistent/clouds.toml"], "does not exist"),
+    (["render", "earth", "--clouds", "cumulus", "--cloud-time", "nan"], "--cloud-time"),
 ])
 def test_bad_argument_exits_2_with_one_clear_line(capsys, argv, expected):
     code, out, err = run_cli(capsys, argv)
@@ -236,6 +240,28 @@ def test_config_file_with_a_bad_value_exits_2_naming_file_key_and_value(capsys, 
 
 
 # --- render -----------------------------------------------------------------------------------
+
+def test_a_bad_clouds_file_names_the_key(capsys, tmp_path):
+    clouds = tmp_path / "clouds.toml"
+    clouds.write_text("[[layer]]\nbase_altitude_m = 1000\ntop_altitude_m = 2000\n"
+                      "coverage = 0.5\nwater_content_g_m3 = -1\n")
+    code, out, err = run_cli(capsys, ["render", "earth", "--clouds", str(clouds), "--size", "8",
+                                      "-o", str(tmp_path / "x.png")])
+    assert code == 2 and out == ""
+    line = _error_line(err)
+    assert "water_content_g_m3" in line and "-1" in line and str(clouds) in line
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_render_with_clouds_writes_a_finite_image(capsys, tmp_path):
+    exr = tmp_path / "clouds.exr"
+    code, _, err = run_cli(capsys, ["render", "earth", "--clouds", "stratus", "--size", "16",
+                                    "--wavelengths", "3", "--altitude", "2", "-o",
+                                    str(tmp_path / "clouds.png"), "--exr", str(exr)])
+    assert code == 0, err
+    pixels, _ = read_exr(exr)
+    assert np.all(np.isfinite(pixels)) and pixels.max() > 0.0
+
 
 def test_render_fisheye_writes_png_and_linear_exr(capsys, tmp_path):
     png, exr = tmp_path / "out" / "x.png", tmp_path / "out" / "x.exr"

@@ -127,9 +127,9 @@ def cloud_transmittance(field: CloudField, origins: np.ndarray, directions: np.n
     (n, 3) or (3,)) up to `max_distance` [m] (the sun disk behind clouds, cloud shadows)."""
     starts, directions = np.broadcast_arrays(np.atleast_2d(origins), np.atleast_2d(directions))
     n = starts.shape[0]
-    starts = np.ascontiguousarray(starts, dtype=np.float64)
-    directions = np.ascontiguousarray(directions, dtype=np.float64)
-    limits = np.ascontiguousarray(np.broadcast_to(max_distance, (n,)), dtype=np.float64)
+    starts = np.array(starts, dtype=np.float64)  # copies: broadcast views are read-only
+    directions = np.array(directions, dtype=np.float64)
+    limits = np.array(np.broadcast_to(max_distance, (n,)), dtype=np.float64)
     water = np.empty((n, field.n_layers))
     _cloud_kernels.cloud_water_paths(starts, directions, limits, field.bottom_radius_m,
                                      field.params, field.profiles, field.textures, water)
