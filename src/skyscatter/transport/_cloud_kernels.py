@@ -11,23 +11,33 @@ cumulus's sunlit skin is ~10 m deep - gets its light right without noise), with
 sigma = k_ext w the extinction coefficient of the water content w (`atmosphere.cloud_field`)
 and J the light each sample scatters per unit scattering:
 
-    J = E_sun T_air(h, mu_s) sum_i a^i p_i(nu) exp(-b^i k_ext W_sun)
-        + [E_down(h, mu_s) D(W_up) + E_up(h, mu_s) D(W_down)] / (2 pi)
+    J = E_sun T_air(h, mu_s) p(nu) e^(-tau_sun)                        single scattering
+        + [E_sun T_air mu_s S(d_sun, d_anti) - E_sun T_air mu_s e^(-tau_sun)]+ / (2 pi)
+        + [E_down S(d_up, d_down) + E_up S(d_down, d_up)] / (2 pi)            sky and ground
 
-- sunlight: the star's top-of-atmosphere irradiance through the air (transmittance table) and
-  through the water path W_sun [g m^-2] towards the sun inside the layer (segments from
-  `LIGHT_FIRST_M`, doubling). Light scattered many times inside the cloud by Wrenninge et
-  al.'s (2013) approximation ("Oz: the great and volumetric", SIGGRAPH talk; Hillaire 2016
-  §5.4.2): octave i scatters a^i of the light, sees b^i of the optical depth and has the
-  phase function of asymmetry c^i g (octave 0 is the particles' own phase function, p_0: the
-  Mie table with its diffraction peak, the silver lining). It is an approximation, judged
-  against the Monte Carlo reference (docs/clouds.md).
-- sky light: the clear sky's diffuse irradiance from above (indirect-irradiance table) and the
-  light the ground reflects from below, as if isotropic (a sample scatters half of an
-  isotropic hemisphere's radiance E / pi, whatever its phase function), each dimmed by the
-  water above and below it (W_up, W_down [g m^-2], segments from `AMBIENT_FIRST_M`) as a
-  conservative two-stream slab transmits diffuse light, D = 2 / (2 + (1 - g) k_ext W) (Bohren 1987,
-  Am. J. Phys. 55, 524, eq. 18, doi:10.1119/1.15109).
+- single scattering of the sunlight exactly: the star's top-of-atmosphere irradiance through
+  the air (transmittance table) and through the cloud's water towards the sun, W_sun
+  [g m^-2] (marched from `LIGHT_FIRST_M`, doubling; tau_sun = k_ext W_sun), with the
+  particles' phase function (the Mie table with its diffraction peak: the silver lining);
+- the light scattered many times inside the cloud from a conservative two-stream slab
+  (Bohren 1987, Am. J. Phys. 55, 524, doi:10.1119/1.15109): a flux F_0 entering one face of
+  a slab of scaled optical depth b (d_1 + d_2) travels with constant net flux
+  F_0 / (1 + b (d_1 + d_2)), and the sum of the up- and downward fluxes at depth d_1 from the
+  lit face is
+
+      F_0 S(d_1, d_2),   S = (1 + 2 b d_2) / (1 + b (d_1 + d_2)),   b = (1 - g) / 2
+
+  (2 at the lit face of a thick slab, its transmittance at the far one). The cloud around
+  each sample is taken as such a slab: for the sun, with the depths d_sun = tau_sun mu_s and
+  d_anti = k_ext W_anti mu_s towards the sun and away from it (the slant paths made vertical
+  as in a horizontal layer), entered by the flux E_sun T_air mu_s less its still direct part
+  (counted above); for the sky's diffuse light from above (the indirect-irradiance table)
+  and the ground's reflected light from below, with the vertical depths d_up, d_down. The
+  fluxes' sum is turned into the light scattered per unit scattering as if each hemisphere
+  were isotropic, S F / (2 pi). Against the published fluxes of a conservative slab (HG
+  g = 0.75, van de Hulst 1980, Table 37) this gives the reflectance and transmittance
+  within tests/transport/test_clouds.py's tolerances; 3D clouds are judged against the
+  Monte Carlo reference (docs/clouds.md).
 
 A sheet layer (cirrus) is sampled once per ray, in the middle of its chord through the
 shell, with its water paths to the sun and to the shell's faces taken as uniform.
@@ -48,7 +58,6 @@ from skyscatter.atmosphere._cloud_sampling import (
     phase_table_index,
 )
 from skyscatter.atmosphere.cloud_noise import hash32
-from skyscatter.optics.phase import henyey_greenstein
 
 __all__ = [
     "AMBIENT_FIRST_M",
@@ -61,7 +70,6 @@ __all__ = [
     "MIN_STEP_M",
     "OPTICAL_STEP",
     "STEP_GROWTH",
-    "OCTAVES",
     "STEP_M",
     "TRANSMITTANCE_CUTOFF",
     "cloud_water_paths",
@@ -79,8 +87,6 @@ MIN_STEP_M = 5.0  # ... and is at least this long [m]: a cumulus's skin in 4-6 s
 LIGHT_FIRST_M = 12.0  # the water path towards the sun: segments from 12 m, doubling ...
 LIGHT_MAX_M = 6000.0  # ... up to this far (9 samples; the light beyond is long lost) [m]
 AMBIENT_FIRST_M = 25.0  # the water above and below each sample: segments from 25 m, doubling
-OCTAVES = 4  # Wrenninge et al. 2013 octaves, with a = b = c = 0.5 (their values); the
-OCTAVE_A, OCTAVE_C = 0.5, 0.5  # kernel takes b = 1/2 as square roots of exp(-tau)
 TRANSMITTANCE_CUTOFF = 1e-4  # a ray stops when every wavelength's transmittance is below this
 
 
@@ -214,8 +220,7 @@ def march_clouds(origin, directions, max_distance, bottom_r, sun, cloud, light, 
     n_layers = params.shape[0]
     for i in prange(directions.shape[0]):
         v = directions[i]
-        octave_phase = _octave_phases(v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2], cloud[6],
-                                      cloud[5])
+        sun_phase = _phases_at(v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2], cloud[6])
         state = np.zeros(4)  # transmittance-weighted distance and weight, hit, stop
         trans = np.ones(n_wl)
         glow = np.zeros(n_wl)
@@ -236,10 +241,10 @@ def march_clouds(origin, directions, max_distance, bottom_r, sun, cloud, light, 
             row = intervals[order[o]]
             if params[int(row[2]), SHEET] > 0.0:
                 _cross_sheet(origin, v, row[0], row[1], int(row[2]), sun, cloud, light,
-                             octave_phase, trans, glow, scratch, state)
+                             sun_phase, trans, glow, scratch, state)
             else:
                 _march_layer(origin, v, row[0], row[1], int(row[2]), _jitter(i), sun, cloud,
-                             light, octave_phase, trans, glow, scratch, state)
+                             light, sun_phase, trans, glow, scratch, state)
             if state[3] > 0.0:
                 break
         radiance[i] = glow
@@ -249,7 +254,7 @@ def march_clouds(origin, directions, max_distance, bottom_r, sun, cloud, light, 
 
 
 @njit(cache=True)
-def _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, octave_phase, trans,
+def _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, sun_phase, trans,
                  glow, scratch, state):
     """March one crossing [t0, t1] of a volume layer (module docstring) in segments that
     cover it: coarse in empty air; where a sample meets cloud, the segments restart at the
@@ -299,9 +304,9 @@ def _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, octave_pha
         empties = 0
         state[2] = 1.0
         if not have_start:
-            _source_at(origin, v, s, layer, sun, cloud, light, octave_phase, start_source,
+            _source_at(origin, v, s, layer, sun, cloud, light, sun_phase, start_source,
                        scratch[2], scratch[3])
-        _source_at(origin, v, s + step, layer, sun, cloud, light, octave_phase, end_source,
+        _source_at(origin, v, s + step, layer, sun, cloud, light, sun_phase, end_source,
                    scratch[2], scratch[3])
         sigma_mid = extinction[layer, mid] * water
         extinct_mid = math.exp(-sigma_mid * step)
@@ -376,7 +381,7 @@ def _mean_depth(sigma, step, e):
 
 
 @njit(cache=True)
-def _cross_sheet(origin, v, t0, t1, layer, sun, cloud, light, octave_phase, trans, glow,
+def _cross_sheet(origin, v, t0, t1, layer, sun, cloud, light, sun_phase, trans, glow,
                  scratch, state):
     """A sheet layer's crossing [t0, t1]: one sample in the middle of the chord, its water
     uniform across the shell's thickness (module docstring)."""
@@ -392,9 +397,10 @@ def _cross_sheet(origin, v, t0, t1, layer, sun, cloud, light, octave_phase, tran
     mu_s = (x * sun[0] + y * sun[1] + z * sun[2]) / r
     half = 0.5 * (params[layer, TOP_R] - params[layer, BASE_R])
     source = scratch[0]
-    _light_source(r, mu_s, water * min(half / max(mu_s, 0.05), LIGHT_MAX_M), water * half,
-                  water * half, layer, cloud, light, octave_phase, source, scratch[2],
-                  scratch[3])
+    slant = water * min(half / max(abs(mu_s), 0.05), LIGHT_MAX_M)
+    _light_source(r, mu_s, (x * v[0] + y * v[1] + z * v[2]) / r, v @ sun, slant, slant,
+                  water * half, water * half, layer, cloud, light, sun_phase, source,
+                  scratch[2], scratch[3])
     length = t1 - t0
     mid = trans.size // 2
     state[0] += trans[mid] * (1.0 - math.exp(-extinction[layer, mid] * water * length)) * t
@@ -406,66 +412,90 @@ def _cross_sheet(origin, v, t0, t1, layer, sun, cloud, light, octave_phase, tran
 
 
 @njit(cache=True)
-def _source_at(origin, v, t, layer, sun, cloud, light, octave_phase, out, down, up):
+def _source_at(origin, v, t, layer, sun, cloud, light, sun_phase, out, down, up):
     """J (n_wl,) (module docstring) at distance t along the view ray inside a volume layer:
     the water towards the sun, above and below marched from there."""
     params, profiles, textures = cloud[0], cloud[1], cloud[2]
     x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
-    r = math.sqrt(x * x + y * y + z * z)
+    radius = math.sqrt(x * x + y * y + z * z)
+    ux, uy, uz = x / radius, y / radius, z / radius
     base_r, top_r = params[layer, BASE_R], params[layer, TOP_R]
-    r = min(max(r, base_r), top_r)
-    ux, uy, uz = x / r, y / r, z / r
+    r = min(max(radius, base_r), top_r)
     length = min(_exit_length(x, y, z, r, sun[0], sun[1], sun[2], base_r, top_r), LIGHT_MAX_M)
     w_sun = _path_water(params, profiles, textures, layer, x, y, z, sun[0], sun[1], sun[2],
                         length, LIGHT_FIRST_M)
+    length = min(_exit_length(x, y, z, r, -sun[0], -sun[1], -sun[2], base_r, top_r),
+                 LIGHT_MAX_M)
+    w_anti = _path_water(params, profiles, textures, layer, x, y, z, -sun[0], -sun[1], -sun[2],
+                         length, LIGHT_FIRST_M)
     w_up = _path_water(params, profiles, textures, layer, x, y, z, ux, uy, uz, top_r - r,
                        AMBIENT_FIRST_M)
     w_down = _path_water(params, profiles, textures, layer, x, y, z, -ux, -uy, -uz, r - base_r,
                          AMBIENT_FIRST_M)
-    mu_s = (x * sun[0] + y * sun[1] + z * sun[2]) / r
-    _light_source(r, mu_s, w_sun, w_up, w_down, layer, cloud, light, octave_phase, out, down,
-                  up)
+    mu_s = ux * sun[0] + uy * sun[1] + uz * sun[2]
+    mu_view = ux * v[0] + uy * v[1] + uz * v[2]
+    _light_source(r, mu_s, mu_view, v @ sun, w_sun, w_anti, w_up, w_down, layer, cloud, light,
+                  sun_phase, out, down, up)
 
 
 @njit(cache=True)
-def _light_source(r, mu_s, w_sun, w_up, w_down, layer, cloud, light, octave_phase, out, down,
-                  up):
-    """J (n_wl,) at radius r [m] and sun zenith cosine mu_s from the water paths towards the
-    sun, above and below [g m^-2] (module docstring); `down` and `up` are scratch."""
+def _light_source(r, mu_s, mu_view, nu, w_sun, w_anti, w_up, w_down, layer, cloud, light,
+                  sun_phase, out, down, up):
+    """J (n_wl,) at radius r [m], sun zenith cosine mu_s, view zenith cosine mu_view and
+    cos(view, sun) nu, from the water paths towards the sun, away from it, above and below
+    [g m^-2] (module docstring); `down` and `up` are scratch."""
     extinction, asymmetry = cloud[3], cloud[5]
     r_nodes, mu_nodes, sun_air, sky_down, ground_up, sun_toa = light
     _table_lookup(sun_air, r_nodes, mu_nodes, r, mu_s, out)
     _table_lookup(sky_down, r_nodes, mu_nodes, r, mu_s, down)
     _table_lookup(ground_up, r_nodes, mu_nodes, r, mu_s, up)
-    g = asymmetry[layer, out.size // 2]
+    slab_mu = max(mu_s, 0.0)
     for k in range(out.size):
         k_ext = extinction[layer, k]
-        seen = math.exp(-k_ext * w_sun)  # exp(-b^o tau): square roots, b = 1/2
-        octaves = octave_phase[layer, 0, k] * seen
-        for octave in range(1, OCTAVES):
-            seen = math.sqrt(seen)
-            octaves += octave_phase[layer, octave, k] * seen
-        d_up = 2.0 / (2.0 + (1.0 - g) * k_ext * w_up)
-        d_down = 2.0 / (2.0 + (1.0 - g) * k_ext * w_down)
-        out[k] = (sun_toa[k] * out[k] * octaves
-                  + (down[k] * d_up + up[k] * d_down) / (2.0 * math.pi))
+        g = asymmetry[layer, k]
+        b = 0.5 * (1.0 - g)
+        sun = sun_toa[k] * out[k]  # E_sun T_air
+        direct = math.exp(-k_ext * w_sun)
+        diffuse_sun = sun * slab_mu * _slab_source(b, g, k_ext * w_sun * slab_mu,
+                                                   k_ext * w_anti * slab_mu, direct, nu)
+        d_up, d_down = k_ext * w_up, k_ext * w_down
+        sky = (down[k] * _slab_source(b, g, d_up, d_down, 0.0, mu_view)
+               + up[k] * _slab_source(b, g, d_down, d_up, 0.0, -mu_view))
+        out[k] = sun * sun_phase[layer, k] * direct + max(diffuse_sun, 0.0) + max(sky, 0.0)
+
+
+@njit(cache=True, inline="always")
+def _slab_source(b, g, lit, far, direct, forward):
+    """Light scattered per unit scattering towards the observer by the diffuse field of a
+    conservative two-stream slab per unit flux entering its lit face (module docstring):
+    (S - direct) / (2 pi) + 3 g forward (N - direct) / (4 pi), with S the sum and N the net
+    of the fluxes at optical depth `lit` (`far` to the other face), `direct` the part of the
+    flux still direct, and `forward` the cosine between the direction the light scatters
+    towards the observer and the one it travels into the slab (the P1 term of a radiance
+    L0 + L1 mu scattered by a phase function of asymmetry g)."""
+    net = 1.0 / (1.0 + b * (lit + far))
+    total = (1.0 + 2.0 * b * far) * net
+    return ((total - direct) / (2.0 * math.pi)
+            + 3.0 * g * forward * (net - direct) / (4.0 * math.pi))
+
+
+@njit(cache=True, inline="always")
+def _two_stream_sum(b, lit, far):
+    """S = (1 + 2 b far) / (1 + b (lit + far)): the sum of the up- and downward fluxes at
+    optical depth `lit` from a conservative slab's lit face (`far` to the other face) per
+    unit incident flux (module docstring)."""
+    return (1.0 + 2.0 * b * far) / (1.0 + b * (lit + far))
 
 
 @njit(cache=True)
-def _octave_phases(nu, phase, asymmetry):
-    """a^o p_o(nu) (n_layers, OCTAVES, n_wl) [sr^-1]: octave 0 the particles' phase table,
-    octave o >= 1 Henyey-Greenstein of asymmetry c^o g (module docstring)."""
-    n_layers, n_wl = asymmetry.shape
-    out = np.empty((n_layers, OCTAVES, n_wl))
+def _phases_at(nu, phase):
+    """The layers' phase functions (n_layers, n_wl) [sr^-1] at cos(scattering angle) nu."""
+    n_layers, _, n_wl = phase.shape
+    out = np.empty((n_layers, n_wl))
     j, w = phase_table_index(nu)
     for layer in range(n_layers):
         for k in range(n_wl):
-            out[layer, 0, k] = phase[layer, j, k] * (1.0 - w) + phase[layer, j + 1, k] * w
-            a, c = OCTAVE_A, OCTAVE_C
-            for octave in range(1, OCTAVES):
-                out[layer, octave, k] = a * henyey_greenstein(nu, c * asymmetry[layer, k])
-                a *= OCTAVE_A
-                c *= OCTAVE_C
+            out[layer, k] = phase[layer, j, k] * (1.0 - w) + phase[layer, j + 1, k] * w
     return out
 
 
