@@ -118,7 +118,8 @@ def test_the_warm_up_terrain_frame_takes_the_aerial_perspective_grid():
 def test_compile_runs_the_warm_up_and_writes_the_marker(capsys, fresh_marker, monkeypatch):
     # two of the commands (the rest are the same command line with other cameras and presets;
     # all of them run in `make`'s install step, whose failure stops the build)
-    monkeypatch.setattr(compile_ahead, "WARM_UP_COMMANDS", compile_ahead.WARM_UP_COMMANDS[::8])
+    commands = compile_ahead.WARM_UP_COMMANDS
+    monkeypatch.setattr(compile_ahead, "WARM_UP_COMMANDS", (commands[0], commands[-1]))
     code, out, err = run_cli(capsys, ["compile"])
     assert code == 0, err
     lines = out.splitlines()
