@@ -56,6 +56,7 @@ from skyscatter.atmosphere._cloud_sampling import (
     TOP_R,
     layer_water,
     phase_table_index,
+    smooth_layer_water,
 )
 from skyscatter.atmosphere.cloud_noise import hash32
 
@@ -82,12 +83,13 @@ COARSE_STEPS = 3  # in empty air the march takes steps this many times longer ..
 EMPTY_TO_COARSE = 3  # ... after this many empty samples, and backs up when it meets a cloud
 MAX_STEPS = 256  # per layer crossed
 EDGE_BISECTIONS = 7  # a cloud's edge is found to 1/128 of the step that met it
-OPTICAL_STEP = 1.5  # inside a cloud a step spans at most this optical depth ...
+OPTICAL_STEP = 2.0  # inside a cloud a step spans at most this optical depth (1.5: 0.3 %
+# closer to the slab's integral, 1.4 x the time) ...
 MIN_STEP_M = 5.0  # ... and is at least this long [m]: a cumulus's skin in 4-6 samples
 LIGHT_FIRST_M = 12.0  # the water path towards the sun: segments from 12 m, doubling ...
 LIGHT_MAX_M = 6000.0  # ... up to this far (9 samples; the light beyond is long lost) [m]
 AMBIENT_FIRST_M = 25.0  # the water above and below each sample: segments from 25 m, doubling
-TRANSMITTANCE_CUTOFF = 1e-4  # a ray stops when every wavelength's transmittance is below this
+TRANSMITTANCE_CUTOFF = 1e-3  # a ray stops when every wavelength's transmittance is below this
 
 
 @njit(cache=True, inline="always")
@@ -128,7 +130,8 @@ def _add_interval(lo, hi, out, count):
 def _path_water(params, profiles, textures, layer, x, y, z, dx, dy, dz, length, first):
     """Water path [g m^-2] of `layer` from (x, y, z) along the unit (dx, dy, dz) over
     `length` [m], midpoint sums on segments that start `first` [m] long and double: fine
-    where the light is lost (a cumulus's sunlit skin is ~10 m deep), coarse beyond."""
+    where the light is lost (a cumulus's sunlit skin is ~10 m deep), coarse beyond; the water
+    without its detail erosion (`smooth_layer_water`)."""
     total = 0.0
     start = 0.0
     segment = first
@@ -137,7 +140,8 @@ def _path_water(params, profiles, textures, layer, x, y, z, dx, dy, dz, length, 
         s = 0.5 * (start + end)
         px, py, pz = x + s * dx, y + s * dy, z + s * dz
         r = math.sqrt(px * px + py * py + pz * pz)
-        total += layer_water(params, profiles, textures, layer, px, py, pz, r) * (end - start)
+        total += smooth_layer_water(params, profiles, textures, layer, px, py, pz, r) * (
+            end - start)
         start = end
         segment *= 2.0
     return total
