@@ -70,8 +70,9 @@ def _slab_sunlight_integral(field, view, sun, n=20_000):
     seen from below, written out from its equations (`transport._cloud_kernels` docstring)
     and integrated along the view ray by the midpoint rule on `n` points:
 
-        L = int omega J(x) sigma e^(-sigma x) dx,   J = p(nu) e^(-tau_s) + mu_s D_sun,
-        D_sun = (S - e^(-tau_s)) / (2 pi) + 3 g nu (N - e^(-tau_s)) / (4 pi),
+        L = int omega J(x) sigma e^(-sigma x) dx,   J = p(nu) e^(-tau_s) + mu_s K D_sun,
+        D_sun = (S - e^(-tau_s)) / (2 pi) + 3 g mu_v (N - e^(-tau_s)) / (4 pi),
+        K = (1 + 2 mu_s) / 3,
         N = 1 / (1 + b (d_1 + d_2)),  S = (1 + 2 b d_2) N,  b = (1 - g) / 2,
         d_1 = sigma (top - z), d_2 = sigma (z - base), tau_s = d_1 / mu_s
 
@@ -93,8 +94,8 @@ def _slab_sunlight_integral(field, view, sun, n=20_000):
     net = 1.0 / (1.0 + b * (d_1 + d_2))
     total = (1.0 + 2.0 * b * d_2) * net
     diffuse = np.maximum((total - direct) / (2.0 * np.pi)
-                         + 3.0 * g * nu * (net - direct) / (4.0 * np.pi), 0.0)
-    source = p_nu * direct + mu_s * diffuse
+                         + 3.0 * g * mu_v * (net - direct) / (4.0 * np.pi), 0.0)
+    source = p_nu * direct + mu_s * (1.0 + 2.0 * mu_s) / 3.0 * diffuse
     weight = sigma * np.exp(-sigma * x[:, None]) * (thickness / mu_v / n)
     radiance = field.single_scattering_albedo[0] * np.sum(source * weight, axis=0)
     return radiance, np.exp(-sigma * thickness / mu_v)

@@ -11,33 +11,36 @@ cumulus's sunlit skin is ~10 m deep - gets its light right without noise), with
 sigma = k_ext w the extinction coefficient of the water content w (`atmosphere.cloud_field`)
 and J the light each sample scatters per unit scattering:
 
-    J = E_sun T_air(h, mu_s) p(nu) e^(-tau_sun)                        single scattering
-        + [E_sun T_air mu_s S(d_sun, d_anti) - E_sun T_air mu_s e^(-tau_sun)]+ / (2 pi)
-        + [E_down S(d_up, d_down) + E_up S(d_down, d_up)] / (2 pi)            sky and ground
+    J = E_sun T_air(h, mu_s) p(nu) e^(-tau_sun)                  single scattering
+        + E_sun T_air mu_s K(mu_s) D(d_sun, d_anti; e^(-tau_sun))      the sun, diffused
+        + E_down D(d_up, d_down; 0) + E_up C D(d_down, d_up; 0)        sky and ground
 
 - single scattering of the sunlight exactly: the star's top-of-atmosphere irradiance through
   the air (transmittance table) and through the cloud's water towards the sun, W_sun
   [g m^-2] (marched from `LIGHT_FIRST_M`, doubling; tau_sun = k_ext W_sun), with the
   particles' phase function (the Mie table with its diffraction peak: the silver lining);
-- the light scattered many times inside the cloud from a conservative two-stream slab
-  (Bohren 1987, Am. J. Phys. 55, 524, doi:10.1119/1.15109): a flux F_0 entering one face of
-  a slab of scaled optical depth b (d_1 + d_2) travels with constant net flux
-  F_0 / (1 + b (d_1 + d_2)), and the sum of the up- and downward fluxes at depth d_1 from the
-  lit face is
+- the light scattered more than once, from a conservative two-stream slab (Bohren 1987,
+  Am. J. Phys. 55, 524, doi:10.1119/1.15109) around each sample: a flux F_0 entering one
+  face of a slab with optical depths d_1 to that face and d_2 to the other has the net flux
+  N = F_0 / (1 + b (d_1 + d_2)) and the sum of up- and downward fluxes S = (1 + 2 b d_2) N,
+  b = (1 - g) / 2. With the first two Legendre terms of the radiance, L0 + L1 cos, the light
+  it scatters towards the observer per unit scattering and unit F_0 is
 
-      F_0 S(d_1, d_2),   S = (1 + 2 b d_2) / (1 + b (d_1 + d_2)),   b = (1 - g) / 2
+      D = (S - direct) / (2 pi) + 3 g mu (N - direct) / (4 pi)
 
-  (2 at the lit face of a thick slab, its transmittance at the far one). The cloud around
-  each sample is taken as such a slab: for the sun, with the depths d_sun = tau_sun mu_s and
-  d_anti = k_ext W_anti mu_s towards the sun and away from it (the slant paths made vertical
-  as in a horizontal layer), entered by the flux E_sun T_air mu_s less its still direct part
-  (counted above); for the sky's diffuse light from above (the indirect-irradiance table)
-  and the ground's reflected light from below, with the vertical depths d_up, d_down. The
-  fluxes' sum is turned into the light scattered per unit scattering as if each hemisphere
-  were isotropic, S F / (2 pi). Against the published fluxes of a conservative slab (HG
-  g = 0.75, van de Hulst 1980, Table 37) this gives the reflectance and transmittance
-  within tests/transport/test_clouds.py's tolerances; 3D clouds are judged against the
-  Monte Carlo reference (docs/clouds.md).
+  with mu the cosine between the direction to the observer and the one into the slab, and
+  `direct` the part of F_0 still unscattered (counted above). The sun's slab is a horizontal
+  layer: its depths are the water paths towards the sun and away from it made vertical
+  (d = k_ext W mu_s), its flux E_sun T_air mu_s, weighted by the escape function of a thick
+  layer normalised at the zenith, K = (1 + 2 mu_s) / 3 (K(mu) = 3/7 (1 + 2 mu): van de Hulst
+  1980, Multiple Light Scattering, vol. 2, ch. 14; Kokhanovsky 2004, Earth-Sci. Rev. 64, 189,
+  doi:10.1016/S0012-8252(03)00042-4); the sky's diffuse light from above (the
+  indirect-irradiance table) and the ground's from below enter vertical slabs of the water
+  above and below, the ground's dimmed by the cloud column it lies under,
+  C = 1 / (1 + b (d_up + d_down)). Against the published fluxes of a conservative slab (HG
+  g = 0.75, van de Hulst 1980, Table 37) this gives the reflectance and transmittance within
+  tests/transport/test_clouds.py's tolerances; 3D clouds are judged against the Monte Carlo
+  reference (docs/clouds.md).
 
 A sheet layer (cirrus) is sampled once per ray, in the middle of its chord through the
 shell, with its water paths to the sun and to the shell's faces taken as uniform.
@@ -454,17 +457,20 @@ def _light_source(r, mu_s, mu_view, nu, w_sun, w_anti, w_up, w_down, layer, clou
     _table_lookup(sky_down, r_nodes, mu_nodes, r, mu_s, down)
     _table_lookup(ground_up, r_nodes, mu_nodes, r, mu_s, up)
     slab_mu = max(mu_s, 0.0)
+    escape = (1.0 + 2.0 * slab_mu) / 3.0  # K(mu_s) / K(1) (module docstring)
     for k in range(out.size):
         k_ext = extinction[layer, k]
         g = asymmetry[layer, k]
         b = 0.5 * (1.0 - g)
         sun = sun_toa[k] * out[k]  # E_sun T_air
         direct = math.exp(-k_ext * w_sun)
-        diffuse_sun = sun * slab_mu * _slab_source(b, g, k_ext * w_sun * slab_mu,
-                                                   k_ext * w_anti * slab_mu, direct, nu)
+        diffuse_sun = sun * slab_mu * escape * _slab_source(
+            b, g, k_ext * w_sun * slab_mu, k_ext * w_anti * slab_mu, direct, mu_view)
         d_up, d_down = k_ext * w_up, k_ext * w_down
+        # the ground below lies in the cloud's shade: its light passed the column once
+        shade = 1.0 / (1.0 + b * (d_up + d_down))
         sky = (down[k] * _slab_source(b, g, d_up, d_down, 0.0, mu_view)
-               + up[k] * _slab_source(b, g, d_down, d_up, 0.0, -mu_view))
+               + up[k] * shade * _slab_source(b, g, d_down, d_up, 0.0, -mu_view))
         out[k] = sun * sun_phase[layer, k] * direct + max(diffuse_sun, 0.0) + max(sky, 0.0)
 
 

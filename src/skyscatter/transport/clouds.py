@@ -4,20 +4,20 @@
 says how each sample is lit) and puts the result over what lies behind the clouds, L_behind
 (the clear sky, or the ground, from the table solver):
 
-    L = T_c L_behind + (1 - T_c) S(x, p_c) + T_air(x, p_c) L_c
+    L = T_c (L_behind - S(x, p_c)) + V S(x, p_c) + T_air(x, p_c) L_c
 
 with L_c and T_c the clouds' own radiance and transmittance along the ray, p_c the point at
 the transmittance-weighted distance of their scattering, and S and T_air the air's
 aerial perspective between the observer x and p_c (`LutSolver.aerial_perspective`). The first
-term is what the clouds let through; the second removes the air's light behind them that
-they hide, the light of the air in front of them (S) staying; the third is their own light
-seen through that air.
+term is what lies beyond the clouds, seen through them; the second the air in front of them,
+lit by the part V of the sunlight that reaches the middle of that stretch through the clouds
+(the air under a deck is in its shadow); the third is their own light seen through that air.
 
 The light reaching each sample comes from tables over (radius, sun zenith cosine) that
 `cloud_lighting` fills from the solver: the air's transmittance towards the sun, the clear
-sky's diffuse irradiance, and the irradiance the ground reflects up. So the clouds are lit by
-a clear sky: their own shadow on the sky light and on the ground below them (which darkens
-the light the ground reflects up to them) is left out.
+sky's diffuse irradiance, and the irradiance the ground reflects up (dimmed in the kernel by
+the cloud column above the ground). The air beyond the clouds, and the air of rays that meet
+no cloud, are lit as in a clear sky (no crepuscular rays).
 """
 
 from __future__ import annotations
@@ -110,8 +110,10 @@ def _clouds_over(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray
     if seen.size:
         points = origin + depth[seen, None] * rays[seen]
         air_light, air_transmittance = solver.aerial_perspective(origin, points, sun)
+        middle = field.wavelengths_nm.size // 2
+        shade = cloud_transmittance(field, 0.5 * (origin + points), sun)[:, middle:middle + 1]
         clouds_t = transmittance[seen]
-        result[seen] = (clouds_t * result[seen] + (1.0 - clouds_t) * air_light
+        result[seen] = (clouds_t * (result[seen] - air_light) + shade * air_light
                         + air_transmittance * radiance[seen])
 
 
