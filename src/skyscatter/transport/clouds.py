@@ -10,8 +10,12 @@ with L_c and T_c the clouds' own radiance and transmittance along the ray, p_c t
 the transmittance-weighted distance of their scattering, and S and T_air the air's
 aerial perspective between the observer x and p_c (`LutSolver.aerial_perspective`). The first
 term is what lies beyond the clouds, seen through them; the second the air in front of them,
-lit by the part V of the sunlight that reaches the middle of that stretch through the clouds
-(the air under a deck is in its shadow); the third is their own light seen through that air.
+V = 1 - f (1 - T_mid) of it lit, T_mid the clouds' transmittance towards the sun from the
+middle of the stretch and f = min(1, `AIR_SHADE_M` / its length) the part of the stretch
+taken as shaded (the air under a deck, in front of a near cloud, is in its shadow; a far
+cloud's light comes through tens of kilometres of mostly sunlit air, and one shadow sample
+there would dapple it). A stopgap until the march shades the air sample by sample
+(crepuscular rays); the third term is the clouds' own light seen through that air.
 
 The light reaching each sample comes from tables over (radius, sun zenith cosine) that
 `cloud_lighting` fills from the solver: the air's transmittance towards the sun, the clear
@@ -32,6 +36,7 @@ from skyscatter.transport import _cloud_kernels
 __all__ = ["CloudField", "CloudLighting", "cloud_lighting", "cloud_transmittance",
            "clouds_in_front", "kernel_arrays"]
 
+AIR_SHADE_M = 2000.0  # the stretch of air in front of a cloud that its layer may shade [m]
 CHUNK_RAYS = 1 << 17  # rays per march: bounds the temporaries (n, n_wl) x 4
 LIGHTING_RADII = 8  # nodes across the cloud layers
 LIGHTING_MU = 241  # sun zenith cosines from MU_LOWEST to 1 (0.005 apart: the reddening sun)
@@ -111,7 +116,10 @@ def _clouds_over(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray
         points = origin + depth[seen, None] * rays[seen]
         air_light, air_transmittance = solver.aerial_perspective(origin, points, sun)
         middle = field.wavelengths_nm.size // 2
-        shade = cloud_transmittance(field, 0.5 * (origin + points), sun)[:, middle:middle + 1]
+        stretch = depth[seen]
+        lit = cloud_transmittance(field, origin + 0.5 * stretch[:, None] * rays[seen], sun)
+        shaded_part = np.minimum(AIR_SHADE_M / np.maximum(stretch, 1.0), 1.0)
+        shade = (1.0 - shaded_part * (1.0 - lit[:, middle]))[:, None]
         clouds_t = transmittance[seen]
         result[seen] = (clouds_t * (result[seen] - air_light) + shade * air_light
                         + air_transmittance * radiance[seen])
