@@ -34,16 +34,15 @@ numbers.
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from skyscatter.atmosphere.config_file import read_toml
+from skyscatter.atmosphere.config_file import preset_or_file, read_toml
 from skyscatter.atmosphere.config_table import ConfigTable
 from skyscatter.checks import Bounds
-from skyscatter.errors import ConfigError, InputError
+from skyscatter.errors import ConfigError
 
 __all__ = [
     "CLOUD_PRESETS_DIR",
@@ -135,19 +134,8 @@ def list_cloud_presets() -> dict[str, str]:
 def load_clouds(name_or_path: str | Path) -> Clouds:
     """Clouds of a preset (`list_cloud_presets`) or a TOML file; InputError naming the presets
     for an unknown name, ConfigError naming the key for a bad value."""
-    text = str(name_or_path)
-    path = Path(text)
-    if not path.suffix and not path.exists():
-        path = CLOUD_PRESETS_DIR / f"{text}.toml"
-        if not path.exists():
-            names = sorted(p.stem for p in CLOUD_PRESETS_DIR.glob("*.toml"))
-            close = difflib.get_close_matches(text, names, n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else ""
-            raise InputError(f"unknown cloud preset '{text}'{hint} (presets: "
-                             f"{', '.join(names)}; or give the path of a .toml file)",
-                             key="clouds", value=text, allowed=", ".join(names))
-    if not path.exists():
-        raise InputError(f"clouds file '{path}' does not exist", key="clouds", value=text)
+    path = preset_or_file(name_or_path, CLOUD_PRESETS_DIR, kind="cloud preset",
+                          file_kind="clouds file", keys=("clouds", "clouds"))
     return parse_clouds(read_toml(path), path)
 
 

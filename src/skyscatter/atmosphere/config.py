@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from skyscatter.atmosphere import config_ranges as ranges
-from skyscatter.atmosphere.config_file import read_toml, read_utf8
+from skyscatter.atmosphere.config_file import preset_or_file, read_toml, read_utf8
 from skyscatter.atmosphere.config_table import ConfigTable
 from skyscatter.atmosphere.gas import (
     GasLayer,
@@ -77,19 +77,9 @@ def list_presets() -> dict[str, str]:
 
 def load_atmosphere(name_or_path: str | Path) -> Atmosphere:
     """Load a preset by name (`skyscatter presets` lists them) or a TOML file by path."""
-    text = str(name_or_path)
-    path = Path(text)
-    if not path.suffix and not path.exists():
-        path = PRESETS_DIR / f"{text}.toml"
-        if not path.exists():
-            names = sorted(p.stem for p in PRESETS_DIR.glob("*.toml"))
-            close = difflib.get_close_matches(text, names, n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else ""
-            raise InputError(f"unknown preset '{text}'{hint} (`skyscatter presets` lists them; "
-                             "or give the path of a .toml file)", key="preset", value=text,
-                             allowed=", ".join(names))
-    if not path.exists():
-        raise InputError(f"config file '{path}' does not exist", key="config", value=text)
+    path = preset_or_file(name_or_path, PRESETS_DIR, kind="preset", file_kind="config file",
+                          keys=("preset", "config"),
+                          listing="`skyscatter presets` lists them")
     return parse_atmosphere(read_toml(path), path)
 
 

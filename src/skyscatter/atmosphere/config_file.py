@@ -22,15 +22,16 @@ Public names: `MAX_CONFIG_BYTES`, `MAX_KEY_PARTS`, `read_toml`, `read_utf8`.
 from __future__ import annotations
 
 import codecs
+import difflib
 import re
 import sys
 import tomllib
 from pathlib import Path
 from typing import Any
 
-from skyscatter.errors import ConfigError
+from skyscatter.errors import ConfigError, InputError
 
-__all__ = ["MAX_CONFIG_BYTES", "MAX_KEY_PARTS", "read_toml", "read_utf8"]
+__all__ = ["MAX_CONFIG_BYTES", "MAX_KEY_PARTS", "preset_or_file", "read_toml", "read_utf8"]
 
 # The largest shipped preset is 4 kB and the docs' worked example, with two inline profile
 # tables, 4 kB; 1 MiB holds an inline table of ~50 000 rows. Longer tables belong in a CSV file
@@ -44,6 +45,27 @@ _BOMS = ((codecs.BOM_UTF32_LE, "UTF-32"), (codecs.BOM_UTF32_BE, "UTF-32"),
          (codecs.BOM_UTF16_LE, "UTF-16"), (codecs.BOM_UTF16_BE, "UTF-16"))
 _KEY_PART = r"""(?:[A-Za-z0-9_-]+|"[^"\\\n]*"|'[^'\n]*')"""
 _DOTTED = re.compile(rf"{_KEY_PART}(?:[ \t]*\.[ \t]*{_KEY_PART})*")
+
+
+def preset_or_file(name_or_path: str | Path, folder: Path, *, kind: str, file_kind: str,
+                   keys: tuple[str, str], listing: str | None = None) -> Path:
+    """The TOML file of a preset named `name_or_path` in `folder`, or the path itself.
+    InputError for an unknown preset (`kind`, naming the closest name, `listing` or else the
+    names, key `keys[0]`) or a file that does not exist (`file_kind`, key `keys[1]`)."""
+    text = str(name_or_path)
+    path = Path(text)
+    if not path.suffix and not path.exists():
+        path = folder / f"{text}.toml"
+        if not path.exists():
+            names = sorted(p.stem for p in folder.glob("*.toml"))
+            close = difflib.get_close_matches(text, names, n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            where = listing or f"presets: {', '.join(names)}"
+            raise InputError(f"unknown {kind} '{text}'{hint} ({where}; or give the path of a "
+                             ".toml file)", key=keys[0], value=text, allowed=", ".join(names))
+    if not path.exists():
+        raise InputError(f"{file_kind} '{path}' does not exist", key=keys[1], value=text)
+    return path
 
 
 def read_toml(path: Path) -> dict[str, Any]:
