@@ -489,14 +489,6 @@ def _slab_source(b, g, lit, far, direct, forward):
             + 3.0 * g * forward * (net - direct) / (4.0 * math.pi))
 
 
-@njit(cache=True, inline="always")
-def _two_stream_sum(b, lit, far):
-    """S = (1 + 2 b far) / (1 + b (lit + far)): the sum of the up- and downward fluxes at
-    optical depth `lit` from a conservative slab's lit face (`far` to the other face) per
-    unit incident flux (module docstring)."""
-    return (1.0 + 2.0 * b * far) / (1.0 + b * (lit + far))
-
-
 @njit(cache=True)
 def _phases_at(nu, phase):
     """The layers' phase functions (n_layers, n_wl) [sr^-1] at cos(scattering angle) nu."""
