@@ -12,6 +12,10 @@
    upload + draw). Goal: under 3 s for Earth. On 2 cores the server's table computation and
    SwiftShader's drawing share the CPU.
 3. Table message sizes and the server's peak resident memory.
+4. Frame time with clouds at 1280 x 720 (issue 19): the cumulus and stratocumulus presets in
+   CLOUD_VIEW (the view of tests/viewer/test_viewer_clouds.py), preview tables, the clouds'
+   own ray march in the fragment shader (shaders/clouds.glsl); the cloud message's size.
+   `--clouds-only` skips 1-3.
 
 Run: PYTHONPATH=src python benchmarks/bench_viewer.py [--frames 5] [--chromium PATH]
 (needs Debian's chromium and `pip install playwright`; `make test` installs both.)
@@ -30,6 +34,9 @@ from skyscatter import api
 FLAGS = ["--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
          "--disable-gpu-vsync", "--force-color-profile=srgb"]
 VIEW = "sun_zenith=60&sun_azimuth=200&heading=180&pitch=10&fov=60&altitude_m=2&ev100=13"
+CLOUD_VIEW = ("sun_zenith=35&sun_azimuth=160&heading=150&pitch=12&fov=75&altitude_m=2&lat=45"
+              "&lon=0&ev100=13.5&cloud_time=600")
+CLOUD_PRESETS = ("cumulus", "stratocumulus")
 
 
 def main() -> None:
@@ -40,6 +47,10 @@ def main() -> None:
     parser.add_argument("--chromium", default=shutil.which("chromium"))
     parser.add_argument("--skip-full", action="store_true",
                         help="only the preview tables (no full Earth tables)")
+    parser.add_argument("--clouds-only", action="store_true",
+                        help="only the frame time with clouds (section 4)")
+    parser.add_argument("--screenshot", default=None,
+                        help="save the cumulus frame as this PNG (docs/images/viewer_clouds.png)")
     args = parser.parse_args()
     server = api.viewer_server("earth")
     threading.Thread(target=server.serve_forever, daemon=True).start()
@@ -49,6 +60,26 @@ def main() -> None:
         page = browser.new_page(viewport={"width": 1920, "height": 1080})
         page.set_default_timeout(900_000)
         renderer = None
+        for clouds in CLOUD_PRESETS:
+            start = time.perf_counter()
+            page.goto(f"{server.url}&controls=0&quality=preview&width=1280&height=720"
+                      f"&clouds={clouds}&{CLOUD_VIEW}")
+            page.wait_for_function(f"document.body.dataset.clouds === '{clouds}' && "
+                                   "document.body.dataset.ready === '1'")
+            loaded = time.perf_counter() - start
+            ms = page.evaluate(f"window.skyscatter.benchmark({args.frames})")
+            print(f"clouds {clouds:14s} perspective 1280x720: {ms:8.1f} ms per frame "
+                  f"(preview tables), page ready in {loaded:.1f} s")
+            if clouds == "cumulus" and args.screenshot:  # metered as `render` meters
+                page.evaluate("(() => { const s = window.skyscatter; "
+                              "s.state.ev100 = s.viewer.meter(); s.viewer.frame(); })()")
+                page.locator("#sky").screenshot(path=args.screenshot)
+            message = server.clouds.message(clouds, "earth")
+            print(f"cloud message, {clouds}: {len(message) / 2**20:.1f} MiB")
+        if args.clouds_only:
+            browser.close()
+            server.shutdown()
+            return
         qualities = ["preview"] if args.skip_full else ["preview", "full"]
         for quality in qualities:
             for label, size in (("perspective 1920x1080", "width=1920&height=1080"),

@@ -10,6 +10,11 @@ RGBA16F target, then the composite pass (composite.frag) into an RGBA8 target of
 query (GPU time) and as wall time from the first GL call to glFinish; the median and the 95th
 percentile of N frames after a warm-up.
 
+With clouds (issue 19): the same frame with the cumulus and stratocumulus presets in
+CLOUD_VIEW (bench_viewer.py's and tests/viewer/test_viewer_clouds.py's view), the preview
+tables; the cloud message uploaded as tables.js `uploadClouds` does and the wind's columns and
+noise origins set as viewer.js `cloudUniforms` does (clouds-NAME.npz).
+
 The viewer shows one atmosphere at a time; "one more atmosphere on screen" is measured as a
 second sky pass from a second, separately uploaded copy of the same tables, added into the same
 target (what drawing a second body's atmosphere over the first would cost at full screen).
@@ -46,13 +51,19 @@ PREFIX = ("#version 300 es\nprecision highp float;\nprecision highp int;\n"
 FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n"
 LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
            "shaders/sky.glsl", "shaders/tonemap.glsl"]
-PROGRAMS = {"sky": [*LIBRARY, "shaders/main.frag"],
+PROGRAMS = {"sky": [*LIBRARY, "shaders/clouds.glsl", "shaders/main.frag"],
             "composite": ["generated/constants.glsl", "shaders/tonemap.glsl",
                           "shaders/composite.frag"]}
 # bench_viewer.py's VIEW and the page's defaults (controls.js NUMBERS)
 VIEW = {"sun_zenith": 60.0, "sun_azimuth": 200.0, "heading": 180.0, "pitch": 10.0,
         "roll": 0.0, "fov": 60.0, "fisheye_fov": 180.0, "altitude_m": 2.0, "lat": 45.0,
         "lon": 0.0, "ev100": 13.0, "operator": "aces"}
+# bench_viewer.py's CLOUD_VIEW: the clouds' time 600 s
+CLOUD_VIEW = dict(VIEW, sun_zenith=35.0, sun_azimuth=160.0, heading=150.0, pitch=12.0, fov=75.0,
+                  ev100=13.5, cloud_time_s=600.0)
+CLOUD_PRESETS = ("cumulus", "stratocumulus")
+CLOUD_CASES = (("perspective", 1920, 1080), ("perspective", 1280, 720))
+CLOUD_UNITS = ("noise", "params", "profiles", "phase", "optics")  # texture units 4-8 (viewer.js)
 CASES = (("perspective", 1920, 1080), ("fisheye", 1080, 1080))
 CASE_DRAWS = (("sky pass", 1, False), ("frame (sky + composite)", 1, True),  # atmospheres,
               ("frame, 2 atmospheres", 2, True))                           # composite pass
@@ -71,30 +82,77 @@ def prepare(out: Path, cache_dir: str | None) -> None:
     cache = TableCache(cache_dir or default_cache_directory())
     service = TableService(cache=cache, log=print)
     out.mkdir(parents=True, exist_ok=True)
+
+    def view_uniforms(v: dict, radius: float) -> tuple[dict, object]:
+        site = orbit_viewpoint(v["altitude_m"], v["lat"], v["lon"], radius)
+        right, up, forward = _basis(*np.radians([v["heading"], v["pitch"], v["roll"]]))
+        return {
+            "u_tan_half_fov": float(np.tan(np.radians(v["fov"]) / 2)),
+            "u_camera_basis": np.concatenate([right, up, forward]).tolist(),
+            "u_fisheye_theta_max": float(np.radians(v["fisheye_fov"]) / 2),
+            "u_local_to_world": site.to_world.T.reshape(-1).tolist(),  # columns
+            "u_camera_position": site.position_m.tolist(),
+            "u_sun_direction": site.direction_to_world(
+                sun_direction(v["sun_zenith"], v["sun_azimuth"])).tolist(),
+            "u_exposure": exposure_scale(v["ev100"]),
+            "u_operator": list(OPERATORS).index(v["operator"]),
+        }, site
+
     for quality in ("full", "preview"):
         start = time.perf_counter()
         message = service.tables(TableRequest("earth", (), None, quality))
         tables = decode(message)
         header = tables.header
-        site = orbit_viewpoint(VIEW["altitude_m"], VIEW["lat"], VIEW["lon"],
-                               header["bottom_radius_m"])
-        right, up, forward = _basis(*np.radians([VIEW["heading"], VIEW["pitch"], VIEW["roll"]]))
-        view = {
-            "u_tan_half_fov": float(np.tan(np.radians(VIEW["fov"]) / 2)),
-            "u_camera_basis": np.concatenate([right, up, forward]).tolist(),
-            "u_fisheye_theta_max": float(np.radians(VIEW["fisheye_fov"]) / 2),
-            "u_local_to_world": site.to_world.T.reshape(-1).tolist(),  # columns
-            "u_camera_position": site.position_m.tolist(),
-            "u_sun_direction": site.direction_to_world(
-                sun_direction(VIEW["sun_zenith"], VIEW["sun_azimuth"])).tolist(),
-            "u_exposure": exposure_scale(VIEW["ev100"]),
-            "u_operator": list(OPERATORS).index(VIEW["operator"]),
-        }
+        view, _ = view_uniforms(VIEW, header["bottom_radius_m"])
         np.savez(out / f"earth-{quality}.npz", header=json.dumps(header), view=json.dumps(view),
                  message_bytes=len(message), **tables.arrays)
         print(f"{quality}: {len(message) / 2**20:.1f} MiB message, scattering "
               f"{header['scattering_shape']}, {header['n_wavelengths']} wavelengths, "
               f"{header['orders']} orders ({time.perf_counter() - start:.1f} s)")
+    from skyscatter.viewer.cloud_service import CloudService
+    from skyscatter.viewer.gpu_clouds import decode_clouds
+    clouds = CloudService(service)
+    for name in CLOUD_PRESETS:
+        message = clouds.message(name, "earth")
+        gpu = decode_clouds(message)
+        view, site = view_uniforms(CLOUD_VIEW, gpu.header["bottom_radius_m"])
+        params, uniforms = _cloud_uniforms(gpu, site, CLOUD_VIEW["cloud_time_s"])
+        arrays = {f"cloud_{key}": value for key, value in gpu.arrays.items()}
+        arrays["cloud_params"] = params
+        np.savez(out / f"clouds-{name}.npz", header=json.dumps(gpu.header),
+                 view=json.dumps(view), clouds=json.dumps(uniforms), message_bytes=len(message),
+                 **arrays)
+        print(f"clouds {name}: {len(message) / 2**20:.1f} MiB message")
+
+
+def _cloud_uniforms(gpu, site, seconds: float) -> tuple[np.ndarray, dict]:
+    """viewer.js `cloudUniforms` for an observer `site` (its frame east, north, up) at the
+    clouds' time `seconds`: the parameter table with the wind's columns, the noise origins."""
+    from skyscatter.atmosphere import _cloud_sampling as columns
+    from skyscatter.atmosphere.cloud_config import MAX_CLOUD_LAYERS
+
+    params = np.array(gpu.arrays["params"], dtype=np.float64)
+    n = gpu.header["texture_size"]
+    origins = np.zeros((3 * MAX_CLOUD_LAYERS, 3))
+    east, north = site.to_world[:, 0], site.to_world[:, 1]
+    for layer, (wind_east, wind_north) in enumerate(gpu.header["wind_enu_m_s"]):
+        row = params[layer]
+        wind = east * wind_east + north * wind_north
+        speed = float(np.linalg.norm(wind))
+        along = wind / speed if speed > 0 else east
+        offset = wind * seconds
+        row[columns.OFFSET_X:columns.OFFSET_X + 3] = offset
+        row[columns.ALONG_X:columns.ALONG_X + 3] = along
+        stretch = row[columns.STRETCH_MINUS_ONE]
+        c = site.position_m - offset
+        m = c - (c @ along) * stretch / (1 + stretch) * along
+        tile = row[columns.INV_SCALE] * n
+        origins[3 * layer] = np.mod(m * tile, n)
+        origins[3 * layer + 1] = np.mod(m[[2, 0, 1]] * tile / columns.COVERAGE_TILE_RATIO, n)
+        origins[3 * layer + 2] = np.mod(m * row[columns.INV_DETAIL_SCALE] * n, n)
+    return params.astype(np.float32), {
+        "u_cloud_layers": int(gpu.header["n_layers"]), "u_cloud_texture_size": float(n),
+        "u_cloud_origin": origins.reshape(-1).tolist()}
 
 
 def _source(names: list[str]) -> str:
@@ -113,6 +171,13 @@ class Frame:
         self.quads = {key: ctx.vertex_array(program, [(quad, "2f", "position")])
                       for key, program in self.programs.items()}
         self.tables = [self._upload(t) for t in tables]
+        self.clouds = self._upload_clouds(None)
+        self.view = None  # the tables' view; the clouds' own with clouds (`set_clouds`)
+
+    def set_clouds(self, data: dict | None) -> None:
+        """Draw `data`'s clouds (a clouds-NAME.npz, loaded) in its view, or none."""
+        self.clouds = self._upload_clouds(data)
+        self.view = None if data is None else data["view"]
 
     def resize(self, width: int, height: int) -> None:
         """Targets of w x h: the float frame (RGBA16F, as Viewer.target) and the canvas (RGBA8)."""
@@ -179,6 +244,42 @@ class Frame:
         }
         return {"textures": textures, "uniforms": uniforms, "view": data["view"]}
 
+    def _upload_clouds(self, data: dict | None) -> dict:
+        """tables.js uploadClouds: the noise RG16F (REPEAT across, its depth clamped), the rest
+        float32 read with texelFetch; 1-texel stand-ins without clouds."""
+        import moderngl
+
+        ctx = self.ctx
+        if data is None:
+            noise = ctx.texture3d((1, 1, 1), 2, np.zeros(2, "f2").tobytes(), dtype="f2")
+            flat = {key: np.zeros((1, 1, width), "f4") for key, width in
+                    (("params", 1), ("profiles", 2), ("phase", 3), ("optics", 3))}
+            uniforms = {"u_cloud_layers": 0, "u_cloud_texture_size": 1.0}
+        else:
+            header = data["header"]
+            depth, height, width, _ = data["cloud_noise"].shape
+            noise = ctx.texture3d((width, height, depth), 2, data["cloud_noise"].tobytes(),
+                                  dtype="f2", alignment=1)
+            layers = header["n_layers"]
+            optics = np.stack([np.asarray(header[key], "f4") for key in (
+                "mass_extinction_xyz_m2_g", "single_scattering_albedo_xyz", "asymmetry_xyz")],
+                axis=1)  # (layers, 3, 3)
+            flat = {"params": data["cloud_params"].reshape(layers, -1, 1),
+                    "profiles": data["cloud_profiles"], "phase": data["cloud_phase"],
+                    "optics": optics}
+            uniforms = data["clouds"]
+        noise.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        noise.repeat_x = noise.repeat_y = True
+        noise.repeat_z = False
+        textures = {"noise": noise}
+        for key, array in flat.items():
+            array = np.ascontiguousarray(array, dtype="f4")
+            texture = ctx.texture((array.shape[1], array.shape[0]), array.shape[2],
+                                  array.tobytes(), dtype="f4", alignment=1)
+            texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            textures[key] = texture
+        return {"textures": textures, "uniforms": uniforms}
+
     def _set(self, program, values: dict) -> None:
         """viewer.js setUniforms: arrays and matrices as written, the rest by value."""
         for name, value in values.items():
@@ -199,7 +300,11 @@ class Frame:
             tables["textures"][name].use(location=unit)
             program[f"u_{name}"].value = unit
         self._set(program, tables["uniforms"])
-        view = dict(tables["view"])
+        for unit, name in enumerate(CLOUD_UNITS, start=4):
+            self.clouds["textures"][name].use(location=unit)
+            program[f"u_cloud_{name}"].value = unit
+        self._set(program, self.clouds["uniforms"])
+        view = dict(tables["view"] if self.view is None else self.view)
         tan_v = view.pop("u_tan_half_fov")
         self._set(program, {**view, "u_resolution": (self.width, self.height),
                             "u_projection": projection, "u_output": 2,  # OUTPUT_EXPOSED
@@ -244,6 +349,16 @@ def _time(ctx, draw, frames: int, warm_up: int) -> tuple[np.ndarray, np.ndarray]
     return gpu, wall
 
 
+def _load_clouds(path: Path) -> dict:
+    with np.load(path) as npz:
+        data = {name: npz[name] for name in npz.files
+                if name.startswith("cloud_") and name != "clouds"}
+        for name in ("header", "view", "clouds"):
+            data[name] = json.loads(str(npz[name]))
+        data["message_bytes"] = int(npz["message_bytes"])
+    return data
+
+
 def _load(path: Path) -> dict:
     with np.load(path) as npz:
         data = {name: npz[name] for name in ("transmittance", "irradiance", "scattering", "phase")}
@@ -280,6 +395,22 @@ def run(directory: Path, frames: int, warm_up: int, png: Path | None) -> None:
                       f"wall {row[5]:.3f} ms (p95 {row[6]:.3f}); shaders {frame.version_line}")
             frame.draw(index, 1)
             _check(frame, f"{quality}-{projection}", png)
+    data = _load(directory / "earth-preview.npz")
+    frame = Frame(ctx, [data])
+    for name in CLOUD_PRESETS:
+        clouds = _load_clouds(directory / f"clouds-{name}.npz")
+        frame.set_clouds(clouds)
+        for projection, width, height in CLOUD_CASES:
+            frame.resize(width, height)
+            draw = partial(frame.draw, 0, 1, True)
+            gpu, wall = _time(ctx, draw, frames, warm_up)
+            row = ("preview", f"{projection} {width}x{height}", f"frame with {name}",
+                   np.median(gpu), np.percentile(gpu, 95), np.median(wall),
+                   np.percentile(wall, 95))
+            rows.append(row)
+            print(f"clouds {name} ({clouds['message_bytes'] / 2**20:.1f} MiB) {row[1]}: GPU "
+                  f"{row[3]:.3f} ms (p95 {row[4]:.3f}), wall {row[5]:.3f} ms (p95 {row[6]:.3f})")
+            _check(frame, f"clouds-{name}-{width}x{height}", png)
     print(f"\n{'tables':8s} {'image':22s} {'case':24s} {'GPU median':>10s} {'p95':>7s} "
           f"{'wall median':>11s} {'p95':>7s}  [ms], {frames} frames")
     for row in rows:

@@ -10,6 +10,9 @@ atmosphere on 3 bands, the sun 40 deg from the zenith: the renderer from the tab
 (`render.scene.diffuse_radiance` with clouds), the reference by `CloudMonteCarlo`.
 
 Run: python benchmarks/compare_clouds_montecarlo.py [--paths N] [--size N] [--figure PNG]
+                                                    [--cases 0,2] [--reference-cache DIR]
+(--reference-cache keeps each case's Monte Carlo image in DIR and reuses it when the size and
+paths match: the renderer can then be compared again in seconds.)
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -70,13 +74,19 @@ def main() -> None:
     parser.add_argument("--paths", type=int, default=2000, help="Monte Carlo paths per pixel")
     parser.add_argument("--size", type=int, default=32, help="image side [pixels]")
     parser.add_argument("--figure", default=None, help="write the comparison figure here")
+    parser.add_argument("--cases", default=None, help="comma-separated case numbers (from 0)")
+    parser.add_argument("--reference-cache", default=None,
+                        help="folder keeping the Monte Carlo images for reuse")
     args = parser.parse_args()
+    chosen = None if args.cases is None else {int(i) for i in args.cases.split(",")}
     atmosphere = api.load_atmosphere("earth")
     solver = api.load_solver(atmosphere, WAVELENGTHS_NM)
     profile = solver.profile
     sun_local = sun_direction(SUN_ZENITH_DEG, SUN_AZIMUTH_DEG)
     rows = []
-    for name, clouds, altitude, camera in cases(args.size):
+    for number, (name, clouds, altitude, camera) in enumerate(cases(args.size)):
+        if chosen is not None and number not in chosen:
+            continue
         viewpoint = ground_viewpoint(altitude, profile.bottom_radius_m)
         field = cloud_field(clouds, profile.bottom_radius_m, profile.wavelengths_nm)
         if camera == "aim":
@@ -89,8 +99,7 @@ def main() -> None:
                                 clouds=field)
         ours_s = time.perf_counter() - start
         start = time.perf_counter()
-        reference, error = CloudMonteCarlo(profile, field, n_samples=args.paths).\
-            radiance_with_error(viewpoint.position_m, rays, sun)
+        reference, error = monte_carlo(args, number, (profile, field, viewpoint, rays, sun))
         reference_s = time.perf_counter() - start
         print(f"{name}: {rays.shape[0]} pixels, renderer {ours_s:.1f} s, Monte Carlo "
               f"{reference_s:.0f} s ({args.paths} paths per pixel)")
@@ -109,6 +118,28 @@ def main() -> None:
         write_figure(rows, args.figure)
 
 
+def monte_carlo(args, number: int, scene) -> tuple[np.ndarray, np.ndarray]:
+    """The reference radiance and its standard error, from the cache folder when it holds
+    this case at this size and number of paths."""
+    profile, field, viewpoint, rays, sun = scene
+    cached = None
+    if args.reference_cache:
+        folder = Path(args.reference_cache)
+        folder.mkdir(parents=True, exist_ok=True)
+        cached = folder / f"case{number}_size{args.size}_paths{args.paths}.npz"
+        if cached.exists():
+            with np.load(cached) as saved:
+                if saved["rays"].shape == rays.shape and np.allclose(saved["rays"], rays):
+                    return saved["reference"], saved["error"]
+    reference, error = CloudMonteCarlo(profile, field, n_samples=args.paths).\
+        radiance_with_error(viewpoint.position_m, rays, sun)
+    if cached is not None:
+        partial = cached.with_suffix(".partial.npz")
+        np.savez(partial, rays=rays, reference=reference, error=error)
+        partial.replace(cached)
+    return reference, error
+
+
 def write_figure(rows, path: str) -> None:
     """Renderer, Monte Carlo and their relative difference at 550 nm, one row per case."""
     import matplotlib
@@ -116,7 +147,7 @@ def write_figure(rows, path: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    figure, axes = plt.subplots(len(rows), 3, figsize=(9.0, 3.0 * len(rows)))
+    figure, axes = plt.subplots(len(rows), 3, figsize=(9.0, 3.0 * len(rows)), squeeze=False)
     for row, (name, shape, valid, ours, reference) in zip(axes, rows, strict=True):
         images = []
         for values in (ours, reference, ours / reference - 1.0):

@@ -253,6 +253,63 @@ def test_a_bad_clouds_file_names_the_key(capsys, tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
+def test_a_bad_coverage_map_names_the_key_and_the_file(capsys, tmp_path):
+    np.save(tmp_path / "weather.npy", np.full((4, 8), 1.5))
+    clouds = tmp_path / "clouds.toml"
+    clouds.write_text("[[layer]]\nbase_altitude_m = 1000\ntop_altitude_m = 2000\n"
+                      "coverage = 0.5\nwater_content_g_m3 = 0.3\n"
+                      "coverage_map = 'weather.npy'\n")
+    code, out, err = run_cli(capsys, ["render", "earth", "--clouds", str(clouds), "--size", "8",
+                                      "-o", str(tmp_path / "x.png")])
+    assert code == 2 and out == ""
+    line = _error_line(err)
+    assert "coverage_map" in line and "weather.npy" in line and "[0, 1]" in line
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("arrays, message", [
+    (None, "no such file"),
+    ({"water_g_m3": np.ones((2, 2, 2))}, "no array 'spacing_m'"),
+    ({"water_g_m3": np.full((2, 2, 2), np.nan), "spacing_m": np.ones(3)}, "not finite"),
+    ({"water_g_m3": -np.ones((2, 2, 2)), "spacing_m": np.ones(3)}, "np.clip"),
+])
+def test_a_bad_cloud_grid_names_the_key_the_file_and_a_fix(capsys, tmp_path, arrays, message):
+    if arrays is not None:
+        np.savez(tmp_path / "les.npz", **arrays)
+    clouds = tmp_path / "clouds.toml"
+    clouds.write_text("[[layer]]\ntype = 'grid'\ngrid = 'les.npz'\nbase_altitude_m = 1000\n")
+    code, out, err = run_cli(capsys, ["render", "earth", "--clouds", str(clouds), "--size", "8",
+                                      "-o", str(tmp_path / "x.png")])
+    assert code == 2 and out == ""
+    line = _error_line(err)
+    assert "grid" in line and "les.npz" in line and str(clouds) in line and message in line
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_render_with_a_grid_cloud_writes_a_finite_image(capsys, tmp_path):
+    x, y, z = np.meshgrid(*(np.linspace(-1.0, 1.0, 16),) * 3, indexing="ij")
+    np.savez(tmp_path / "bubble.npz", water_g_m3=np.clip(0.5 * (1 - x**2 - y**2 - z**2), 0, None),
+             spacing_m=(100.0, 100.0, 100.0), periodic=False)
+    clouds = tmp_path / "clouds.toml"
+    clouds.write_text("[[layer]]\ntype = 'grid'\ngrid = 'bubble.npz'\nbase_altitude_m = 1000\n")
+    exr = tmp_path / "grid.exr"
+    code, _, err = run_cli(capsys, ["render", "earth", "--clouds", str(clouds), "--size", "16",
+                                    "-o", str(tmp_path / "grid.png"), "--exr", str(exr)])
+    assert code == 0, err
+    assert (tmp_path / "grid.png").exists() and exr.exists()
+
+
+def test_earth_from_orbit_with_the_earth_weather_clouds(capsys, tmp_path):
+    exr = tmp_path / "orbit.exr"
+    code, _, err = run_cli(capsys, ["render", "earth", "--camera", "orbit", "--clouds",
+                                    "earth-weather", "--distance-km", "20000", "--size", "16",
+                                    "--wavelengths", "3", "-o", str(tmp_path / "orbit.png"),
+                                    "--exr", str(exr)])
+    assert code == 0, err
+    pixels, _ = read_exr(exr)
+    assert np.all(np.isfinite(pixels)) and pixels.max() > 0.0
+
+
 def test_render_with_clouds_writes_a_finite_image(capsys, tmp_path):
     exr = tmp_path / "clouds.exr"
     code, _, err = run_cli(capsys, ["render", "earth", "--clouds", "stratus", "--size", "16",

@@ -291,13 +291,20 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
                              orbit_longitude_deg)
     return render_sky(engine, camera, viewpoint, sun, atmosphere.planet.star, progress=progress,
                       ground=ground,
-                      clouds=_cloud_field(clouds, engine, viewpoint, cloud_time_s, solver))
+                      clouds=_cloud_field(clouds, engine, viewpoint, cloud_time_s, solver,
+                                          camera=camera, place=(
+                                              (0.0, 0.0) if orbit_latitude_deg is None
+                                              else (orbit_latitude_deg, orbit_longitude_deg))))
 
 
 def _cloud_field(clouds: Clouds | None, engine, viewpoint: Viewpoint, time_s: float,
-                 solver: str) -> CloudField | None:
+                 solver: str, *, camera: Camera | None = None,
+                 place: tuple[float, float] = (0.0, 0.0)) -> CloudField | None:
     """The field of `clouds` for this solver's wavelengths and planet, winds in the
-    viewpoint's frame; None without clouds. InputError unless the solver is "lut"."""
+    viewpoint's frame, coverage maps oriented for an observer at `place` (latitude,
+    longitude [deg]; the CLI's default 0, 0 for undated views from the ground), the far
+    field from `camera`'s pixel size; None without clouds. InputError unless the solver is
+    "lut"."""
     if clouds is None:
         return None
     checked_instance("clouds", clouds, Clouds, "Clouds", " from load_clouds(name or path)")
@@ -305,8 +312,13 @@ def _cloud_field(clouds: Clouds | None, engine, viewpoint: Viewpoint, time_s: fl
         raise InputError("clouds need the table solver (--solver lut)", key="solver",
                          value=solver, allowed="lut")
     profile = engine.profile
+    pixel = None
+    if camera is not None:
+        solid = camera.pixel_solid_angles()[camera.valid_mask()]
+        pixel = float(np.sqrt(np.median(solid))) if solid.size else None
     return cloud_field(clouds, profile.bottom_radius_m, profile.wavelengths_nm,
-                       to_world=viewpoint.to_world, time_s=time_s)
+                       to_world=viewpoint.to_world, time_s=time_s, latitude_deg=place[0],
+                       longitude_deg=place[1], pixel_angle_rad=pixel)
 
 
 def _seconds_since_j2000(observer: Observer) -> float:
@@ -393,7 +405,8 @@ def _render_at(engine, atmosphere: Atmosphere, camera: Camera, observer: Observe
         viewpoint = viewpoint_at(orbit_altitude_m, radius, observer.latitude_deg,
                                  observer.longitude_deg)
     optics = eclipse_optics(engine) if sky.moon is not None else None
-    field = _cloud_field(clouds, engine, viewpoint, _seconds_since_j2000(observer), "lut")
+    field = _cloud_field(clouds, engine, viewpoint, _seconds_since_j2000(observer), "lut",
+                         camera=camera, place=(observer.latitude_deg, observer.longitude_deg))
     return render_sky_at(engine, camera, viewpoint, atmosphere.planet.star, sky,
                          objects=objects, progress=progress, ground=ground,
                          eclipse_optics=optics, clouds=field)

@@ -538,6 +538,10 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--no-browser", action="store_true",
                       help="only serve; do not open the page in a browser")
     view.add_argument("--verbose", action="store_true", help="log every request")
+    view.add_argument("--clouds", default=None, metavar="FILE|PRESET",
+                      help="the clouds shown first: a clouds file or preset (cumulus, "
+                      "stratocumulus, altocumulus, cirrus, stratus; docs/clouds.md); the page "
+                      "offers the presets too (default: none)")
     _add_cache_arguments(view)
     view.set_defaults(run=_view)
 
@@ -792,7 +796,8 @@ def _orbit_camera(args: argparse.Namespace, altitude_m: float, radius_m: float,
 def _add_cloud_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--clouds", default=None, metavar="FILE|PRESET",
                         help="cloud layers: a TOML file or a preset (cumulus, stratocumulus, "
-                        "altocumulus, cirrus, stratus; docs/clouds.md); table solver only")
+                        "altocumulus, cirrus, stratus, earth-weather for views from space; "
+                        "docs/clouds.md); table solver only")
 
 
 def _clouds(args: argparse.Namespace):
@@ -905,9 +910,13 @@ def _view(args: argparse.Namespace) -> None:
     def log(message: str) -> None:
         print(f"skyscatter: {message}", file=sys.stderr, flush=True)
 
+    if args.clouds is not None:
+        api.load_clouds(args.clouds)  # a bad file is named before the server starts
     server = api.viewer_server(args.atmosphere, host=args.host, port=args.port,
                                cache_dir=args.cache_dir, use_cache=not args.no_cache,
                                log=log if args.verbose else None)
+    if args.clouds is not None:
+        server.clouds.offer(args.clouds)
     if not api.is_loopback(args.host):
         print(f"skyscatter: WARNING: the viewer listens on {args.host}, not only on this "
               "computer: anyone on the network can reach it, over plain unencrypted HTTP.\n"

@@ -36,3 +36,22 @@ def test_clouds_need_the_table_solver(atmosphere):
     with pytest.raises(InputError, match="table solver"):
         api.render(atmosphere, api.FisheyeCamera(8), 40.0, wavelengths_nm=WAVELENGTHS_NM,
                    solver="single", clouds=api.load_clouds("cumulus"))
+
+
+def test_earth_from_orbit_with_the_earth_weather_clouds(atmosphere):
+    # From 20 000 km a 32-pixel image's pixel spans ~400 km, thousands of the earth-weather
+    # layers' tiles: the far field draws them (docs/clouds.md). The clouds (the demo map's
+    # cover, ~0.6 of the disk) brighten the planet's disk against the clear view, whose
+    # ocean-and-land albedo is 0.1 (tests/transport/test_clouds.py checks the far field
+    # against closed forms and the columns one by one).
+    def orbit(**clouds):
+        camera = api.PerspectiveCamera(32, 32, 40.0, 0.0, -90.0)  # at the planet's centre
+        return api.render(atmosphere, camera, 40.0, 100.0, 2.0e7,
+                          wavelengths_nm=WAVELENGTHS_NM, orbit_latitude_deg=20.0,
+                          orbit_longitude_deg=-30.0, **clouds).spectral
+
+    cloudy = orbit(clouds=api.load_clouds("earth-weather"))
+    clear = orbit()
+    disk = clear[..., 1] > 0.0
+    assert disk.sum() > 100 and np.all(np.isfinite(cloudy))
+    assert cloudy[disk].mean() > 1.3 * clear[disk].mean()

@@ -19,6 +19,9 @@ A clouds file holds one or more `[[layer]]` tables (docs/clouds.md lists every k
                                      # noise values a cloud covers [0-1]: soft to sharp edges
     coverage_variation = 0.4         # coverage varies by this share over 7.3 tiles [0-1]
     stretch = 1.0                    # horizontal stretch along the wind (cirrus streaks)
+    coverage_map = "weather.png"     # optional: an equirectangular map [0-1] the coverage is
+                                     # multiplied by (`atmosphere.cloud_maps`), path relative
+                                     # to the clouds file
     [layer.wind]
     east_m_s = 5.0
     north_m_s = 2.0
@@ -26,6 +29,17 @@ A clouds file holds one or more `[[layer]]` tables (docs/clouds.md lists every k
     phase = "liquid"                 # Mie droplets; or "ice" (`optics.cloud_optics`)
     effective_radius_um = 8.0
     effective_variance = 0.1         # liquid only
+
+A `type = "grid"` layer takes its water from a 3-D grid in a file instead of the noise
+(`atmosphere.cloud_grids`; docs/clouds.md, "A grid from a file"):
+
+    [[layer]]
+    type = "grid"
+    grid = "les.npz"                 # water_g_m3 (nx, ny, nz), spacing_m (dx, dy, dz),
+                                     # optionally periodic; path relative to the clouds file
+    base_altitude_m = 500.0          # the box's bottom; top_altitude_m = base + nz dz (optional)
+    [layer.particles]                # and [layer.wind], as above; coverage, water_content_g_m3,
+    ...                              # profile, [layer.shape] and coverage_map are refused
 
 Layers may not overlap in altitude: the renderer takes them in the order a ray meets them.
 Presets live in `atmosphere/cloud_presets/*.toml` and cite the observations behind their
@@ -39,17 +53,21 @@ from pathlib import Path
 
 import numpy as np
 
+from skyscatter.atmosphere.cloud_grids import read_cloud_grid
+from skyscatter.atmosphere.cloud_maps import read_coverage_map
 from skyscatter.atmosphere.config_file import preset_or_file, read_toml
 from skyscatter.atmosphere.config_table import ConfigTable
 from skyscatter.checks import Bounds
-from skyscatter.errors import ConfigError
+from skyscatter.errors import ConfigError, InputError
 
 __all__ = [
     "CLOUD_PRESETS_DIR",
+    "CloudGrid",
     "CloudLayer",
     "CloudParticles",
     "CloudShape",
     "Clouds",
+    "CoverageMap",
     "list_cloud_presets",
     "load_clouds",
     "parse_clouds",
@@ -72,7 +90,9 @@ WIND_M_S = Bounds(-200.0, 200.0)  # jet streams reach ~100 m/s; Venus' superrota
 LIQUID_RADIUS_UM = Bounds(1.0, 40.0)  # `optics.cloud_optics.liquid_cloud_optics`
 ICE_RADIUS_UM = Bounds(5.0, 100.0)  # `optics.cloud_optics.ice_cloud_optics`
 EFFECTIVE_VARIANCE = Bounds(0.01, 0.45)  # Hansen & Travis's b; clouds 0.05-0.2
-LAYER_TYPES = ("volume", "sheet")
+LAYER_TYPES = ("volume", "sheet", "grid")
+# keys of the noise a grid layer does not read: refused rather than silently ignored
+GRID_REFUSED_KEYS = ("coverage", "water_content_g_m3", "profile", "shape", "coverage_map")
 PHASES = ("liquid", "ice")
 
 
@@ -99,10 +119,34 @@ class CloudParticles:
     effective_variance: float = 0.1
 
 
+@dataclass(frozen=True, eq=False)
+class CoverageMap:
+    """An equirectangular coverage map [0-1] (h, w), row 0 at latitude +90 deg, column 0 at
+    longitude -180 deg (`atmosphere.cloud_maps`), and the file it came from."""
+
+    values: np.ndarray
+    source: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class CloudGrid:
+    """Water content on a regular grid (`atmosphere.cloud_grids`): water_g_m3 (nx, ny, nz)
+    [g m^-3] at cell centres, x east, y north, z up; the cells' size (dx, dy, dz) [m];
+    whether it repeats horizontally; the file it came from."""
+
+    water_g_m3: np.ndarray
+    spacing_m: tuple[float, float, float]
+    periodic: bool = True
+    source: str = ""
+
+
 @dataclass(frozen=True)
 class CloudLayer:
     """One cloud layer (module docstring); altitudes [m], water content [g m^-3], wind in the
-    observer's east-north frame [m s^-1], profile nodes (height fraction 0-1, factor 0-1)."""
+    observer's east-north frame [m s^-1], profile nodes (height fraction 0-1, factor 0-1),
+    an optional coverage map the coverage is multiplied by; a "grid" layer's water comes from
+    `grid` (its `water_content_g_m3` is then the grid's largest value, its coverage 1, its
+    shape and profile unused)."""
 
     name: str
     kind: str
@@ -114,6 +158,8 @@ class CloudLayer:
     shape: CloudShape
     particles: CloudParticles
     wind_m_s: tuple[float, float] = (0.0, 0.0)
+    coverage_map: CoverageMap | None = None
+    grid: CloudGrid | None = None
 
 
 @dataclass(frozen=True)
@@ -164,6 +210,8 @@ def parse_clouds(data: dict, path: Path) -> Clouds:
 def _parse_layer(table: ConfigTable) -> CloudLayer:
     name = table.text("name", table.prefix)
     kind = table.text("type", "volume", LAYER_TYPES)
+    if kind == "grid":
+        return _parse_grid_layer(table, name)
     base = table.number("base_altitude_m", CLOUD_ALTITUDE_M)
     top = table.number("top_altitude_m", CLOUD_ALTITUDE_M)
     if not top > base:
@@ -171,16 +219,74 @@ def _parse_layer(table: ConfigTable) -> CloudLayer:
     coverage = table.number("coverage", FRACTION)
     water = table.number("water_content_g_m3", WATER_CONTENT_G_M3)
     profile = _parse_profile(table)
+    coverage_map = _parse_coverage_map(table)
     shape = _parse_shape(table.table("shape", required=False))
     particles = _parse_particles(table.table("particles", required=False))
-    wind_table = table.table("wind", required=False)
-    wind = (0.0, 0.0)
-    if wind_table is not None:
-        wind = (wind_table.number("east_m_s", WIND_M_S, 0.0),
-                wind_table.number("north_m_s", WIND_M_S, 0.0))
-        wind_table.finish()
+    wind = _parse_wind(table.table("wind", required=False))
     table.finish()
-    return CloudLayer(name, kind, base, top, coverage, water, profile, shape, particles, wind)
+    return CloudLayer(name, kind, base, top, coverage, water, profile, shape, particles, wind,
+                      coverage_map)
+
+
+def _parse_grid_layer(table: ConfigTable, name: str) -> CloudLayer:
+    """A `type = "grid"` layer (module docstring): its grid file, base, optional top (which
+    must be base + nz dz), particles and wind; the noise's keys refused."""
+    for key in GRID_REFUSED_KEYS:
+        if table.has(key):
+            raise table.error(key, table.data[key], 'not in a type = "grid" layer, which '
+                              "takes its water from the grid file: remove it")
+    if not table.has("grid"):
+        raise table.missing("grid", ' (type = "grid" reads its water from an .npz file)')
+    grid = _parse_grid(table)
+    base = table.number("base_altitude_m", CLOUD_ALTITUDE_M)
+    top = base + grid.water_g_m3.shape[2] * grid.spacing_m[2]
+    if top > CLOUD_ALTITUDE_M.high:
+        raise table.error("base_altitude_m", base, f"the grid's top (base + nz dz = {top:g} m) "
+                          f"at most {CLOUD_ALTITUDE_M.high:g} m up")
+    if table.has("top_altitude_m"):
+        given = table.number("top_altitude_m", CLOUD_ALTITUDE_M)
+        if abs(given - top) > 1e-6 * max(top, 1.0):
+            raise table.error("top_altitude_m", given, f"base_altitude_m + nz dz = {top:g} (the "
+                              "grid's height), or leave it out")
+    particles = _parse_particles(table.table("particles", required=False))
+    wind = _parse_wind(table.table("wind", required=False))
+    table.finish()
+    return CloudLayer(name, "grid", base, top, 1.0, float(grid.water_g_m3.max()),
+                      ((0.0, 1.0), (1.0, 1.0)), CloudShape(), particles, wind, None, grid)
+
+
+def _parse_grid(table: ConfigTable) -> CloudGrid:
+    """The layer's `grid`, an .npz path relative to the clouds file."""
+    name = table.text("grid")
+    path = Path(name) if Path(name).is_absolute() else table.path.parent / name
+    try:
+        water, spacing, periodic = read_cloud_grid(path)
+    except InputError as error:
+        raise table.error("grid", name, f"{error} (the path is relative to the clouds file; "
+                          "docs/clouds.md, 'A grid from a file')") from None
+    return CloudGrid(water, spacing, periodic, str(path))
+
+
+def _parse_wind(table: ConfigTable | None) -> tuple[float, float]:
+    if table is None:
+        return (0.0, 0.0)
+    wind = (table.number("east_m_s", WIND_M_S, 0.0), table.number("north_m_s", WIND_M_S, 0.0))
+    table.finish()
+    return wind
+
+
+def _parse_coverage_map(table: ConfigTable) -> CoverageMap | None:
+    """The layer's `coverage_map`, a path relative to the clouds file; None when absent."""
+    if not table.has("coverage_map"):
+        return None
+    name = table.text("coverage_map")
+    path = Path(name) if Path(name).is_absolute() else table.path.parent / name
+    try:
+        values = read_coverage_map(path)
+    except InputError as error:
+        raise table.error("coverage_map", name, f"{error} (the path is relative to the "
+                          "clouds file; docs/clouds.md, 'Whole-planet clouds')") from None
+    return CoverageMap(values, str(path))
 
 
 def _parse_profile(table: ConfigTable) -> tuple[tuple[float, float], ...]:

@@ -22,7 +22,8 @@ import numpy as np
 from skyscatter.errors import InputError
 from skyscatter.render.albedo_map import AlbedoMap
 from skyscatter.render.terrain import Heightfield
-from skyscatter.transport.clouds import CloudField, cloud_transmittance
+from skyscatter.transport.cloud_far_field import surface_cloud_transmittance
+from skyscatter.transport.clouds import CloudField
 from skyscatter.transport.geometry import ground_distances
 from skyscatter.transport.solvers import Solver, SurfaceRadianceSolver
 
@@ -65,7 +66,8 @@ def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarra
         lit = np.ones(points.shape[0], dtype=bool)
     if clouds is not None:
         middle = clouds.wavelengths_nm.size // 2
-        lit = lit * cloud_transmittance(clouds, points, sun_direction)[:, middle]
+        lit = lit * surface_cloud_transmittance(clouds, origin, points,
+                                                sun_direction)[:, middle]
     if ground.albedo_map is not None:
         albedo = ground.albedo_map.spectral(points, profile.wavelengths_nm)
     else:

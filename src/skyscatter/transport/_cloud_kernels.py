@@ -55,8 +55,14 @@ from numba import njit, prange
 
 from skyscatter.atmosphere._cloud_sampling import (
     BASE_R,
+    COLUMN_BINS,
+    COLUMN_SHARES,
+    FAR_END,
+    FAR_START,
     SHEET,
     TOP_R,
+    column_cover,
+    coverage_map_factor,
     layer_water,
     phase_table_index,
     smooth_layer_water,
@@ -246,7 +252,10 @@ def march_clouds(origin, directions, max_distance, bottom_r, sun, cloud, light, 
         order = np.argsort(intervals[:count, 0])
         for o in range(count):
             row = intervals[order[o]]
-            if params[int(row[2]), SHEET] > 0.0:
+            if row[0] > params[int(row[2]), FAR_START]:  # beyond a tile per pixel: _far_layer
+                _far_layer(origin, v, row[0], row[1], int(row[2]), _jitter(i), sun, cloud,
+                           light, sun_phase, trans, glow, scratch, state)
+            elif params[int(row[2]), SHEET] > 0.0:
                 _cross_sheet(origin, v, row[0], row[1], int(row[2]), sun, cloud, light,
                              sun_phase, trans, glow, scratch, state)
             else:
@@ -529,3 +538,133 @@ def cloud_water_paths(origins, directions, max_distance, bottom_r, params, profi
                     r = math.sqrt(x * x + y * y + z * z)
                     total += layer_water(params, profiles, textures, layer, x, y, z, r) * dt
             out[i, layer] = total
+
+
+@njit(cache=True)
+def _far_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, sun_phase, trans, glow,
+               scratch, state):
+    """A layer's crossing [t0, t1] beyond `FAR_START` (`atmosphere.cloud_field`: where a pixel
+    covers a tile): the independent columns of `_cross_columns`, blended smoothly (weight
+    f = smoothstep((t0 - FAR_START) / (FAR_END - FAR_START))) with the march up to `FAR_END`."""
+    params = cloud[0]
+    start, end = params[layer, FAR_START], params[layer, FAR_END]
+    f = min(max((t0 - start) / (end - start), 0.0), 1.0) if end > start else 1.0
+    f = f * f * (3.0 - 2.0 * f)
+    near_trans, near_glow, near_state = trans.copy(), glow.copy(), state.copy()
+    if f < 1.0:
+        if params[layer, SHEET] > 0.0:
+            _cross_sheet(origin, v, t0, t1, layer, sun, cloud, light, sun_phase, near_trans,
+                         near_glow, scratch, near_state)
+        else:
+            _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, sun_phase,
+                         near_trans, near_glow, scratch, near_state)
+    _cross_columns(origin, v, t0, t1, layer, sun, cloud, light, sun_phase, trans, glow,
+                   scratch, state)
+    if f < 1.0:
+        alive = False
+        for k in range(trans.size):
+            trans[k] = f * trans[k] + (1.0 - f) * near_trans[k]
+            glow[k] = f * glow[k] + (1.0 - f) * near_glow[k]
+            alive |= trans[k] > TRANSMITTANCE_CUTOFF
+        state[0] = f * state[0] + (1.0 - f) * near_state[0]
+        state[1] = f * state[1] + (1.0 - f) * near_state[1]
+        state[2] = max(state[2], near_state[2])
+        state[3] = 0.0 if alive else 1.0
+
+
+@njit(cache=True)
+def _cross_columns(origin, v, t0, t1, layer, sun, cloud, light, sun_phase, trans, glow,
+                   scratch, state):
+    """The independent column approximation of a layer's crossing [t0, t1] (Cahalan et al.
+    1994; `atmosphere.cloud_field`): at the map factor m where the ray is halfway through,
+    a fraction c_col(m) of cloudy columns in the `COLUMN_SHARES`, each a uniform slab
+    of its share's mean water path / thickness marched as `_march_layer` marches water
+    (segments at most `OPTICAL_STEP` deep, the source of `_source_at` at both ends with its
+    water paths through the slab), and 1 - c_col clear:
+    L += T c_col <L_col>, T <- T (1 - c_col (1 - <T_col>)), <> the mean over the shares."""
+    params, profiles = cloud[0], cloud[1]
+    extinction, albedo = cloud[3], cloud[4]
+    t = 0.5 * (t0 + t1)
+    m = coverage_map_factor(params, profiles, layer, origin[0] + t * v[0],
+                            origin[1] + t * v[1], origin[2] + t * v[2])
+    paths = np.empty(COLUMN_BINS)
+    cover = column_cover(profiles, layer, m, paths)
+    if cover <= 0.0:
+        return
+    n_wl = trans.size
+    mid = n_wl // 2
+    mean_t = np.zeros(n_wl)
+    mean_glow = np.zeros(n_wl)
+    column_t = np.empty(n_wl)
+    start_source, end_source = scratch[0], scratch[1]
+    state[2] = 1.0
+    for b in range(COLUMN_BINS):
+        water = paths[b] / (params[layer, TOP_R] - params[layer, BASE_R])
+        column_t[:] = 1.0
+        if water > 0.0:
+            _column_source_at(origin, v, t0, layer, water, sun, cloud, light, sun_phase,
+                              start_source, scratch[2], scratch[3])
+            step = max(OPTICAL_STEP / (extinction[layer, mid] * water), MIN_STEP_M)
+            s = t0
+            for _ in range(MAX_STEPS):
+                if s >= t1:
+                    break
+                dt = min(step, t1 - s)
+                _column_source_at(origin, v, s + dt, layer, water, sun, cloud, light,
+                                  sun_phase, end_source, scratch[2], scratch[3])
+                sigma_mid = extinction[layer, mid] * water
+                extinct_mid = math.exp(-sigma_mid * dt)
+                weight = (trans[mid] * cover * COLUMN_SHARES[b] * column_t[mid]
+                          * (1.0 - extinct_mid))
+                state[0] += weight * (s + _mean_depth(sigma_mid, dt, extinct_mid))
+                state[1] += weight
+                alive = False
+                for k in range(n_wl):
+                    sigma = extinction[layer, k] * water
+                    e = math.exp(-sigma * dt)
+                    mean_glow[k] += column_t[k] * albedo[layer, k] * _segment_integral(
+                        start_source[k], end_source[k], sigma, dt, e) * COLUMN_SHARES[b]
+                    column_t[k] *= e
+                    alive |= column_t[k] > TRANSMITTANCE_CUTOFF
+                if not alive:
+                    break
+                start_source[:] = end_source
+                s += dt
+        for k in range(n_wl):
+            mean_t[k] += column_t[k] * COLUMN_SHARES[b]
+    alive = False
+    for k in range(n_wl):
+        glow[k] += trans[k] * cover * mean_glow[k]
+        trans[k] *= 1.0 - cover * (1.0 - mean_t[k])
+        alive |= trans[k] > TRANSMITTANCE_CUTOFF
+    if not alive:
+        state[3] = 1.0
+
+
+@njit(cache=True)
+def _column_source_at(origin, v, t, layer, water, sun, cloud, light, sun_phase, out, down, up):
+    """J (n_wl,) as `_source_at`, in a uniform slab of `water` [g m^-3] filling the layer's
+    shell: its water paths are `water` times the lengths to the shell's faces."""
+    params = cloud[0]
+    x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
+    radius = math.sqrt(x * x + y * y + z * z)
+    ux, uy, uz = x / radius, y / radius, z / radius
+    base_r, top_r = params[layer, BASE_R], params[layer, TOP_R]
+    r = min(max(radius, base_r), top_r)
+    mu_s = ux * sun[0] + uy * sun[1] + uz * sun[2]
+    to_sun = min(_shell_length(r, mu_s, base_r, top_r), LIGHT_MAX_M)
+    away = min(_shell_length(r, -mu_s, base_r, top_r), LIGHT_MAX_M)
+    _light_source(r, mu_s, ux * v[0] + uy * v[1] + uz * v[2], v @ sun, water * to_sun,
+                  water * away, water * (top_r - r), water * (r - base_r), layer, cloud, light,
+                  sun_phase, out, down, up)
+
+
+@njit(cache=True, inline="always")
+def _shell_length(r, mu, base_r, top_r):
+    """Distance [m] from radius r in [base_r, top_r] along zenith cosine mu to the shell's
+    edge: the top, or the base where the ray goes down and meets it (0 from the base)."""
+    length = -r * mu + math.sqrt(max(r * r * (mu * mu - 1.0) + top_r * top_r, 0.0))
+    disc = r * r * (mu * mu - 1.0) + base_r * base_r
+    if mu < 0.0 and disc >= 0.0:
+        length = min(length, max(-r * mu - math.sqrt(disc), 0.0))
+    return length

@@ -4,24 +4,28 @@
 says how each sample is lit) and puts the result over what lies behind the clouds, L_behind
 (the clear sky, or the ground, from the table solver):
 
-    L = T_c (L_behind - S(x, p_c)) + V S(x, p_c) + T_air(x, p_c) L_c
+    L = T_c (L_behind - S(x, p_c)) + S(x, p_c) - dL(x, p_c) + T_air(x, p_c) L_c
 
 with L_c and T_c the clouds' own radiance and transmittance along the ray, p_c the point at
-the transmittance-weighted distance of their scattering, and S and T_air the air's
-aerial perspective between the observer x and p_c (`LutSolver.aerial_perspective`). The first
-term is what lies beyond the clouds, seen through them; the second the air in front of them,
-V = 1 - f (1 - T_mid) of it lit, T_mid the clouds' transmittance towards the sun from the
-middle of the stretch and f = min(1, `AIR_SHADE_M` / its length) the part of the stretch
-taken as shaded (the air under a deck, in front of a near cloud, is in its shadow; a far
-cloud's light comes through tens of kilometres of mostly sunlit air, and one shadow sample
-there would dapple it). A stopgap until the march shades the air sample by sample
-(crepuscular rays); the third term is the clouds' own light seen through that air.
+the transmittance-weighted distance of their scattering, S and T_air the air's aerial
+perspective between the observer x and p_c (`LutSolver.aerial_perspective`), and dL the light
+the clouds' shadows take from that air (`transport.air_shadows`: crepuscular rays). The first
+term is what lies beyond the clouds, seen through them; the second the air in front of them;
+the third the clouds' own light seen through that air. A ray that meets no cloud is
+L_behind - dL(x, end of the ray).
 
 The light reaching each sample comes from tables over (radius, sun zenith cosine) that
 `cloud_lighting` fills from the solver: the air's transmittance towards the sun, the clear
 sky's diffuse irradiance, and the irradiance the ground reflects up (dimmed in the kernel by
-the cloud column above the ground). The air beyond the clouds, and the air of rays that meet
-no cloud, are lit as in a clear sky (no crepuscular rays).
+the cloud column above the ground).
+
+The march sees the droplets' optics delta-scaled (`delta_scaled`): the light they diffract
+within `PEAK_ANGLE_RAD` of its direction goes on as if unscattered, along the view ray and
+towards the sun alike (transmittance of the sky behind a thin cloud, depth of the sunlit
+skin), and the single scattering keeps the exact phase function (the TMS correction). Against
+the Monte Carlo reference this brightens the thin, sunlit edges of cumulus seen near the sun
+(docs/clouds.md). The sun's disk behind clouds and the shadows on the ground use the clouds'
+unscaled transmittance (`cloud_transmittance`).
 """
 
 from __future__ import annotations
@@ -32,15 +36,17 @@ import numpy as np
 
 from skyscatter.atmosphere.cloud_field import CloudField
 from skyscatter.transport import _cloud_kernels
+from skyscatter.transport.air_shadows import SUN_MU, AirShadows, air_shadows
 
 __all__ = ["CloudField", "CloudLighting", "cloud_lighting", "cloud_transmittance",
            "clouds_in_front", "kernel_arrays"]
 
-AIR_SHADE_M = 2000.0  # the stretch of air in front of a cloud that its layer may shade [m]
+# The droplets' diffraction peak: about half of what they scatter (Q_ext ~ 2, half of it
+# diffraction: van de Hulst 1957, Light Scattering by Small Particles, sec. 8.22) lies within 5 deg
+# of the forward direction for r_eff >= 5 um in the visible (the lobe is ~0.6 lambda / r wide)
+PEAK_ANGLE_RAD = np.radians(5.0)
 CHUNK_RAYS = 1 << 17  # rays per march: bounds the temporaries (n, n_wl) x 4
 LIGHTING_RADII = 8  # nodes across the cloud layers
-LIGHTING_MU = 241  # sun zenith cosines from MU_LOWEST to 1 (0.005 apart: the reddening sun)
-MU_LOWEST = -0.2  # below this the sun is set for every cloud below 40 km
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,7 +68,7 @@ def cloud_lighting(solver, field: CloudField) -> CloudLighting:
     profile = solver.profile
     bottom = float(profile.bottom_radius_m)
     r_nodes = np.linspace(field.lowest_radius_m, field.highest_radius_m, LIGHTING_RADII)
-    mu_nodes = np.linspace(MU_LOWEST, 1.0, LIGHTING_MU)
+    mu_nodes = SUN_MU
     # the sun along z, the points at its zenith cosine mu: one sun for every lookup
     sun = np.array([0.0, 0.0, 1.0])
     ups = np.stack([np.sqrt(1.0 - mu_nodes**2), np.zeros_like(mu_nodes), mu_nodes], axis=-1)
@@ -91,19 +97,23 @@ def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndar
     sun = np.ascontiguousarray(sun, dtype=np.float64)
     light = cloud_lighting(solver, field) if lighting is None else lighting
     result = np.array(behind, dtype=np.float64)
+    rays = np.ascontiguousarray(rays, dtype=np.float64)
     limits = (np.full(rays.shape[0], np.inf) if max_distance is None
               else np.asarray(max_distance, dtype=np.float64))
+    shadows = air_shadows(solver, field, origin, rays, sun, stop=limits)
     for start in range(0, rays.shape[0], CHUNK_RAYS):
         chunk = slice(start, start + CHUNK_RAYS)
-        _clouds_over(solver, field, origin, np.ascontiguousarray(rays[chunk], dtype=np.float64),
-                     np.ascontiguousarray(limits[chunk]), sun, light, result[chunk])
+        _clouds_over(solver, field, (origin, rays[chunk], np.ascontiguousarray(limits[chunk]),
+                                     sun), (light, shadows), result[chunk])
     return result
 
 
-def _clouds_over(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray,
-                 limits: np.ndarray, sun: np.ndarray, light: CloudLighting,
-                 result: np.ndarray) -> None:
-    """`clouds_in_front` of one chunk of rays, over `result` in place."""
+def _clouds_over(solver, field: CloudField, scene: tuple,
+                 lights: tuple[CloudLighting, AirShadows | None], result: np.ndarray) -> None:
+    """`clouds_in_front` of one chunk of rays (`scene` = origin, rays, limits, sun), over
+    `result` in place."""
+    origin, rays, limits, sun = scene
+    light, shadows = lights
     n, n_wl = rays.shape[0], field.wavelengths_nm.size
     radiance, transmittance = np.empty((n, n_wl)), np.empty((n, n_wl))
     depth, hit = np.empty(n), np.empty(n, dtype=np.bool_)
@@ -111,24 +121,49 @@ def _clouds_over(solver, field: CloudField, origin: np.ndarray, rays: np.ndarray
         origin, rays, limits, field.bottom_radius_m, sun, kernel_arrays(field),
         (light.r_nodes, light.mu_nodes, light.sun_air, light.sky_down, light.ground_up,
          light.sun_toa), radiance, transmittance, depth, hit)
+    shade = (np.zeros((n, n_wl)) if shadows is None
+             else shadows.loss(solver, rays, np.where(hit, depth, limits)))
+    clear = np.flatnonzero(~hit)
+    result[clear] = np.maximum(result[clear] - shade[clear], 0.0)
     seen = np.flatnonzero(hit)
     if seen.size:
         points = origin + depth[seen, None] * rays[seen]
         air_light, air_transmittance = solver.aerial_perspective(origin, points, sun)
-        middle = field.wavelengths_nm.size // 2
-        stretch = depth[seen]
-        lit = cloud_transmittance(field, origin + 0.5 * stretch[:, None] * rays[seen], sun)
-        shaded_part = np.minimum(AIR_SHADE_M / np.maximum(stretch, 1.0), 1.0)
-        shade = (1.0 - shaded_part * (1.0 - lit[:, middle]))[:, None]
-        clouds_t = transmittance[seen]
-        result[seen] = (clouds_t * (result[seen] - air_light) + shade * air_light
+        result[seen] = (transmittance[seen] * (result[seen] - air_light)
+                        + np.maximum(air_light - shade[seen], 0.0)
                         + air_transmittance * radiance[seen])
 
 
 def kernel_arrays(field: CloudField) -> tuple:
-    """The arrays of `field` in the order the kernels take them (`_cloud_kernels`)."""
-    return (field.params, field.profiles, field.textures, field.mass_extinction_m2_g,
-            field.single_scattering_albedo, field.asymmetry, field.phase)
+    """The arrays of `field` in the order the kernels take them (`_cloud_kernels`), its
+    optics delta-scaled (`delta_scaled`)."""
+    return (field.params, field.profiles, field.textures) + delta_scaled(field)
+
+
+def delta_scaled(field: CloudField) -> tuple:
+    """(mass extinction [m^2 g^-1], single-scattering albedo, asymmetry, phase [sr^-1]) of the
+    layers with the fraction f of the light their droplets scatter within `PEAK_ANGLE_RAD` of
+    the forward direction counted as unscattered (Joseph et al. 1976, J. Atmos. Sci. 33, 2452):
+    k' = (1 - f w) k, w' = w (1 - f) / (1 - f w), g' = (g - f) / (1 - f), p' = p / (1 - f),
+    so that p' is the phase function outside the peak per unit of the scaled scattering
+    (Nakajima & Tanaka 1988, JQSRT 40, 51: the exact phase function for single scattering
+    with the scaled extinction)."""
+    f = forward_peak_fraction(field.phase, PEAK_ANGLE_RAD)  # (n_layers, n_wl)
+    albedo = field.single_scattering_albedo
+    scaled = 1.0 - f * albedo
+    return (field.mass_extinction_m2_g * scaled, albedo * (1.0 - f) / scaled,
+            (field.asymmetry - f) / (1.0 - f), field.phase / (1.0 - f)[:, None, :])
+
+
+def forward_peak_fraction(phase: np.ndarray, angle_rad: float) -> np.ndarray:
+    """The fraction (n_layers, n_wl) of `phase` (n_layers, PHASE_ANGLES, n_wl) [sr^-1] (nodes
+    theta = pi (i / (n - 1))^2) scattered within `angle_rad` of the forward direction
+    (trapezoids in theta of 2 pi p sin(theta))."""
+    n = phase.shape[1]
+    theta = np.pi * np.linspace(0.0, 1.0, n) ** 2
+    inside = theta <= angle_rad
+    weight = 2.0 * np.pi * np.sin(theta[inside])
+    return np.trapezoid(phase[:, inside] * weight[None, :, None], theta[inside], axis=1)
 
 
 def cloud_transmittance(field: CloudField, origins: np.ndarray, directions: np.ndarray,

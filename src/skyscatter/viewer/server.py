@@ -6,11 +6,15 @@ Routes (GET and HEAD only; anything else 405):
   /static/PATH          a file of the static directory, looked up in the list made at start-up:
                         a request never becomes a file-system path, so `..`, encoded slashes
                         or links cannot reach outside it (404)
-  /api/atmospheres      what can be shown (`TableService.describe`)
+  /api/atmospheres      what can be shown (`TableService.describe`, with the clouds offered:
+                        `CloudService.describe` under "clouds")
   /api/tables?...       the tables of one atmosphere, binary (`gpu_tables.encode`); 400 for a
                         bad parameter, 409 when a newer request of the same client superseded
                         it, 429 when too many wait
   /api/progress         the table computation under way
+  /api/clouds?clouds&atmosphere
+                        cloud layers offered by name (a preset or the --clouds file), binary
+                        (`gpu_clouds.encode_clouds`); 400 for a name not offered
   /api/sky?atmosphere&time&lat&lon
                         the sun's zenith and azimuth [deg] at that place and time and the
                         stars above the horizon (directions, XYZ irradiance above the air)
@@ -59,6 +63,7 @@ from urllib.parse import parse_qsl, quote, urlsplit
 
 from skyscatter.atmosphere.model import Atmosphere
 from skyscatter.errors import InputError, SkyscatterError
+from skyscatter.viewer.cloud_service import CloudService
 from skyscatter.viewer.table_service import BusyError, SupersededError, TableService
 
 __all__ = ["CLIENT_HEADER", "LISTEN_BACKLOG", "MAX_CONNECTIONS", "REQUEST_TIMEOUT_S",
@@ -149,6 +154,7 @@ class ViewerServer(ThreadingHTTPServer):
     def __init__(self, address: tuple[str, int], service: TableService, sky_at: SkyAt,
                  log: Callable[[str], None] | None = None) -> None:
         self.service = service
+        self.clouds = CloudService(service)  # `offer` adds a --clouds file
         self.sky_at = sky_at
         self.files = static_files()
         self.log = log
@@ -430,7 +436,12 @@ class Handler(BaseHTTPRequestHandler):
     def _api(self, route: str, query: dict[str, str]) -> None:
         service = self.server.service
         if route == "/api/atmospheres":
-            self._json(HTTPStatus.OK, service.describe())
+            self._json(HTTPStatus.OK, dict(service.describe(),
+                                           clouds=self.server.clouds.describe()))
+        elif route == "/api/clouds":
+            clouds = self.server.clouds
+            self._send(HTTPStatus.OK, clouds.message(*clouds.parse(query)),
+                       "application/octet-stream")
         elif route == "/api/tables":
             client = self.headers.get(CLIENT_HEADER) or self.client_address[0]
             message = service.tables(service.parse(query), client=client[:64])

@@ -13,6 +13,9 @@ const NUMBERS = {
   site_lat: [45, -90, 90], site_lon: [0, -180, 180],
   sun_zenith: [60, 0, 180], sun_azimuth: [180, -1e6, 1e6],
   compensation: [0, -10, 10],  // and ev100, within what the meter can choose (readUrlState)
+  // clouds: the cover of every layer (-1: as configured), a factor on the winds, the clouds'
+  // time without a date [s] (api.render's cloud_time_s: years 1-9999 from J2000 at most)
+  cloud_coverage: [-1, 0, 1], wind: [1, 0, 10], cloud_time: [0, -1e11, 1e11],
 };
 const CHOICES = {projection: ["perspective", "fisheye"], operator: ["aces", "clamp", "exponential", "reinhard"],
                  quality: ["full", "preview"], mode: ["ground", "orbit"]};
@@ -43,7 +46,8 @@ export function showProgress(progress) {
 export function readUrlState(description, layout) {
   const query = new URLSearchParams(window.location.search);
   const numbers = {...NUMBERS, ev100: [12, ...layout.exposure.ev100_range]};
-  const state = {atmosphere: description.default, amounts: {}, albedo: null, auto_exposure: true,
+  const state = {atmosphere: description.default, clouds: description.clouds.default,
+                 amounts: {}, albedo: null, auto_exposure: true,
                  controls: true, projection: "perspective", operator: "aces", quality: "full",
                  mode: "ground", time: ""};
   for (const [name, [value]] of Object.entries(numbers)) state[name] = value;
@@ -64,6 +68,9 @@ export function readUrlState(description, layout) {
     } else if (key === "atmosphere") {
       if (description.atmospheres.some((a) => a.name === text)) state.atmosphere = text;
       else problems.push(`unknown atmosphere ${text}`);
+    } else if (key === "clouds") {
+      if (text === description.clouds.none || description.clouds.clouds.some((c) => c.name === text)) state.clouds = text;
+      else problems.push(`unknown clouds ${text}: choose one of ${[description.clouds.none, ...description.clouds.clouds.map((c) => c.name)].join(", ")}`);
     } else if (key === "albedo" || key.startsWith("amount_")) {
       const value = Number(text);
       if (!Number.isFinite(value)) problems.push(`${key} = ${text} is not a number`);
@@ -114,10 +121,10 @@ function placeSun(state, dir) {
 // Binds the panel (unless controls=0), the mouse, the keys and the automatic exposure; returns a
 // function that shows a state changed elsewhere. Without the panel the view still follows the
 // mouse, the keys and the meter (kiosk and dome use).
-export function bindControls(viewer, description, reload, sky) {
+export function bindControls(viewer, description, reload, sky, reloadClouds) {
   const state = viewer.state;
   document.getElementById("panel").hidden = !state.controls;
-  const refresh = state.controls ? bindPanel(viewer, description, reload, sky) : () => {};
+  const refresh = state.controls ? bindPanel(viewer, description, reload, sky, reloadClouds) : () => {};
   bindPointer(viewer, refresh);
   let frames = 0;
   setInterval(() => {
@@ -131,7 +138,7 @@ export function bindControls(viewer, description, reload, sky) {
 }
 
 // The panel's widgets; returns a function that shows the state in them
-function bindPanel(viewer, description, reload, sky) {
+function bindPanel(viewer, description, reload, sky, reloadClouds) {
   const state = viewer.state;
   const byId = (id) => document.getElementById(id);
   // Atmosphere
@@ -162,10 +169,32 @@ function bindPanel(viewer, description, reload, sky) {
     state.albedo = null;
     buildPhysical();
     reload();
+    reloadClouds();  // the planet's radius and star
   });
   buildPhysical();
   byId("quality").value = state.quality;
   byId("quality").addEventListener("change", (event) => { state.quality = event.target.value; reload(); });
+  // Clouds: preset or the --clouds file, cover, wind, time (a date sets the time instead)
+  const cloudSelect = byId("clouds");
+  cloudSelect.append(new Option("none", description.clouds.none));
+  for (const entry of description.clouds.clouds) {
+    const option = new Option(entry.name, entry.name);
+    option.title = entry.description;
+    cloudSelect.append(option);
+  }
+  cloudSelect.value = state.clouds;
+  cloudSelect.addEventListener("change", () => { state.clouds = cloudSelect.value; reloadClouds(); });
+  const coverage = byId("cloud-coverage");
+  const configured = byId("cloud-coverage-configured");
+  configured.checked = state.cloud_coverage < 0;
+  coverage.value = Math.max(state.cloud_coverage, 0);
+  coverage.addEventListener("input", () => { state.cloud_coverage = Number(coverage.value); configured.checked = false; });
+  configured.addEventListener("change", () => { state.cloud_coverage = configured.checked ? -1 : Number(coverage.value); });
+  byId("wind").value = state.wind;
+  byId("wind").addEventListener("input", (event) => { state.wind = Number(event.target.value); });
+  const cloudTime = byId("cloud-time");
+  cloudTime.value = state.cloud_time;
+  cloudTime.addEventListener("input", () => { state.cloud_time = Number(cloudTime.value); });
   // Sun
   const sunElevation = byId("sun-elevation");
   const sunAzimuth = byId("sun-azimuth");
@@ -246,6 +275,9 @@ function bindPanel(viewer, description, reload, sky) {
     fov.value = state.fov;
     ev.value = state.ev100;
     byId("ev-readout").textContent = state.ev100.toFixed(2);
+    byId("cloud-readout").textContent = state.clouds === description.clouds.none ? "" :
+      `cover ${state.cloud_coverage < 0 ? "as configured" : state.cloud_coverage.toFixed(2)}, wind ×${state.wind.toFixed(2)}, ` +
+      `time ${viewer.cloudTime().toFixed(0)} s${state.time ? " (the date's, since 2000-01-01 12:00 UTC)" : ""}`;
     const times = viewer.frameTimes;
     const gpu = viewer.gpuMs === null ? "" : `GPU ${viewer.gpuMs.toFixed(2)} ms per frame; `;
     const ms = times.length ? times.reduce((a, b) => a + b, 0) / times.length : null;

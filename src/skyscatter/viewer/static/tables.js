@@ -102,3 +102,96 @@ export function deleteTables(gl, tables) {
   if (!tables) return;
   for (const texture of Object.values(tables.textures)) gl.deleteTexture(texture);
 }
+
+// {header, arrays: {name: {shape, data}}} of a cloud message (viewer/gpu_clouds.py: float16
+// noise as Uint16Array, the rest Float32Array)
+export function decodeClouds(buffer, layout) {
+  const bytes = new Uint8Array(buffer);
+  const magic = String.fromCharCode(...bytes.slice(0, 4));
+  if (magic !== layout.clouds.magic) throw new Error("the server sent something that is not a cloud message");
+  const view = new DataView(buffer);
+  const version = view.getUint32(4, true);
+  if (version !== layout.clouds.format_version) {
+    throw new Error(`cloud message version ${version}; this page reads ${layout.clouds.format_version}: reload it`);
+  }
+  const length = view.getUint32(8, true);
+  const header = JSON.parse(new TextDecoder().decode(bytes.slice(12, 12 + length)));
+  const start = 12 + length;
+  const arrays = {};
+  for (const [name, entry] of Object.entries(header.arrays)) {
+    const count = entry.shape.reduce((a, b) => a * b, 1);
+    const Type = entry.dtype === "float16" ? Uint16Array : Float32Array;
+    arrays[name] = {shape: entry.shape, data: new Type(buffer, start + entry.offset, count)};
+  }
+  return {header, arrays};
+}
+
+function floatTexture(gl, internal, format, width, height, data) {
+  const texture = gl.createTexture();
+  gl.bindTexture(gl.TEXTURE_2D, texture);
+  gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+  gl.texImage2D(gl.TEXTURE_2D, 0, internal, width, height, 0, format, gl.FLOAT, data);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+  return texture;
+}
+
+// The textures of decoded clouds (or of none: 1-texel stand-ins, so that every sampler of the
+// sky program has a texture of its own type); `params` is a copy the page fills with the
+// wind's columns (viewer.js `cloudUniforms`) and uploads again with `uploadCloudParams`
+export function uploadClouds(gl, decoded) {
+  const none = decoded === null;
+  const header = none ? {n_layers: 0, texture_size: 1} : decoded.header;
+  const layers = Math.max(header.n_layers, 1);
+  const noise = gl.createTexture();
+  gl.bindTexture(gl.TEXTURE_3D, noise);
+  gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+  if (none) {
+    gl.texImage3D(gl.TEXTURE_3D, 0, gl.RG16F, 1, 1, 1, 0, gl.RG, gl.HALF_FLOAT, new Uint16Array(2));
+  } else {
+    const [depth, height, width] = decoded.arrays.noise.shape;
+    gl.texImage3D(gl.TEXTURE_3D, 0, gl.RG16F, width, height, depth, 0, gl.RG, gl.HALF_FLOAT,
+                  decoded.arrays.noise.data);
+  }
+  for (const [key, value] of [[gl.TEXTURE_MIN_FILTER, gl.LINEAR], [gl.TEXTURE_MAG_FILTER, gl.LINEAR],
+                              [gl.TEXTURE_WRAP_S, gl.REPEAT], [gl.TEXTURE_WRAP_T, gl.REPEAT],
+                              [gl.TEXTURE_WRAP_R, gl.CLAMP_TO_EDGE]]) {
+    gl.texParameteri(gl.TEXTURE_3D, key, value);
+  }
+  const nParams = none ? 1 : decoded.arrays.params.shape[1];
+  const params = none ? new Float32Array(1) : Float32Array.from(decoded.arrays.params.data);
+  const profileRows = none ? 1 : decoded.arrays.profiles.shape[1];
+  const optics = new Float32Array(layers * 9);
+  for (let layer = 0; layer < header.n_layers; ++layer) {
+    ["mass_extinction_xyz_m2_g", "single_scattering_albedo_xyz", "asymmetry_xyz"].forEach((key, i) => {
+      optics.set(header[key][layer], layer * 9 + i * 3);
+    });
+  }
+  const angles = none ? 1 : decoded.arrays.phase.shape[1];
+  return {
+    header,
+    params,
+    textures: {
+      noise,
+      params: floatTexture(gl, gl.R32F, gl.RED, nParams, layers, params),
+      profiles: floatTexture(gl, gl.RG32F, gl.RG, profileRows, layers,
+                             none ? new Float32Array(2) : decoded.arrays.profiles.data),
+      phase: floatTexture(gl, gl.RGB32F, gl.RGB, angles, layers,
+                          none ? new Float32Array(3) : decoded.arrays.phase.data),
+      optics: floatTexture(gl, gl.RGB32F, gl.RGB, 3, layers, optics),
+    },
+  };
+}
+
+// Uploads `clouds.params` (after the page changed its wind columns)
+export function uploadCloudParams(gl, clouds) {
+  gl.bindTexture(gl.TEXTURE_2D, clouds.textures.params);
+  gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+  gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, clouds.params.length / Math.max(clouds.header.n_layers, 1),
+                   Math.max(clouds.header.n_layers, 1), gl.RED, gl.FLOAT, clouds.params);
+}
+
+export function deleteClouds(gl, clouds) {
+  if (!clouds) return;
+  for (const texture of Object.values(clouds.textures)) gl.deleteTexture(texture);
+}

@@ -1,9 +1,11 @@
 // The skyscatter viewer: ray-casts the precomputed tables in a WebGL2 fragment shader every
 // frame (shaders/*.glsl, the GLSL twins of the Python renderer), asks the server for new
 // tables when a physical parameter changes (a preview first, then the full tables), and
-// places the sun by hand or from a date, time and place.
+// places the sun by hand or from a date, time and place; clouds (shaders/clouds.glsl) from the
+// server's cloud message, moved by their wind over the clouds' time.
 import {apiFetch, apiJson} from "./api.js";
-import {decodeTables, deleteTables, fetchLayout, uploadTables} from "./tables.js";
+import {decodeClouds, decodeTables, deleteClouds, deleteTables, fetchLayout, uploadCloudParams,
+        uploadClouds, uploadTables} from "./tables.js";
 import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
 import {cameraBasis, localFrame, sunDirection, toWorld} from "./geometry.js";
 
@@ -11,7 +13,7 @@ const LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "s
                  "shaders/sky.glsl", "shaders/tonemap.glsl"];
 // Programs: [vertex sources, fragment sources] (files under static/; "" = the full-screen triangle)
 const PROGRAMS = {
-  sky: [[""], [...LIBRARY, "shaders/main.frag"]],
+  sky: [[""], [...LIBRARY, "shaders/clouds.glsl", "shaders/main.frag"]],
   stars: [[...LIBRARY.slice(0, 4), "shaders/stars.vert"],
           ["generated/constants.glsl", "shaders/camera.glsl", "shaders/stars.frag"]],
   composite: [[""], ["generated/constants.glsl", "shaders/tonemap.glsl", "shaders/composite.frag"]],
@@ -20,6 +22,8 @@ const PREFIX = "#version 300 es\nprecision highp float;\nprecision highp int;\np
 const FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n";
 const METER_SIZE = [64, 36];  // the auto-exposure meter renders the view this small
 const DEG = Math.PI / 180;
+const J2000_MS = Date.UTC(2000, 0, 1, 12);  // the clouds' epoch (api.J2000_UTC)
+const CLOUD_UNITS = ["noise", "params", "profiles", "phase", "optics"];  // texture units 4-8
 
 // Exposure change [EV] for a scene of log-average luminance L [cd m^-2] (twin of
 // render.tonemap.night_compensation_ev, Krawczyk et al. 2005): 0 by day, down to a floor in
@@ -86,6 +90,85 @@ class Viewer {
     this.floatTargets = gl.getExtension("EXT_color_buffer_float") !== null;
     this.query = null;
     this.gpuMs = null;
+    this.clouds = uploadClouds(gl, null);
+  }
+
+  // Clouds from /api/clouds (decoded), or none (null)
+  setClouds(decoded) {
+    deleteClouds(this.gl, this.clouds);
+    this.clouds = uploadClouds(this.gl, decoded);
+    this.cloudsVersion = (this.cloudsVersion || 0) + 1;
+  }
+
+  // The clouds' time [s] since their initial state: with a date, the seconds since J2000 (as
+  // `render --time`), otherwise the page's cloud time (`render --cloud-time`)
+  cloudTime() {
+    const s = this.state;
+    const date = s.time ? Date.parse(s.time) : NaN;
+    return Number.isFinite(date) ? (date - J2000_MS) / 1000 : s.cloud_time;
+  }
+
+  // The clouds' uniforms for a camera at `position` (world [m]): the wind's columns of the
+  // parameter table (OFFSET = wind t, ALONG = its direction, in the site's east-north-up frame,
+  // as atmosphere.cloud_field with to_world and time_s; the coverage when the page sets it),
+  // uploaded when they changed, and the noise coordinates of the camera, three per layer
+  // (shape, weather, detail), reduced modulo the tile in double precision (clouds.glsl)
+  cloudUniforms(position) {
+    const clouds = this.clouds;
+    const header = clouds.header;
+    const layers = header.n_layers;
+    const max = this.layout.clouds.max_layers;
+    const origins = new Float32Array(9 * max);
+    if (!layers) return {u_cloud_layers: 0, u_cloud_origin: origins, u_cloud_texture_size: 1};
+    const s = this.state;
+    const columns = this.layout.clouds.columns;
+    const stride = clouds.params.length / layers;
+    const original = clouds.original || (clouds.original = Float32Array.from(clouds.params));
+    const site = localFrame(s.site_lat * DEG, s.site_lon * DEG);
+    const seconds = this.cloudTime();
+    const n = header.texture_size;
+    const wrap = (x) => ((x % n) + n) % n;
+    const params = clouds.params;
+    for (let layer = 0; layer < layers; ++layer) {
+      const row = layer * stride;
+      const [east, north] = header.wind_enu_m_s[layer];
+      const wind = [0, 1, 2].map((i) => site[0][i] * east + site[1][i] * north);
+      const speed = Math.hypot(...wind);
+      const along = speed > 0 ? wind.map((v) => v / speed) : site[0];
+      const offset = wind.map((v) => v * s.wind * seconds);
+      ["OFFSET_X", "OFFSET_Y", "OFFSET_Z"].forEach((key, i) => { params[row + columns[key]] = offset[i]; });
+      ["ALONG_X", "ALONG_Y", "ALONG_Z"].forEach((key, i) => { params[row + columns[key]] = along[i]; });
+      params[row + columns.COVERAGE] = s.cloud_coverage >= 0 ? s.cloud_coverage : original[row + columns.COVERAGE];
+      const stretch = original[row + columns.STRETCH_MINUS_ONE];
+      const c = position.map((v, i) => v - offset[i]);
+      const shift = (c[0] * along[0] + c[1] * along[1] + c[2] * along[2]) * stretch / (1 + stretch);
+      const m = c.map((v, i) => v - shift * along[i]);
+      const tile = original[row + columns.INV_SCALE] * n;
+      const large = tile / this.layout.clouds.coverage_tile_ratio;
+      const fine = original[row + columns.INV_DETAIL_SCALE] * n;
+      origins.set(m.map((v) => wrap(v * tile)), 9 * layer);
+      origins.set([m[2], m[0], m[1]].map((v) => wrap(v * large)), 9 * layer + 3);
+      origins.set(m.map((v) => wrap(v * fine)), 9 * layer + 6);
+    }
+    const signature = params.join(",");
+    if (signature !== clouds.uploaded) {
+      uploadCloudParams(this.gl, clouds);
+      clouds.uploaded = signature;
+    }
+    return {u_cloud_layers: layers, u_cloud_origin: origins, u_cloud_texture_size: n};
+  }
+
+  // The cloud textures on units 4-8 (always bound: stand-ins without clouds) and uniforms
+  bindClouds(program, position) {
+    const gl = this.gl;
+    gl.activeTexture(gl.TEXTURE4 + CLOUD_UNITS.indexOf("params"));  // an upload binds there
+    const uniforms = this.cloudUniforms(position);  // first: it may upload the parameters
+    CLOUD_UNITS.forEach((key, i) => {
+      gl.activeTexture(gl.TEXTURE4 + i);
+      gl.bindTexture(key === "noise" ? gl.TEXTURE_3D : gl.TEXTURE_2D, this.clouds.textures[key]);
+      gl.uniform1i(this.uniform(program, `u_cloud_${key}`), 4 + i);
+    });
+    this.setUniforms(program, uniforms);
   }
 
   uniform(program, name) {
@@ -146,7 +229,7 @@ class Viewer {
   setUniforms(program, values) {
     const gl = this.gl;
     const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows", "u_output",
-                          "u_radius_warp_identity"]);
+                          "u_radius_warp_identity", "u_cloud_layers"]);
     const matrices = new Set(["u_camera_basis", "u_local_to_world", "u_site_to_world"]);
     for (const [name, value] of Object.entries(values)) {
       const location = this.uniform(program, name);
@@ -156,6 +239,7 @@ class Viewer {
       else if (name === "u_scattering_scales") gl.uniform1fv(location, value);
       else if (name === "u_sun_disk") gl.uniform3fv(location, value);
       else if (name === "u_radius_warp") gl.uniform4fv(location, value);
+      else if (name === "u_cloud_origin") gl.uniform3fv(location, value);
       else if (!Array.isArray(value)) gl.uniform1f(location, value);
       else if (value.length === 2) gl.uniform2fv(location, value);
       else if (value.length === 3) gl.uniform3fv(location, value);
@@ -181,7 +265,9 @@ class Viewer {
     gl.useProgram(this.programs.sky);
     gl.viewport(0, 0, width, height);
     this.bindTables("sky");
-    this.setUniforms("sky", {...this.viewUniforms(width, height), u_output: this.layout.outputs.indexOf(output)});
+    const view = this.viewUniforms(width, height);
+    this.bindClouds("sky", view.u_camera_position);
+    this.setUniforms("sky", {...view, u_output: this.layout.outputs.indexOf(output)});
     gl.bindVertexArray(this.fullScreen);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
@@ -253,7 +339,7 @@ class Viewer {
     // what the picture depends on: the view, not the physical parameters (those act through
     // new tables, so a slider does not redraw the old ones while the server computes)
     const {amounts, albedo, atmosphere, quality, ...view} = this.state;
-    const signature = JSON.stringify([view, this.tablesVersion, this.starsVersion,
+    const signature = JSON.stringify([view, this.tablesVersion, this.starsVersion, this.cloudsVersion,
                                       this.canvas.width, this.canvas.height]);
     if (signature === this.drawn) return false;
     this.drawn = signature;
@@ -362,6 +448,22 @@ async function loadTables(viewer, query, onProgress) {
   }
 }
 
+// The clouds the state names (state.clouds; "none": a clear sky) over the state's planet
+async function loadClouds(viewer) {
+  const state = viewer.state;
+  if (state.clouds === "none") {
+    viewer.setClouds(null);
+    return;
+  }
+  const params = new URLSearchParams({clouds: state.clouds, atmosphere: state.atmosphere});
+  const response = await apiFetch(`clouds?${params}`);
+  if (!response.ok) {
+    const message = (await response.json().catch(() => ({error: response.statusText}))).error;
+    throw new Error(message);
+  }
+  viewer.setClouds(decodeClouds(await response.arrayBuffer(), viewer.layout));
+}
+
 // The sun and the stars for a time and place from the server's ephemeris; the site moves
 // there (and a ground camera with it). Throws with the server's message for a bad input.
 async function applySky(viewer, time, lat, lon) {
@@ -424,8 +526,16 @@ async function main() {
     }
   };
   const sky = (time, lat, lon) => applySky(viewer, time, lat, lon);
-  window.skyscatter = {viewer, state, reload, sky, benchmark: (n) => viewer.benchmark(n)};
-  const refreshControls = bindControls(viewer, description, reload, sky);
+  const reloadClouds = async () => {
+    try {
+      await loadClouds(viewer);
+      document.body.dataset.clouds = state.clouds;
+    } catch (error) {
+      showError(error.message);
+    }
+  };
+  window.skyscatter = {viewer, state, reload, sky, reloadClouds, benchmark: (n) => viewer.benchmark(n)};
+  const refreshControls = bindControls(viewer, description, reload, sky, reloadClouds);
   // Frame times: the intervals between animation frames that drew (while the view moves)
   let previous = null;
   const loop = (time) => {
@@ -441,7 +551,8 @@ async function main() {
     viewer.pollTimer();
     requestAnimationFrame(loop);
   };
-  await reload();
+  await Promise.all([reload(), reloadClouds()]);
+  viewer.frame();
   if (state.time) {
     try { await sky(state.time, state.site_lat, state.site_lon); } catch (error) { showError(error.message); }
     refreshControls();

@@ -107,18 +107,10 @@ vec4 enter_atmosphere(vec3 origin, vec3 dir) {
     return vec4(origin + d * dir, 1.0);
 }
 
-// twin of sky_radiance_rays (day branch): sum_s p_s(nu) S_s + M, plus for rays that hit the
-// ground the Lambertian ground lit by the sun and the sky, seen through the air
-vec3 sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir) {
-    vec4 entry = enter_atmosphere(origin, dir);
-    if (entry.w == 0.0) return vec3(0.0);
-    vec3 x = entry.xyz;
-    float r = length(x);
-    float mu = dot(x, dir) / r;
-    float mu_s = dot(x, sun_dir) / r;
-    float nu = dot(dir, sun_dir);
-    r = clamp(r, u_bottom_radius, u_top_radius);
-    bool hits_ground = ray_intersects_ground(r, mu, u_bottom_radius);
+// Single scattering of each constituent with its phase function, plus the orders >= 2, at
+// (r, mu, mu_s, nu) in the half of the mu axis `hits_ground` names (twin of
+// scattering_corners + scattering_lookup with the phase weights)
+vec3 sky_scattering(float r, float mu, float mu_s, float nu, bool hits_ground) {
     float u_r = scattering_u_r(r, u_bottom_radius, u_top_radius, u_scattering_shape.x);
     float u_mu = scattering_u_mu(r, mu, hits_ground, u_bottom_radius, u_top_radius,
                                  u_scattering_shape.y);
@@ -134,16 +126,68 @@ vec3 sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir) {
         vec3 weight = t < u_n_tables - 1 ? phase_value(t, nu) : vec3(1.0);
         radiance += weight * scattering_table(t, u_r, u_mu, u_mu_s, i_nu, a_nu);
     }
+    return radiance;
+}
+
+// twin of sky_radiance_rays (day branch): sum_s p_s(nu) S_s + M, plus for rays that hit the
+// ground the Lambertian ground lit by the sun and the sky, seen through the air; the part
+// `ground_sunlit` of the sunlight reaches the ground (the clouds' shadow: surfaces.py)
+vec3 sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir, float ground_sunlit) {
+    vec4 entry = enter_atmosphere(origin, dir);
+    if (entry.w == 0.0) return vec3(0.0);
+    vec3 x = entry.xyz;
+    float r = length(x);
+    float mu = dot(x, dir) / r;
+    float mu_s = dot(x, sun_dir) / r;
+    float nu = dot(dir, sun_dir);
+    r = clamp(r, u_bottom_radius, u_top_radius);
+    bool hits_ground = ray_intersects_ground(r, mu, u_bottom_radius);
+    vec3 radiance = sky_scattering(r, mu, mu_s, nu, hits_ground);
     if (hits_ground) {
         float d = distance_to_bottom_boundary(r, mu, u_bottom_radius);
         float mu_s_g = clamp((r * mu_s + d * nu) / u_bottom_radius, -1.0, 1.0);
         vec3 t_view = transmittance_along(r, mu, d, true);
         float direct = max(mu_s_g, 0.0) * sun_visible_fraction(u_bottom_radius, mu_s_g);
         vec3 t_sun = transmittance_to_top(u_bottom_radius, max(mu_s_g, 0.0));
-        vec3 ground = u_sun_irradiance * t_sun * direct + irradiance_lookup(u_bottom_radius, mu_s_g);
+        vec3 ground = u_sun_irradiance * t_sun * direct * ground_sunlit
+                      + irradiance_lookup(u_bottom_radius, mu_s_g);
         radiance += u_ground_albedo / PI * ground * t_view;
     }
     return radiance;
+}
+
+// The air between the observer at `origin` and `point` (twin of _aerial_point by day): the
+// light it scatters towards the observer, S(x, v) - T(x, p) S(p, v) with both lookups in the
+// half of the mu axis of the ray at x (Bruneton 2017, GetSkyRadianceToPoint), into
+// `inscattered`; returns the segment's transmittance T(x, p)
+vec3 aerial_perspective(vec3 origin, vec3 point, vec3 sun_dir, out vec3 inscattered) {
+    inscattered = vec3(0.0);
+    vec3 dir = point - origin;
+    float d = length(dir);
+    if (!(d > 0.0)) return vec3(1.0);
+    dir /= d;
+    vec4 entry = enter_atmosphere(origin, dir);
+    if (entry.w == 0.0) return vec3(1.0);
+    vec3 x = entry.xyz;
+    d -= length(x - origin);
+    if (d <= 0.0) return vec3(1.0);
+    float r = length(x);
+    float mu = dot(x, dir) / r;
+    float mu_s = dot(x, sun_dir) / r;
+    float nu = dot(dir, sun_dir);
+    r = clamp(r, u_bottom_radius, u_top_radius);
+    bool hits_ground = ray_intersects_ground(r, mu, u_bottom_radius);
+    d = min(d, hits_ground ? distance_to_bottom_boundary(r, mu, u_bottom_radius)
+                           : distance_to_top_boundary(r, mu, u_top_radius));
+    float r_p = sqrt(max(d * d + 2.0 * r * mu * d + r * r, 0.0));
+    float mu_p = clamp((r * mu + d) / r_p, -1.0, 1.0);
+    float mu_s_p = clamp((r * mu_s + d * nu) / r_p, -1.0, 1.0);
+    r_p = clamp(r_p, u_bottom_radius, u_top_radius);
+    vec3 transmittance = transmittance_along(r, mu, d, hits_ground);
+    inscattered = max(sky_scattering(r, mu, mu_s, nu, hits_ground)
+                      - transmittance * sky_scattering(r_p, mu_p, mu_s_p, nu, hits_ground),
+                      vec3(0.0));
+    return transmittance;
 }
 
 // The star's transmittance from `origin` towards `sun_dir` (twin of LutSolver.transmittance
