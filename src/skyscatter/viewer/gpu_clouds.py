@@ -49,9 +49,9 @@ import numpy as np
 
 from skyscatter.atmosphere.cloud_config import Clouds
 from skyscatter.atmosphere.cloud_field import cloud_field
-from skyscatter.errors import InputError
 from skyscatter.spectrum.colour import cmf_weights
 from skyscatter.transport.clouds import kernel_arrays
+from skyscatter.viewer.gpu_tables import unpack_message
 
 __all__ = ["CLOUD_FORMAT_VERSION", "CLOUD_LAYOUT", "CLOUD_MAGIC", "GpuClouds", "decode_clouds",
            "encode_clouds", "gpu_clouds"]
@@ -138,19 +138,4 @@ def encode_clouds(gpu: GpuClouds) -> bytes:
 
 def decode_clouds(message: bytes) -> GpuClouds:
     """Inverse of `encode_clouds` (for tests and tools; the viewer decodes in JavaScript)."""
-    if message[:4] != CLOUD_MAGIC or len(message) < 12:
-        raise InputError("not a skyscatter cloud message (no SKYC magic)", key="message",
-                         value=message[:4])
-    version, length = struct.unpack("<II", message[4:12])
-    if version != CLOUD_FORMAT_VERSION:
-        raise InputError(f"cloud message version {version}, expected {CLOUD_FORMAT_VERSION}",
-                         key="version", value=version)
-    header = json.loads(message[12:12 + length])
-    start = 12 + length
-    arrays = {}
-    for name, entry in header.pop("arrays").items():
-        count = int(np.prod(entry["shape"]))
-        dtype = "<f2" if entry["dtype"] == "float16" else "<f4"
-        arrays[name] = np.frombuffer(message, dtype, count, start + entry["offset"]).reshape(
-            entry["shape"])
-    return GpuClouds(header, arrays)
+    return GpuClouds(*unpack_message(message, (CLOUD_MAGIC, CLOUD_FORMAT_VERSION), "cloud"))

@@ -176,18 +176,28 @@ def encode(gpu: GpuTables) -> bytes:
 
 def decode(message: bytes) -> GpuTables:
     """Inverse of `encode` (for tests and tools; the viewer decodes in JavaScript)."""
-    if message[:4] != MAGIC or len(message) < 12:
-        raise InputError("not a skyscatter table message (no SKYT magic)", key="message",
-                         value=message[:4])
+    return GpuTables(*unpack_message(message, (MAGIC, FORMAT_VERSION), "table"))
+
+
+def unpack_message(message: bytes, magic_and_version: tuple[bytes, int],
+                   what: str) -> tuple[dict, dict[str, np.ndarray]]:
+    """(header, arrays) of a binary message: the magic, its version and the header's length
+    (little-endian uint32s), the JSON header, then the arrays at the header's offsets
+    (float16, or float32 where its entry's dtype says so)."""
+    magic, expected = magic_and_version
+    if message[:4] != magic or len(message) < 12:
+        raise InputError(f"not a skyscatter {what} message (no {magic.decode()} magic)",
+                         key="message", value=message[:4])
     version, length = struct.unpack("<II", message[4:12])
-    if version != FORMAT_VERSION:
-        raise InputError(f"table message version {version}, expected {FORMAT_VERSION}",
+    if version != expected:
+        raise InputError(f"{what} message version {version}, expected {expected}",
                          key="version", value=version)
     header = json.loads(message[12:12 + length])
     start = 12 + length
     arrays = {}
     for name, entry in header.pop("arrays").items():
         count = int(np.prod(entry["shape"]))
-        offset = start + entry["offset"]
-        arrays[name] = np.frombuffer(message, "<f2", count, offset).reshape(entry["shape"])
-    return GpuTables(header, arrays)
+        dtype = "<f4" if entry.get("dtype") == "float32" else "<f2"
+        arrays[name] = np.frombuffer(message, dtype, count, start + entry["offset"]).reshape(
+            entry["shape"])
+    return header, arrays

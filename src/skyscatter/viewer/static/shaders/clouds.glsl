@@ -446,16 +446,16 @@ vec2 march_clouds(vec3 v, float t_max, vec3 sun_dir, uint index, out vec3 trans,
 }
 
 // twin of _cloud_kernels.cloud_water_paths for one layer: its water path [g m^-2] from d
-// (relative to the camera) along `dir` to the ground or beyond the layer, midpoint steps of
-// STEP_M
-float layer_water_path(int layer, vec3 d, vec3 dir) {
+// (relative to the camera) along `dir` up to `max_distance` [m], the ground or beyond the
+// layer, midpoint steps of STEP_M
+float layer_water_path(int layer, vec3 d, vec3 dir, float max_distance) {
     vec3 o = u_camera_position + d;
     float r_o = length(o);
     float b = dot(o, dir);
-    float t_max = 1e30;
+    float t_max = max_distance;
     if (b < 0.0) {
         vec2 g = sphere_roots(b, r_o, u_bottom_radius);
-        if (g.x > -1e29) t_max = max(g.x, 0.0);
+        if (g.x > -1e29) t_max = min(t_max, max(g.x, 0.0));
     }
     vec2 t = sphere_roots(b, r_o, cloud_param(layer, CLOUD_TOP_R));
     if (t.x < -1e29) return 0.0;
@@ -482,36 +482,9 @@ float layer_water_path(int layer, vec3 d, vec3 dir) {
 // or the ground, midpoint steps of STEP_M
 vec3 cloud_transmittance(vec3 d, vec3 dir, float max_distance) {
     vec3 depth = vec3(0.0);
-    vec3 o = u_camera_position + d;
-    float r_o = length(o);
-    float b = dot(o, dir);
-    float t_max = max_distance;
-    if (b < 0.0) {
-        vec2 g = sphere_roots(b, r_o, u_bottom_radius);
-        if (g.x > -1e29) t_max = min(t_max, max(g.x, 0.0));
-    }
     for (int layer = 0; layer < MAX_CLOUD_LAYERS; ++layer) {
         if (layer >= u_cloud_layers) break;
-        float base_r = cloud_param(layer, CLOUD_BASE_R);
-        float top_r = cloud_param(layer, CLOUD_TOP_R);
-        bool sheet = cloud_param(layer, CLOUD_SHEET) > 0.0;
-        vec2 t = sphere_roots(b, r_o, top_r);
-        if (t.x < -1e29) continue;
-        vec2 s = sphere_roots(b, r_o, base_r);
-        if (s.x < -1e29) s = vec2(t.y);
-        float total = 0.0;
-        for (int k = 0; k < 2; ++k) {
-            float lo = k == 0 ? max(t.x, 0.0) : max(max(t.x, s.y), 0.0);
-            float hi = k == 0 ? min(min(t.y, s.x), t_max) : min(t.y, t_max);
-            if (!(hi > lo)) continue;
-            int steps = sheet ? 1 : min(MAX_STEPS, max(1, int(ceil((hi - lo) / STEP_M))));
-            float dt = (hi - lo) / float(steps);
-            for (int i = 0; i < MAX_STEPS; ++i) {
-                if (i >= steps) break;
-                total += cloud_water(layer, d + (lo + (float(i) + 0.5) * dt) * dir, true) * dt;
-            }
-        }
-        depth += cloud_optics(layer, 0) * total;
+        depth += cloud_optics(layer, 0) * layer_water_path(layer, d, dir, max_distance);
     }
     return exp(-depth);
 }
@@ -521,20 +494,15 @@ vec3 cloud_transmittance(vec3 d, vec3 dir, float max_distance) {
 // through `through` (the air's transmittance to there): T sum_s p_s(nu) S_s and T sum_s S_s
 void single_scattering_sums(float r, float mu, float mu_s, float nu, bool hits_ground,
                             vec3 through, out vec3 weighted, out vec3 plain) {
-    float u_r = scattering_u_r(r, u_bottom_radius, u_top_radius, u_scattering_shape.x);
-    float u_mu = scattering_u_mu(r, mu, hits_ground, u_bottom_radius, u_top_radius,
-                                 u_scattering_shape.y);
-    float u_mu_s = scattering_u_mu_s(mu_s, u_bottom_radius, u_top_radius, u_mu_s_min,
-                                     u_sun_angle_share, u_scattering_shape.z);
-    float f_nu = clamp(scattering_u_nu(nu, mu, mu_s) * (u_scattering_shape.w - 1.0), 0.0,
-                       u_scattering_shape.w - 1.0);
-    int i_nu = min(int(f_nu), int(u_scattering_shape.w) - 2);
-    float a_nu = f_nu - float(i_nu);
+    vec3 u;
+    int i_nu;
+    float a_nu;
+    scattering_coordinates(r, mu, mu_s, nu, hits_ground, u, i_nu, a_nu);
     weighted = vec3(0.0);
     plain = vec3(0.0);
     for (int t = 0; t < MAX_TABLES - 1; ++t) {
         if (t >= u_n_tables - 1) break;
-        vec3 table = scattering_table(t, u_r, u_mu, u_mu_s, i_nu, a_nu);
+        vec3 table = scattering_table(t, u.x, u.y, u.z, i_nu, a_nu);
         weighted += phase_value(t, nu) * table;
         plain += table;
     }
@@ -603,7 +571,7 @@ vec3 air_shadow_loss(vec3 v, vec3 sun_dir, float stop, uint index) {
         vec3 b_tau = vec3(0.0);
         for (int layer = 0; layer < MAX_CLOUD_LAYERS; ++layer) {
             if (layer >= u_cloud_layers) break;
-            vec3 depth = cloud_optics(layer, 0) * layer_water_path(layer, t * v, sun_dir);
+            vec3 depth = cloud_optics(layer, 0) * layer_water_path(layer, t * v, sun_dir, 1e30);
             tau += depth;
             b_tau += 0.5 * (1.0 - cloud_optics(layer, 2)) * depth;
         }

@@ -107,24 +107,34 @@ vec4 enter_atmosphere(vec3 origin, vec3 dir) {
     return vec4(origin + d * dir, 1.0);
 }
 
+// the scattering tables' coordinates (u_r, u_mu, u_mu_s) at (r, mu, mu_s) in the half of the
+// mu axis `hits_ground` names, and the nu node i_nu below nu with the weight a_nu of the next
+void scattering_coordinates(float r, float mu, float mu_s, float nu, bool hits_ground,
+                            out vec3 u, out int i_nu, out float a_nu) {
+    u.x = scattering_u_r(r, u_bottom_radius, u_top_radius, u_scattering_shape.x);
+    u.y = scattering_u_mu(r, mu, hits_ground, u_bottom_radius, u_top_radius,
+                          u_scattering_shape.y);
+    u.z = scattering_u_mu_s(mu_s, u_bottom_radius, u_top_radius, u_mu_s_min,
+                            u_sun_angle_share, u_scattering_shape.z);
+    float f_nu = clamp(scattering_u_nu(nu, mu, mu_s) * (u_scattering_shape.w - 1.0), 0.0,
+                       u_scattering_shape.w - 1.0);
+    i_nu = min(int(f_nu), int(u_scattering_shape.w) - 2);
+    a_nu = f_nu - float(i_nu);
+}
+
 // Single scattering of each constituent with its phase function, plus the orders >= 2, at
 // (r, mu, mu_s, nu) in the half of the mu axis `hits_ground` names (twin of
 // scattering_corners + scattering_lookup with the phase weights)
 vec3 sky_scattering(float r, float mu, float mu_s, float nu, bool hits_ground) {
-    float u_r = scattering_u_r(r, u_bottom_radius, u_top_radius, u_scattering_shape.x);
-    float u_mu = scattering_u_mu(r, mu, hits_ground, u_bottom_radius, u_top_radius,
-                                 u_scattering_shape.y);
-    float u_mu_s = scattering_u_mu_s(mu_s, u_bottom_radius, u_top_radius, u_mu_s_min,
-                                     u_sun_angle_share, u_scattering_shape.z);
-    float f_nu = clamp(scattering_u_nu(nu, mu, mu_s) * (u_scattering_shape.w - 1.0), 0.0,
-                       u_scattering_shape.w - 1.0);
-    int i_nu = min(int(f_nu), int(u_scattering_shape.w) - 2);
-    float a_nu = f_nu - float(i_nu);
+    vec3 u;
+    int i_nu;
+    float a_nu;
+    scattering_coordinates(r, mu, mu_s, nu, hits_ground, u, i_nu, a_nu);
     vec3 radiance = vec3(0.0);
     for (int t = 0; t < MAX_TABLES; ++t) {
         if (t >= u_n_tables) break;
         vec3 weight = t < u_n_tables - 1 ? phase_value(t, nu) : vec3(1.0);
-        radiance += weight * scattering_table(t, u_r, u_mu, u_mu_s, i_nu, a_nu);
+        radiance += weight * scattering_table(t, u.x, u.y, u.z, i_nu, a_nu);
     }
     return radiance;
 }
