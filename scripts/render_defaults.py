@@ -2,7 +2,8 @@
 
 Earth at noon, Earth at sunset (fisheye + equirectangular panorama), mountains fading into
 the haze, Earth from space, Mars (gas and hematite-bearing Mie dust from physical parameters)
-in the afternoon and at sunset with its blue glow, the sky over Berlin at a date (21 June 2024,
+in the afternoon and at sunset with its blue glow, altocumulus at sunset with their shadows in
+the air, the sky over Berlin at a date (21 June 2024,
 21:30: sunset glow in the north-west; and a full-moon night with every star), all with multiple
 scattering from the precomputed tables (computed once per atmosphere, then reused from the
 cache): tone-mapped PNGs and linear EXRs (linear sRGB, 1.0 = 1 cd m^-2); and a short time-lapse
@@ -29,6 +30,10 @@ SCENES = [
                          "--terrain", "demo"]),
     ("earth_from_space", ["earth", "--camera", "orbit", "--distance-km", "20000", "--lat",
                           "30", "--sun-elevation", "15", "--sun-azimuth", "90"]),
+    ("earth_altocumulus_sunset", ["earth", "--clouds", "altocumulus", "--camera", "perspective",
+                                  "--fov", "75", "--aspect", "1.7778", "--size", "360",
+                                  "--heading", "270", "--pitch", "20", "--altitude", "2",
+                                  "--sun-elevation", "1", "--sun-azimuth", "265"]),
     ("mars_afternoon", ["mars-physical", "--sun-elevation", "35", "--sun-azimuth", "240"]),
     ("mars_sunset_glow", ["mars-physical", "--sun-elevation", "2", "--sun-azimuth", "270",
                           "--camera", "perspective", "--heading", "270", "--pitch", "20",
