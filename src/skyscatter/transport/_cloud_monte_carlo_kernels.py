@@ -18,8 +18,8 @@ kernels these call):
   nodes, dense at the forward peak), interpolated linearly in the node index i as the renderer
   reads them (`cloud_field.phase_table_index`); directions are drawn uniformly in cos(theta)
   within an interval chosen with mass 2 pi (p_i + p_i+1) / 2 (cos theta_i - cos theta_i+1)
-  (`tabulated_phase_cdf`) and weighted by p / proposal, so the estimate is unbiased for the
-  interpolated table.
+  (`_monte_carlo_kernels.tabulated_phase_cdf`) and weighted by p / proposal, so the estimate
+  is unbiased for the interpolated table.
 - Random numbers: numba's per-thread Mersenne Twister, re-seeded at the start of every work
   unit (one ray, one wavelength, one batch of paths) from (seed, unit): the results do not
   depend on the number of threads.
@@ -60,27 +60,6 @@ SPLIT_WEIGHT = 2.0  # paths heavier than this split into copies (`random_walk`)
 STACK_SIZE = 64  # paths waiting per work unit (branches run first: a few are waiting)
 PEAK_DEG = 10.0  # the sun-centred proposal: the cloud phase functions' first PEAK_DEG degrees
 RATIO_ROULETTE = 0.05  # ratio tracking plays Russian roulette below this transmittance
-
-
-@njit(cache=True)
-def tabulated_phase_cdf(phase, cos_grid):
-    """Cumulative proposal masses (n_t, n_wl, n) of phase tables (n_t, n_wl, n) [sr^-1] on the
-    nodes cos_grid = cos(theta_i) (n,), theta increasing: the mass of interval i is
-    2 pi (p_i + p_i+1) / 2 (cos theta_i - cos theta_i+1), normalised to 1 (uniform in cos(theta)
-    where a table is zero)."""
-    n_t, n_wl, n = phase.shape
-    cdf = np.zeros((n_t, n_wl, n))
-    for s in range(n_t):
-        for w in range(n_wl):
-            total = 0.0
-            for i in range(n - 1):
-                total += TWO_PI * 0.5 * (phase[s, w, i] + phase[s, w, i + 1]) * (
-                    cos_grid[i] - cos_grid[i + 1])
-                cdf[s, w, i + 1] = total
-            for i in range(n):
-                cdf[s, w, i] = (cdf[s, w, i] / total if total > 0.0
-                                else 0.5 * (1.0 - cos_grid[i]))
-    return cdf
 
 
 @njit(cache=True)

@@ -55,23 +55,32 @@ FLIGHT, SCATTER, GROUND, LEAVE = 0, 1, 2, 3
 @njit(cache=True)
 def phase_cdf(phase):
     """Cumulative proposal masses (n_s, n_wl, n_angle) from phase tables (n_s, n_wl, n_angle)
-    [sr^-1] sampled at theta_i = pi i / (n_angle - 1); see the module doc. A row whose table is
-    zero everywhere gets a uniform (isotropic) proposal."""
-    n_s, n_wl, n_angle = phase.shape
-    cdf = np.zeros((n_s, n_wl, n_angle))
-    for s in range(n_s):
+    [sr^-1] sampled at theta_i = pi i / (n_angle - 1); see the module doc."""
+    n_angle = phase.shape[2]
+    cos_grid = np.empty(n_angle)
+    for i in range(n_angle):
+        cos_grid[i] = math.cos(math.pi * i / (n_angle - 1))
+    return tabulated_phase_cdf(phase, cos_grid)
+
+
+@njit(cache=True)
+def tabulated_phase_cdf(phase, cos_grid):
+    """Cumulative proposal masses (n_t, n_wl, n) of phase tables (n_t, n_wl, n) [sr^-1] on the
+    nodes cos_grid = cos(theta_i) (n,), theta increasing: the mass of interval i is
+    2 pi (p_i + p_i+1) / 2 (cos theta_i - cos theta_i+1), normalised to 1 (uniform in cos(theta)
+    where a table is zero)."""
+    n_t, n_wl, n = phase.shape
+    cdf = np.zeros((n_t, n_wl, n))
+    for s in range(n_t):
         for w in range(n_wl):
             total = 0.0
-            for i in range(n_angle - 1):
-                c0 = math.cos(math.pi * i / (n_angle - 1))
-                c1 = math.cos(math.pi * (i + 1) / (n_angle - 1))
-                total += TWO_PI * 0.5 * (phase[s, w, i] + phase[s, w, i + 1]) * (c0 - c1)
+            for i in range(n - 1):
+                total += TWO_PI * 0.5 * (phase[s, w, i] + phase[s, w, i + 1]) * (
+                    cos_grid[i] - cos_grid[i + 1])
                 cdf[s, w, i + 1] = total
-            for i in range(n_angle):
-                if total > 0.0:
-                    cdf[s, w, i] /= total
-                else:
-                    cdf[s, w, i] = 0.5 * (1.0 - math.cos(math.pi * i / (n_angle - 1)))
+            for i in range(n):
+                cdf[s, w, i] = (cdf[s, w, i] / total if total > 0.0
+                                else 0.5 * (1.0 - cos_grid[i]))
     return cdf
 
 

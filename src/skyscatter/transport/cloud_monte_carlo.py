@@ -228,7 +228,7 @@ def _peak_cdf(phase: np.ndarray, cos_grid: np.ndarray) -> np.ndarray:
     `PEAK_DEG` (`tabulated_phase_cdf` of the forward peak alone)."""
     theta_deg = np.degrees(np.arccos(np.clip(cos_grid, -1.0, 1.0)))
     n_peak = int(np.searchsorted(theta_deg, _cloud_monte_carlo_kernels.PEAK_DEG)) + 1
-    return _cloud_monte_carlo_kernels.tabulated_phase_cdf(
+    return _monte_carlo_kernels.tabulated_phase_cdf(
         np.ascontiguousarray(phase[:, :, :n_peak]), cos_grid[:n_peak])
 
 
@@ -287,7 +287,7 @@ def _cloud_arrays(field: CloudField) -> tuple:
             np.ascontiguousarray(field.textures),
             np.ascontiguousarray(field.mass_extinction_m2_g, dtype=np.float64),
             np.ascontiguousarray(field.single_scattering_albedo, dtype=np.float64), phase,
-            _cloud_monte_carlo_kernels.tabulated_phase_cdf(phase, cos_grid), cos_grid)
+            _monte_carlo_kernels.tabulated_phase_cdf(phase, cos_grid), cos_grid)
 
 
 def _regions(profile: OpticalProfile, field: CloudField, extinction: np.ndarray) -> tuple:

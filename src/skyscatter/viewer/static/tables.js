@@ -9,21 +9,29 @@ export async function fetchLayout() {
 
 // {header, arrays: {name: {shape, data: Uint16Array}}} from an ArrayBuffer
 export function decodeTables(buffer, layout) {
+  return unpackMessage(buffer, layout.magic, layout.format_version, "table");
+}
+
+// {header, arrays: {name: {shape, data}}} of a binary message (viewer/gpu_tables.py
+// unpack_message): magic, version and header length, the JSON header, then the arrays at its
+// offsets, float16 as Uint16Array unless the entry's dtype says float32
+function unpackMessage(buffer, magicExpected, formatVersion, what) {
   const bytes = new Uint8Array(buffer);
   const magic = String.fromCharCode(...bytes.slice(0, 4));
-  if (magic !== layout.magic) throw new Error("the server sent something that is not a table message");
+  if (magic !== magicExpected) throw new Error(`the server sent something that is not a ${what} message`);
   const view = new DataView(buffer);
   const version = view.getUint32(4, true);
-  if (version !== layout.format_version) {
-    throw new Error(`table message version ${version}; this page reads ${layout.format_version}: reload it`);
+  if (version !== formatVersion) {
+    throw new Error(`${what} message version ${version}; this page reads ${formatVersion}: reload it`);
   }
   const length = view.getUint32(8, true);
   const header = JSON.parse(new TextDecoder().decode(bytes.slice(12, 12 + length)));
   const start = 12 + length;
   const arrays = {};
   for (const [name, entry] of Object.entries(header.arrays)) {
-    const count = entry.shape.reduce((a, b) => a * b, 1);
-    arrays[name] = {shape: entry.shape, data: new Uint16Array(buffer, start + entry.offset, count)};
+    const count = entry.shape.reduce((x, y) => x * y, 1);
+    const Type = entry.dtype === "float32" ? Float32Array : Uint16Array;
+    arrays[name] = {shape: entry.shape, data: new Type(buffer, start + entry.offset, count)};
   }
   return {header, arrays};
 }
@@ -106,24 +114,7 @@ export function deleteTables(gl, tables) {
 // {header, arrays: {name: {shape, data}}} of a cloud message (viewer/gpu_clouds.py: float16
 // noise as Uint16Array, the rest Float32Array)
 export function decodeClouds(buffer, layout) {
-  const bytes = new Uint8Array(buffer);
-  const magic = String.fromCharCode(...bytes.slice(0, 4));
-  if (magic !== layout.clouds.magic) throw new Error("the server sent something that is not a cloud message");
-  const view = new DataView(buffer);
-  const version = view.getUint32(4, true);
-  if (version !== layout.clouds.format_version) {
-    throw new Error(`cloud message version ${version}; this page reads ${layout.clouds.format_version}: reload it`);
-  }
-  const length = view.getUint32(8, true);
-  const header = JSON.parse(new TextDecoder().decode(bytes.slice(12, 12 + length)));
-  const start = 12 + length;
-  const arrays = {};
-  for (const [name, entry] of Object.entries(header.arrays)) {
-    const count = entry.shape.reduce((a, b) => a * b, 1);
-    const Type = entry.dtype === "float16" ? Uint16Array : Float32Array;
-    arrays[name] = {shape: entry.shape, data: new Type(buffer, start + entry.offset, count)};
-  }
-  return {header, arrays};
+  return unpackMessage(buffer, layout.clouds.magic, layout.clouds.format_version, "cloud");
 }
 
 function floatTexture(gl, internal, format, width, height, data) {
