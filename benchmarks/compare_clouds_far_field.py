@@ -51,7 +51,7 @@ def march(field, solver, origins, rays, sun):
         chosen = np.flatnonzero(index.ravel() == k)
         r, t = np.empty((chosen.size, n_wl)), np.empty((chosen.size, n_wl))
         _cloud_kernels.march_clouds(np.ascontiguousarray(origin), np.ascontiguousarray(
-            rays[chosen]), np.full(chosen.size, np.inf), field.bottom_radius_m, sun,
+            rays[chosen]), chosen, np.full(chosen.size, np.inf), field.bottom_radius_m, sun,
             kernel_arrays(field), arrays, r, t, np.empty(chosen.size),
             np.empty(chosen.size, dtype=np.bool_))
         radiance[chosen], transmittance[chosen] = r, t

@@ -75,6 +75,8 @@ def main() -> None:
     parser.add_argument("--size", type=int, default=32, help="image side [pixels]")
     parser.add_argument("--figure", default=None, help="write the comparison figure here")
     parser.add_argument("--cases", default=None, help="comma-separated case numbers (from 0)")
+    parser.add_argument("--renders", type=int, default=8,
+                        help="renderer passes averaged (each with its own jitter)")
     parser.add_argument("--reference-cache", default=None,
                         help="folder keeping the Monte Carlo images for reuse")
     args = parser.parse_args()
@@ -95,9 +97,10 @@ def main() -> None:
         rays = viewpoint.direction_to_world(directions[valid])
         sun = viewpoint.direction_to_world(sun_local)
         start = time.perf_counter()
-        ours = diffuse_radiance(solver, viewpoint.position_m, np.ascontiguousarray(rays), sun,
-                                clouds=field)
-        ours_s = time.perf_counter() - start
+        ours, ours_error = renderer_mean(args.renders, rays.shape[0], lambda order, v=viewpoint,
+                                         r=rays, s=sun, f=field: diffuse_radiance(
+            solver, v.position_m, np.ascontiguousarray(r[order]), s, clouds=f))
+        ours_s = (time.perf_counter() - start) / args.renders
         start = time.perf_counter()
         reference, error = monte_carlo(args, number, (profile, field, viewpoint, rays, sun))
         reference_s = time.perf_counter() - start
@@ -109,13 +112,52 @@ def main() -> None:
             mean_ours, mean_reference = ours[:, k].mean(), reference[:, k].mean()
             mean_noise = np.sqrt(np.sum(error[:, k] ** 2)) / rays.shape[0] / mean_reference
             print(f"  {wavelength:.0f} nm: image mean {mean_ours:.4g} vs {mean_reference:.4g} "
-                  f"({mean_ours / mean_reference - 1:+.1%}, reference noise {mean_noise:.2%}); "
+                  f"({mean_ours / mean_reference - 1:+.1%}, renderer noise "
+                  f"{ours_error[k] / mean_ours:.2%}, reference noise {mean_noise:.2%}); "
                   f"per pixel median |e| {np.median(np.abs(relative[:, k])):.1%}, 90th "
                   f"percentile {np.percentile(np.abs(relative[:, k]), 90):.1%}; reference "
                   f"median relative standard error {np.median(noise[:, k]):.1%}")
+        print_breakdown(cloud_transmittance(field, viewpoint.position_m, rays)[:, 1],
+                        ours[:, 1], reference[:, 1])
         rows.append((name, directions.shape[:2], valid, ours[:, 1], reference[:, 1]))
     if args.figure:
         write_figure(rows, args.figure)
+
+
+TRANSMITTANCE_CLASSES = (("clear sky (T > 0.9)", 0.9, 1.01),
+                         ("thin edges (1e-3 < T < 0.3)", 1e-3, 0.3),
+                         ("cloud bodies (T < 1e-3)", -1.0, 1e-3))
+
+
+def print_breakdown(transmittance: np.ndarray, ours: np.ndarray, reference: np.ndarray) -> None:
+    """At 550 nm, per class of the clouds' transmittance along the pixels: their share of the
+    reference's light and the renderer's total over them against the reference's."""
+    for label, low, high in TRANSMITTANCE_CLASSES:
+        chosen = (transmittance > low) & (transmittance <= high)
+        if chosen.any():
+            share = reference[chosen].sum() / reference.sum()
+            print(f"    {label}: {chosen.sum()} pixels, {share:.0%} of the light, renderer "
+                  f"{ours[chosen].sum() / reference[chosen].sum() - 1:+.1%} (median "
+                  f"{np.median(ours[chosen] / reference[chosen] - 1):+.1%})")
+
+
+def renderer_mean(passes: int, n: int, render) -> tuple[np.ndarray, np.ndarray]:
+    """The renderer's expected image (n, n_wl) of n rays and the standard error of its image
+    mean (n_wl,): each ray's jitter follows from its index among the rays rendered
+    (`_cloud_kernels`), so `render(order)` of the rays in `passes` shuffled orders gives
+    independent passes."""
+    generator = np.random.default_rng(19)
+    images = []
+    for number in range(passes):
+        order = generator.permutation(n) if number else np.arange(n)
+        image = np.empty_like(values := render(order))
+        image[order] = values
+        images.append(image)
+    images = np.stack(images)
+    means = images.mean(axis=1)  # (passes, n_wl)
+    spread = means.std(axis=0, ddof=1) / np.sqrt(passes) if passes > 1 else np.zeros(
+        means.shape[1])
+    return images.mean(axis=0), spread
 
 
 def monte_carlo(args, number: int, scene) -> tuple[np.ndarray, np.ndarray]:

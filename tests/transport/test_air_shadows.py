@@ -133,4 +133,5 @@ def test_a_thick_deck_dims_the_air_below_it(solver):
                              max_distance=limit)
     loss = air_shadows(solver, field, origin, rays, sun, stop=limit).loss(solver, rays, limit)
     assert np.all(loss > 0.0)
-    assert shaded == pytest.approx(np.maximum(behind - loss, 0.0), rel=1e-12)
+    # rel 1e-6: the composite keeps the clouds' transmittance and added light in float32
+    assert shaded == pytest.approx(np.maximum(behind - loss, 0.0), rel=1e-6)

@@ -75,6 +75,7 @@ __all__ = [
     "column_statistics",
     "coverage_map_factor",
     "coverage_map_factors",
+    "edge_margin",
     "grid_water",
     "layer_datum",
     "layer_water",
@@ -243,7 +244,7 @@ def _profile(profiles, layer, n_nodes, h):
 def layer_water(params, profiles, textures, layer, x, y, z, r):
     """Water content w [g m^-3] of `layer` at the world point (x, y, z), |p| = r [m]
     (module docstring); 0 outside the layer's shell."""
-    return _water(params, profiles, textures, layer, x, y, z, r, True)
+    return _water(params, profiles, textures, layer, x, y, z, r, True, False)
 
 
 @njit(cache=True)
@@ -251,18 +252,29 @@ def smooth_layer_water(params, profiles, textures, layer, x, y, z, r):
     """`layer_water` without the detail noise's erosion: the water the renderer's light paths
     march (the erosion's small-scale holes hardly change a path's total, and skipping it
     saves one of three texture reads)."""
-    return _water(params, profiles, textures, layer, x, y, z, r, False)
+    return _water(params, profiles, textures, layer, x, y, z, r, False, False)
+
+
+@njit(cache=True)
+def edge_margin(params, profiles, textures, layer, x, y, z, r):
+    """Where the point lies on the layer's edge ramp, in ramps: the shape noise's excess over
+    the coverage threshold divided by the ramp's width (> 0 inside the smooth cloud, < 0
+    outside: -1 is a ramp's width of noise below the threshold; -1e9 where the coverage is
+    0, outside the shell and for grid layers)."""
+    if params[layer, GRID_NX] > 0.0:
+        return -1e9
+    return _water(params, profiles, textures, layer, x, y, z, r, False, True)
 
 
 @njit(cache=True, inline="always")
-def _water(params, profiles, textures, layer, x, y, z, r, detail):
+def _water(params, profiles, textures, layer, x, y, z, r, detail, margin):
     """`layer_water`, with the detail noise's erosion when `detail`; a grid layer's
-    `grid_water`."""
+    `grid_water`; with `margin`, `edge_margin` instead."""
     if params[layer, GRID_NX] > 0.0:
         return grid_water(params, profiles, layer, x, y, z, r)
     base, top = params[layer, BASE_R], params[layer, TOP_R]
     if r < base or r > top:
-        return 0.0
+        return -1e9 if margin else 0.0
     h = 0.5 if params[layer, SHEET] > 0.0 else (r - base) / (top - base)
     # the coverage map is fixed to the planet: read at p, before the wind moves the noise
     factor = 1.0
@@ -290,10 +302,12 @@ def _water(params, profiles, textures, layer, x, y, z, r, detail):
         weather = sample_texture(textures, layer, 0, z * large, x * large, y * large)
         coverage *= 1.0 + variation * (2.0 * weather - 1.0)
     if coverage <= 0.0:
-        return 0.0
+        return -1e9 if margin else 0.0
     coverage = min(coverage, 1.0)
     shape = sample_texture(textures, layer, 0, x * tile, y * tile, z * tile)
     d = (shape - (1.0 - coverage)) / (params[layer, EDGE] * coverage)
+    if margin:
+        return d
     if d <= 0.0:
         return 0.0
     d = min(d, 1.0)
@@ -347,7 +361,7 @@ def column_statistics(params, profiles, textures, layer, side, n_columns, n_heig
             path = 0.0
             for k in range(n_heights):
                 r = base + (k + 0.5) * dh
-                path += _water(params, profiles, textures, layer, x, y, r, r, True) * dh
+                path += _water(params, profiles, textures, layer, x, y, r, r, True, False) * dh
             if path > 0.0:
                 paths[cloudy] = path
                 cloudy += 1

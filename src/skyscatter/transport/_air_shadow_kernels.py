@@ -75,10 +75,11 @@ def _exit(b, c, radius):
 
 
 @njit(cache=True, parallel=True)
-def shadow_loss(origin, directions, stretch, start_transmittance, sun, shadow_map, air,
-                clouds, out):
+def shadow_loss(origin, directions, ray_ids, stretch, start_transmittance, sun, shadow_map,
+                air, clouds, out):
     """out (n, n_wl): the sunlight [W m^-2 sr^-1 nm^-1] the air along each view ray no
-    longer scatters towards `origin` because clouds shade it (`transport.air_shadows`).
+    longer scatters towards `origin` because clouds shade it (`transport.air_shadows`); each
+    ray's jitter follows from its id in `ray_ids` (n,).
 
     `stretch` (n, 2): the distances [m] between which the ray is marched;
     `start_transmittance` (n, n_wl): the air's transmittance from `origin` to the first;
@@ -106,7 +107,7 @@ def shadow_loss(origin, directions, stretch, start_transmittance, sun, shadow_ma
         paths = np.empty(cloud_extinction.shape[0])
         all_at = np.empty(all_density.shape[0])
         scattering_at = np.empty(density.shape[0])
-        jitter = (float(hash32(i)) + 0.5) / 4294967296.0
+        jitter = (float(hash32(ray_ids[i])) + 0.5) / 4294967296.0
         length = t_b - t_a
         previous = t_a
         for j in range(SHADOW_SAMPLES):

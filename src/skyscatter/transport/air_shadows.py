@@ -63,10 +63,12 @@ class AirShadows:
     air: tuple
     clouds: tuple
 
-    def loss(self, solver, rays: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    def loss(self, solver, rays: np.ndarray, stop: np.ndarray,
+             ray_ids: np.ndarray | None = None) -> np.ndarray:
         """dL (n, n_wl) [W m^-2 sr^-1 nm^-1] (module docstring) along unit world `rays`
         (n, 3) up to `stop` (n,) [m] (a cloud, a surface; inf: the sky); rays outside the
-        region the map was made for are shaded from its nearest lines."""
+        region the map was made for are shaded from its nearest lines. `ray_ids` (n,) (default
+        0 .. n-1) seed each ray's jitter."""
         origin, sun = self.origin, self.sun
         stretch = _shaded_stretch(origin, rays, stop, float(solver.profile.bottom_radius_m),
                                   float(self.shadow_map[5][-1]))
@@ -74,6 +76,8 @@ class AirShadows:
         marched = np.flatnonzero(stretch[:, 1] > stretch[:, 0])
         if marched.size == 0:
             return loss
+        ids = np.arange(rays.shape[0]) if ray_ids is None else np.asarray(ray_ids)
+        ids = np.ascontiguousarray(ids[marched], dtype=np.int64)
         rays = np.ascontiguousarray(rays[marched])
         stretch = np.ascontiguousarray(stretch[marched])
         before = np.ones((marched.size, loss.shape[1]))
@@ -82,8 +86,8 @@ class AirShadows:
             starts = origin + stretch[away, :1] * rays[away]
             before[away] = solver.aerial_perspective(origin, starts, sun)[1]
         part = np.empty_like(before)
-        _air_shadow_kernels.shadow_loss(origin, rays, stretch, before, sun, self.shadow_map,
-                                        self.air, self.clouds, part)
+        _air_shadow_kernels.shadow_loss(origin, rays, ids, stretch, before, sun,
+                                        self.shadow_map, self.air, self.clouds, part)
         loss[marched] = part
         return loss
 

@@ -58,7 +58,8 @@ EV100_RANGE = (-10.0, 20.0)
 # The march's constants the shader shares with transport._cloud_kernels (same names)
 CLOUD_KERNEL_CONSTANTS = ("STEP_M", "STEP_GROWTH", "COARSE_STEPS", "EMPTY_TO_COARSE", "MAX_STEPS",
                           "EDGE_BISECTIONS", "OPTICAL_STEP", "MIN_STEP_M", "LIGHT_FIRST_M",
-                          "LIGHT_MAX_M", "AMBIENT_FIRST_M", "TRANSMITTANCE_CUTOFF")
+                          "LIGHT_MAX_M", "AMBIENT_FIRST_M", "TRANSMITTANCE_CUTOFF",
+                          "NEAR_EDGE", "NEAR_STEP_M")
 # The columns of `CloudField.params` the shader and the page read, by name (their numbers come
 # from atmosphere._cloud_sampling, which may add columns)
 CLOUD_COLUMNS = ("BASE_R", "TOP_R", "COVERAGE", "WATER", "INV_SCALE", "INV_DETAIL_SCALE",

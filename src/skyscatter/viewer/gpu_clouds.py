@@ -27,6 +27,9 @@ parameter table, and lights it as `transport._cloud_kernels` does. What changes 
   (from `_cloud_sampling`, by `codegen`): the page fills the wind's columns (offset, along)
   from the place and the clouds' time itself, as `cloud_field` does with `to_world` and
   `time_s`.
+* The share of the sky's light the ground keeps under the clouds (`transport.clouds.
+  ground_shade`, weighted as the optics) in the header: the page keeps the preset's when its
+  coverage control changes the coverage.
 
 Message layout (`encode`): b"SKYC", uint32 format version, uint32 header length n, n bytes of
 UTF-8 JSON header, zero padding to a multiple of 4, then the arrays (little-endian) at the byte
@@ -50,7 +53,7 @@ import numpy as np
 from skyscatter.atmosphere.cloud_config import Clouds
 from skyscatter.atmosphere.cloud_field import cloud_field
 from skyscatter.spectrum.colour import cmf_weights
-from skyscatter.transport.clouds import kernel_arrays
+from skyscatter.transport.clouds import ground_shade, kernel_arrays
 from skyscatter.viewer.gpu_tables import unpack_message
 
 __all__ = ["CLOUD_FORMAT_VERSION", "CLOUD_LAYOUT", "CLOUD_MAGIC", "GpuClouds", "decode_clouds",
@@ -110,6 +113,7 @@ def gpu_clouds(clouds: Clouds, bottom_radius_m: float, wavelengths_nm: np.ndarra
         "mass_extinction_xyz_m2_g": _weighted(extinction, weights).tolist(),
         "single_scattering_albedo_xyz": _weighted(albedo, weights).tolist(),
         "asymmetry_xyz": _weighted(asymmetry, weights).tolist(),
+        "ground_shade_xyz": _weighted(ground_shade(field), weights).tolist(),
     }
     arrays = {
         "noise": noise.reshape(field.n_layers * (n + 1), n, n, 2),

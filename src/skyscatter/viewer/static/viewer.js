@@ -119,7 +119,10 @@ class Viewer {
     const layers = header.n_layers;
     const max = this.layout.clouds.max_layers;
     const origins = new Float32Array(9 * max);
-    if (!layers) return {u_cloud_layers: 0, u_cloud_origin: origins, u_cloud_texture_size: 1};
+    if (!layers) {
+      return {u_cloud_layers: 0, u_cloud_origin: origins, u_cloud_texture_size: 1,
+              u_cloud_ground_shade: [1, 1, 1]};
+    }
     const s = this.state;
     const columns = this.layout.clouds.columns;
     const stride = clouds.params.length / layers;
@@ -155,7 +158,8 @@ class Viewer {
       uploadCloudParams(this.gl, clouds);
       clouds.uploaded = signature;
     }
-    return {u_cloud_layers: layers, u_cloud_origin: origins, u_cloud_texture_size: n};
+    return {u_cloud_layers: layers, u_cloud_origin: origins, u_cloud_texture_size: n,
+            u_cloud_ground_shade: header.ground_shade_xyz};
   }
 
   // The cloud textures on units 4-8 (always bound: stand-ins without clouds) and uniforms

@@ -30,6 +30,7 @@ uniform highp sampler2D u_cloud_profiles;   // RG32F (n_rows, n_layers), texelFe
 uniform highp sampler2D u_cloud_phase;      // RGB32F (CLOUD_PHASE_ANGLES, n_layers), XYZ
 uniform highp sampler2D u_cloud_optics;     // RGB32F (3, n_layers): k_ext [m^2 g^-1], albedo, g
 uniform float u_cloud_texture_size;         // n, texels per tile side
+uniform vec3 u_cloud_ground_shade;          // transport.clouds.ground_shade, XYZ
 uniform vec3 u_cloud_origin[3 * MAX_CLOUD_LAYERS];  // q_camera: shape, weather, detail [texels]
 
 float cloud_param(int layer, int column) {
@@ -69,17 +70,21 @@ float cloud_profile(int layer, int n_nodes, float h) {
 
 // twin of _cloud_sampling._water: water content [g m^-3] of `layer` at d from the camera,
 // with the detail noise's erosion when `detail`
-float cloud_water(int layer, vec3 d, bool detail) {
+// twin of _cloud_sampling.edge_margin: where d lies on the layer's edge ramp, in ramps (> 0
+// inside the smooth cloud; -1e9 outside the shell or where the coverage is 0); m: the point
+// moved by the wind and stretched, for the detail noise
+float cloud_ramp(int layer, vec3 d, out vec3 m) {
+    m = d;
     float r = length(u_camera_position + d);
     float base = cloud_param(layer, CLOUD_BASE_R);
     float top = cloud_param(layer, CLOUD_TOP_R);
-    if (r < base || r > top) return 0.0;
+    if (r < base || r > top) return -1e9;
     float h = cloud_param(layer, CLOUD_SHEET) > 0.0 ? 0.5 : (r - base) / (top - base);
     // moved by the wind (in q_camera), stretched along it
     vec3 along = vec3(cloud_param(layer, CLOUD_ALONG_X), cloud_param(layer, CLOUD_ALONG_Y),
                       cloud_param(layer, CLOUD_ALONG_Z));
     float stretch = cloud_param(layer, CLOUD_STRETCH_MINUS_ONE);
-    vec3 m = d - dot(d, along) * (stretch / (1.0 + stretch)) * along;
+    m = d - dot(d, along) * (stretch / (1.0 + stretch)) * along;
     float tile = cloud_param(layer, CLOUD_INV_SCALE) * u_cloud_texture_size;
     float coverage = cloud_param(layer, CLOUD_COVERAGE)
                      * cloud_profile(layer, int(cloud_param(layer, CLOUD_N_PROFILE)), h);
@@ -90,10 +95,15 @@ float cloud_water(int layer, vec3 d, bool detail) {
         float weather = sample_texture(layer, 0, u_cloud_origin[3 * layer + 1] + m.zxy * large);
         coverage *= 1.0 + variation * (2.0 * weather - 1.0);
     }
-    if (coverage <= 0.0) return 0.0;
+    if (coverage <= 0.0) return -1e9;
     coverage = min(coverage, 1.0);
     float shape = sample_texture(layer, 0, u_cloud_origin[3 * layer] + m * tile);
-    float density = (shape - (1.0 - coverage)) / (cloud_param(layer, CLOUD_EDGE) * coverage);
+    return (shape - (1.0 - coverage)) / (cloud_param(layer, CLOUD_EDGE) * coverage);
+}
+
+float cloud_water(int layer, vec3 d, bool detail) {
+    vec3 m;
+    float density = cloud_ramp(layer, d, m);
     if (density <= 0.0) return 0.0;
     density = min(density, 1.0);
     float strength = cloud_param(layer, CLOUD_DETAIL);
@@ -180,9 +190,9 @@ vec3 light_source(int layer, float r, float mu_s, float mu_view, float w_sun, fl
         b, g, k_ext * w_sun * slab_mu, k_ext * w_anti * slab_mu, direct, mu_view);
     vec3 d_up = k_ext * w_up;
     vec3 d_down = k_ext * w_down;
-    vec3 shade = 1.0 / (1.0 + b * (d_up + d_down));
     vec3 sky = down * slab_source(b, g, d_up, d_down, vec3(0.0), mu_view)
-               + up * shade * slab_source(b, g, d_down, d_up, vec3(0.0), -mu_view);
+               + up * u_cloud_ground_shade * slab_source(b, g, d_down, d_up, vec3(0.0),
+                                                         -mu_view);
     return sun * sun_phase * direct + max(diffuse_sun, vec3(0.0)) + max(sky, vec3(0.0));
 }
 
@@ -198,7 +208,7 @@ vec3 source_at(int layer, vec3 v, float t, vec3 sun_dir, vec3 sun_phase) {
     float len = min(exit_length(d, r, sun_dir, base_r, top_r), LIGHT_MAX_M);
     float w_sun = path_water(layer, d, sun_dir, len, LIGHT_FIRST_M);
     len = min(exit_length(d, r, -sun_dir, base_r, top_r), LIGHT_MAX_M);
-    float w_anti = path_water(layer, d, -sun_dir, len, LIGHT_FIRST_M);
+    float w_anti = path_water(layer, d, -sun_dir, len, AMBIENT_FIRST_M);
     float w_up = path_water(layer, d, up, top_r - r, AMBIENT_FIRST_M);
     float w_down = path_water(layer, d, -up, r - base_r, AMBIENT_FIRST_M);
     return light_source(layer, r, dot(up, sun_dir), dot(up, v), w_sun, w_anti, w_up, w_down,
@@ -295,13 +305,21 @@ void march_layer(int layer, vec3 v, float t0, float t1, float jitter_, vec3 sun_
         float t = s + jitter_ * step;
         float water = cloud_water(layer, t * v, true);
         if (water <= 0.0) {
-            empties += 1;
-            coarse = coarse || empties >= EMPTY_TO_COARSE;
-            thick_cap = 1e30;
+            vec3 m;
             refined = false;
             have_start = false;
             inside = false;
             last_empty = t;
+            if (cloud_ramp(layer, t * v, m) > -NEAR_EDGE) {  // near an edge: end the step here
+                empties = 0;
+                coarse = false;
+                thick_cap = NEAR_STEP_M;
+                s = t;
+                continue;
+            }
+            empties += 1;
+            coarse = coarse || empties >= EMPTY_TO_COARSE;
+            thick_cap = 1e30;
             s += step;
             continue;
         }
