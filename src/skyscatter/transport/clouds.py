@@ -145,7 +145,9 @@ def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndar
               else np.asarray(max_distance, dtype=np.float64))
     light = cloud_lighting(solver, field, origin) if lighting is None else lighting
     shadows = air_shadows(solver, field, origin, rays, sun, stop=limits)
-    over = _CloudsOver(rays.shape[0], field.wavelengths_nm.size)
+    # each ray's jitter from its pixel's index (row-major), as the viewer's shader has it
+    ids = np.arange(rays.shape[0]) if pixels is None else np.flatnonzero(pixels.ravel() >= 0)
+    over = _CloudsOver(ids, field.wavelengths_nm.size)
 
     def evaluate(indices: np.ndarray) -> None:
         for start in range(0, indices.size, CHUNK_RAYS):
@@ -166,9 +168,11 @@ class _CloudsOver:
     """Per ray (n, n_wl), float32: the clouds' transmittance T and what they add A to the
     radiance behind them, L = T L_behind + A (module docstring: T = T_c and
     A = -T_c S + max(S - dL, 0) + T_air L_c; a clear ray T = 1, A = -dL), and whether the ray
-    met a cloud."""
+    met a cloud; `ids` (n,) seed each ray's jitter."""
 
-    def __init__(self, n: int, n_wl: int) -> None:
+    def __init__(self, ids: np.ndarray, n_wl: int) -> None:
+        n = ids.size
+        self.ids = ids
         self.transmittance = np.ones((n, n_wl), dtype=np.float32)
         self.added = np.zeros((n, n_wl), dtype=np.float32)
         self.hit = np.zeros(n, dtype=np.bool_)
@@ -184,11 +188,13 @@ class _CloudsOver:
         radiance, transmittance = np.empty((n, n_wl)), np.empty((n, n_wl))
         depth, hit = np.empty(n), np.empty(n, dtype=np.bool_)
         _cloud_kernels.march_clouds(
-            origin, rays, order, limits, field.bottom_radius_m, sun, kernel_arrays(field),
+            origin, rays, self.ids[order], limits, field.bottom_radius_m, sun,
+            kernel_arrays(field),
             (light.r_nodes, light.mu_nodes, light.sun_air, light.sky_down, light.ground_up,
              light.sun_toa), radiance, transmittance, depth, hit)
         added = (np.zeros((n, n_wl)) if shadows is None
-                 else -shadows.loss(solver, rays, np.where(hit, depth, limits), order))
+                 else -shadows.loss(solver, rays, np.where(hit, depth, limits),
+                                    self.ids[order]))
         seen = np.flatnonzero(hit)
         if seen.size:
             points = origin + depth[seen, None] * rays[seen]

@@ -30,7 +30,7 @@ from skyscatter.render.tonemap import (
     OPERATORS,
 )
 from skyscatter.spectrum.colour import _SRGB_LINEAR_LIMIT, xyz_to_rgb
-from skyscatter.transport import _air_shadow_kernels, _cloud_kernels, air_shadows, clouds
+from skyscatter.transport import _air_shadow_kernels, _cloud_kernels, air_shadows
 from skyscatter.transport.table_parameterisation import SPREAD_MIN
 from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS
 from skyscatter.viewer.gpu_clouds import CLOUD_FORMAT_VERSION, CLOUD_LAYOUT, CLOUD_MAGIC
@@ -80,14 +80,13 @@ def _glsl_number(value: float | int) -> str:
 
 def _cloud_lines() -> list[str]:
     """The clouds' part of constants.glsl (atmosphere/_cloud_sampling.py,
-    transport/_cloud_kernels.py, transport/clouds.py, transport/air_shadows.py)."""
+    transport/_cloud_kernels.py, transport/air_shadows.py)."""
     lines = [f"#define CLOUD_{name} {index}" for name, index in cloud_columns().items()]
     lines += [f"#define CLOUD_N_PARAMS {_cloud_sampling.N_PARAMS}",
               f"#define CLOUD_PHASE_ANGLES {_cloud_sampling.PHASE_ANGLES}",
               f"const float COVERAGE_TILE_RATIO = {_cloud_sampling.COVERAGE_TILE_RATIO!r};",
               f"#define MAX_CLOUD_LAYERS {MAX_CLOUD_LAYERS}",
               f"#define MAX_PROFILE_NODES {MAX_PROFILE_NODES}",
-              f"#define CLOUD_CHUNK_RAYS {clouds.CHUNK_RAYS}",
               f"#define SHADOW_SAMPLES {_air_shadow_kernels.SHADOW_SAMPLES}",
               f"const float SHADOW_MAX_M = {float(air_shadows.SHADOW_MAX_M)!r};"]
     for name in CLOUD_KERNEL_CONSTANTS:
@@ -102,7 +101,7 @@ def constants_glsl() -> str:
     lines = [_HEADER.format(sources="viewer/gpu_tables.py, render/scene.py, render/tonemap.py, "
                                     "transport/table_parameterisation.py, transport/tables.py, "
                                     "spectrum/colour.py, atmosphere/_cloud_sampling.py, "
-                                    "transport/_cloud_kernels.py, transport/clouds.py, "
+                                    "transport/_cloud_kernels.py, "
                                     "transport/air_shadows.py"),
              f"const float PI = {math.pi!r};",
              f"const float SPREAD_MIN = {SPREAD_MIN!r};",

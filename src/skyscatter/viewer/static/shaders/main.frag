@@ -58,10 +58,9 @@ void main() {
         float sunlit = t_ground < 1e29
             ? cloud_transmittance(t_ground * dir, u_sun_direction, 1e30).y : 1.0;
         radiance = sky_radiance(u_camera_position, dir, u_sun_direction, sunlit);
-        // the ray's index in the CPU renderer's chunk of rays (the march's jitter)
+        // the pixel's row-major index: the march's jitter, as the CPU renderer numbers it
         uint row = uint(u_resolution.y - gl_FragCoord.y);
-        uint index = (row * uint(u_resolution.x) + uint(gl_FragCoord.x))
-                     % uint(CLOUD_CHUNK_RAYS);
+        uint index = row * uint(u_resolution.x) + uint(gl_FragCoord.x);
         radiance = clouds_in_front(dir, u_sun_direction, radiance, 1e30, index);
     } else {
         radiance = sky_radiance(u_camera_position, dir, u_sun_direction, 1.0);
