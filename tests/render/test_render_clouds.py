@@ -55,3 +55,16 @@ def test_earth_from_orbit_with_the_earth_weather_clouds(atmosphere):
     disk = clear[..., 1] > 0.0
     assert disk.sum() > 100 and np.all(np.isfinite(cloudy))
     assert cloudy[disk].mean() > 1.3 * clear[disk].mean()
+
+
+@pytest.mark.parametrize("camera", [api.FisheyeCamera(40), api.PerspectiveCamera(96, 64, 20.0)])
+def test_a_render_with_clouds_reports_every_ray_once(atmosphere, camera):
+    # The clouds' pass reports the rays it marches and those it interpolates (adaptive
+    # refinement, on the perspective's 0.2 deg pixels): together every ray of the camera,
+    # once, as the CLI's bar expects.
+    done = []
+    api.render(atmosphere, camera, 40.0, 135.0, 2.0, wavelengths_nm=WAVELENGTHS_NM,
+               clouds=api.load_clouds("cumulus"), progress=done.append)
+    assert sum(done) == int(camera.valid_mask().sum())
+    if isinstance(camera, api.PerspectiveCamera):
+        assert len(done) > 3  # the lattice, then each level: in steps, not at the end

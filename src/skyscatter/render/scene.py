@@ -180,13 +180,14 @@ def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light
     """Sky (and, with `ground`, surface) radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along world
     `rays` (n, 3) from `position`, lit from `world_light` with the profile's top-of-atmosphere
     irradiance; with `clouds` in front (`transport.clouds.clouds_in_front`, refined over the
-    image `pixels` (h, w) of ray indices where given)."""
+    image `pixels` (h, w) of ray indices where given). `progress(n)` counts the rays done
+    (with clouds, as their pass finishes them: the sky behind is quick)."""
     if clouds is not None:
         _check_cloud_solver(solver)
         behind, distance = _sky_and_surfaces(solver, position, rays, world_light,
-                                             ground or Ground(), clouds, progress)
+                                             ground or Ground(), clouds, None)
         return clouds_in_front(solver, clouds, position, rays, world_light, behind=behind,
-                               max_distance=distance, pixels=pixels)
+                               max_distance=distance, pixels=pixels, progress=progress)
     if ground is None:
         return solver.sky_radiance(position, rays, world_light, progress)
     return _sky_and_surfaces(solver, position, rays, world_light, ground, None, progress)[0]

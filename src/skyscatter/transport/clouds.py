@@ -30,6 +30,7 @@ unscaled transmittance (`cloud_transmittance`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -131,13 +132,16 @@ def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndar
                     sun: np.ndarray, *, behind: np.ndarray,
                     max_distance: np.ndarray | None = None,
                     lighting: CloudLighting | None = None,
-                    pixels: np.ndarray | None = None) -> np.ndarray:
+                    pixels: np.ndarray | None = None,
+                    progress: Callable[[int], None] | None = None) -> np.ndarray:
     """Radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along unit world `rays` (n, 3) from `origin`
     (3,) with the clouds of `field` in front of `behind` (n, n_wl), the radiance without them
     (module docstring), the sun along unit `sun` (3,). Rays stop at the planet's ground or
     at `max_distance` (n,) [m] (terrain). With `pixels` (h, w), the index of each pixel's ray
     (-1 where none), the clouds are marched on a coarse lattice first and between its points
-    only where neighbours differ by more than `REFINE_TOLERANCE` (`adaptive_pixels`)."""
+    only where neighbours differ by more than `REFINE_TOLERANCE` (`adaptive_pixels`).
+    `progress(n)` is told of the rays as they are marched or interpolated."""
+    report = progress or (lambda n: None)
     origin = np.ascontiguousarray(origin, dtype=np.float64)
     sun = np.ascontiguousarray(sun, dtype=np.float64)
     rays = np.ascontiguousarray(rays, dtype=np.float64)
@@ -151,14 +155,19 @@ def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndar
 
     def evaluate(indices: np.ndarray) -> None:
         for start in range(0, indices.size, CHUNK_RAYS):
-            over.march(solver, field, (origin, rays, limits, sun), (light, shadows),
-                       indices[start:start + CHUNK_RAYS])
+            chunk = indices[start:start + CHUNK_RAYS]
+            over.march(solver, field, (origin, rays, limits, sun), (light, shadows), chunk)
+            report(chunk.size)
+
+    def settle(targets: np.ndarray, neighbours: np.ndarray) -> np.ndarray:
+        agree = over.settle(targets, neighbours, behind)
+        report(int(agree.sum()))
+        return agree
 
     if pixels is None:
         evaluate(np.arange(rays.shape[0]))
     else:
-        refine(pixels, coarse_spacing(rays, pixels), evaluate,
-               lambda targets, neighbours: over.settle(targets, neighbours, behind))
+        refine(pixels, coarse_spacing(rays, pixels), evaluate, settle)
     result = np.multiply(behind, over.transmittance)
     result += over.added
     return np.maximum(result, 0.0, out=result)
