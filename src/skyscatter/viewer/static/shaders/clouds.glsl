@@ -310,11 +310,12 @@ void march_layer(int layer, vec3 v, float t0, float t1, float jitter_, vec3 sun_
             have_start = false;
             inside = false;
             last_empty = t;
-            if (cloud_ramp(layer, t * v, m) > -NEAR_EDGE) {  // near an edge: end the step here
+            if (cloud_ramp(layer, t * v, m) > -NEAR_EDGE) {  // near an edge: short steps
                 empties = 0;
                 coarse = false;
                 thick_cap = NEAR_STEP_M;
-                s = t;
+                // a long step is looked at again from its sample on, a short one is done
+                s = step > NEAR_STEP_M ? t : s + step;
                 continue;
             }
             empties += 1;
