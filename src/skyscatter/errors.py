@@ -6,10 +6,13 @@ bug in skyscatter (exit code 1).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
-__all__ = ["ConfigError", "InputError", "SkyscatterError"]
+__all__ = ["ConfigError", "InputError", "SkyscatterError", "read_user_file"]
+
+T = TypeVar("T")
 
 
 class SkyscatterError(Exception):
@@ -38,3 +41,22 @@ class ConfigError(SkyscatterError):
         self.key = key
         self.value = value
         self.allowed = allowed
+
+
+def read_user_file(path: str | Path, read: Callable[[Path], T], *, what: str, key: str,
+                   allowed: str) -> T:
+    """`read(path)` of a file a user named as `what` (argument or config `key`), with an
+    InputError naming the file for one that is missing or that `read` cannot decode (any
+    decoder's exception), saying what to give instead (`allowed`)."""
+    source = Path(path)
+    if not source.is_file():
+        raise InputError(f"{what} {source}: no such file", key=key, value=str(source),
+                         allowed=allowed)
+    try:
+        return read(source)
+    except InputError:
+        raise
+    except Exception as error:  # any decoder's complaint about a bad file
+        raise InputError(f"{what} {source}: cannot read it ({type(error).__name__}: {error}); "
+                         f"give {allowed}", key=key, value=str(source),
+                         allowed=allowed) from None

@@ -506,8 +506,8 @@ def test_refining_over_the_pixels_keeps_the_image_of_every_pixel_marched(solver)
     sun = _direction(40.0, 315.0)
     behind = solver.sky_radiance(origin, rays, sun)
     every = clouds_in_front(solver, field, origin, rays, sun, behind=behind)
-    pixels = np.arange(size * size).reshape(size, size)
-    refined = clouds_in_front(solver, field, origin, rays, sun, behind=behind, pixels=pixels)
+    refined = clouds_in_front(solver, field, origin, rays, sun, behind=behind,
+                              image_mask=np.ones((size, size), dtype=bool))
     assert np.std(every[:, 1]) > 0.5 * every[:, 1].mean()  # the frame holds clouds and sky
     assert abs(refined.mean() / every.mean() - 1.0) < 0.02
     assert np.median(np.abs(refined / every - 1.0)) < 0.01

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skyscatter.errors import InputError
+from skyscatter.errors import InputError, read_user_file
 
 __all__ = [
     "MAX_MAP_PIXELS",
@@ -98,17 +98,8 @@ def read_coverage_map(path: str | Path) -> np.ndarray:
     source = Path(path)
     allowed = ("an equirectangular grey PNG (8 or 16 bit) or a 2-D float .npy array, values "
                "0-1, at least 2 x 2 pixels")
-    if not source.is_file():
-        raise InputError(f"coverage map {source}: no such file", key="coverage_map",
-                         value=str(source), allowed=allowed)
-    try:
-        data = _read(source)
-    except InputError:
-        raise
-    except Exception as error:  # any decoder's complaint about a bad file
-        raise InputError(f"coverage map {source}: cannot read it ({type(error).__name__}: "
-                         f"{error}); give {allowed}", key="coverage_map", value=str(source),
-                         allowed=allowed) from None
+    data = read_user_file(source, _read, what="coverage map", key="coverage_map",
+                          allowed=allowed)
     if data.ndim != 2 or min(data.shape) < 2:
         raise InputError(f"coverage map {source}: shape {data.shape} is not allowed: {allowed}",
                          key="coverage_map", value=str(source), allowed=allowed)

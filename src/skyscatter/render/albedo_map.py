@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skyscatter.errors import InputError
+from skyscatter.errors import InputError, read_user_file
 from skyscatter.render.image_io import read_exr
 from skyscatter.spectrum.colour import decode_srgb_transfer
 from skyscatter.spectrum.reflectance import reflectance_from_rgb
@@ -46,17 +46,8 @@ class AlbedoMap:
     def from_image(cls, path: str | os.PathLike[str]) -> AlbedoMap:
         """Read a PNG/JPEG (8 or 16 bit, sRGB-encoded), EXR or .npy (linear) map."""
         source = Path(path)
-        if not source.is_file():
-            raise InputError(f"albedo map {source}: no such file", key="albedo_map",
-                             value=str(source))
-        try:
-            rgb = _read_linear_rgb(source)
-        except InputError:
-            raise
-        except Exception as error:  # any decoder's complaint about a bad file
-            raise InputError(f"albedo map {source}: cannot read it ({type(error).__name__}: "
-                             f"{error}); give a PNG, JPEG, EXR or .npy image", key="albedo_map",
-                             value=str(source)) from None
+        rgb = read_user_file(source, _read_linear_rgb, what="albedo map", key="albedo_map",
+                             allowed="a PNG, JPEG, EXR or .npy image")
         try:
             return cls(rgb)
         except InputError as error:

@@ -135,9 +135,9 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     profile = solver.profile
     directions, valid = camera.directions()
     world_sun = viewpoint.direction_to_world(sun_dir)
-    spectral = camera_image(directions, valid, profile.n_wavelengths, lambda rays, pixels: (
+    spectral = camera_image(directions, valid, profile.n_wavelengths, lambda rays, mask: (
         diffuse_radiance(solver, viewpoint.position_m, rays, world_sun, ground=ground,
-                         clouds=clouds, progress=progress, pixels=pixels)),
+                         clouds=clouds, progress=progress, image_mask=mask)),
         viewpoint)
     # The visible part of a setting disk shines along the grazing ray; the planet hides the rest
     position = viewpoint.position_m
@@ -159,35 +159,34 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
 def camera_image(directions: np.ndarray, valid: np.ndarray, n_wavelengths: int,
                  radiance_of: Callable[[np.ndarray, np.ndarray], np.ndarray],
                  viewpoint: Viewpoint) -> np.ndarray:
-    """(h, w, n_wl) image of `radiance_of(world rays (n, 3), pixels) -> (n, n_wl)` over a
-    camera's valid pixels (`directions` (h, w, 3) in the viewpoint's local frame; `pixels`
-    (h, w) the index of each pixel's ray, -1 where none); 0 elsewhere."""
+    """(h, w, n_wl) image of `radiance_of(world rays (n, 3), valid) -> (n, n_wl)` over a
+    camera's `valid` pixels (h, w) (`directions` (h, w, 3) in the viewpoint's local frame; the
+    rays are the valid pixels' in row-major order); 0 elsewhere."""
     world_directions = viewpoint.direction_to_world(directions)
-    pixels = np.full(valid.shape, -1)
-    pixels[valid] = np.arange(int(valid.sum()))
     if bool(valid.all()):  # perspective and panorama: no masking, no copies
-        radiance = radiance_of(world_directions.reshape(-1, 3), pixels)
+        radiance = radiance_of(world_directions.reshape(-1, 3), valid)
         return radiance.reshape(directions.shape[:2] + (n_wavelengths,))
     spectral = np.zeros(directions.shape[:2] + (n_wavelengths,))
-    spectral[valid] = radiance_of(np.ascontiguousarray(world_directions[valid]), pixels)
+    spectral[valid] = radiance_of(np.ascontiguousarray(world_directions[valid]), valid)
     return spectral
 
 
 def diffuse_radiance(solver, position: np.ndarray, rays: np.ndarray, world_light: np.ndarray,
                      *, ground: Ground | None = None, clouds: CloudField | None = None,
                      progress: Callable[[int], None] | None = None,
-                     pixels: np.ndarray | None = None) -> np.ndarray:
+                     image_mask: np.ndarray | None = None) -> np.ndarray:
     """Sky (and, with `ground`, surface) radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along world
     `rays` (n, 3) from `position`, lit from `world_light` with the profile's top-of-atmosphere
     irradiance; with `clouds` in front (`transport.clouds.clouds_in_front`, refined over the
-    image `pixels` (h, w) of ray indices where given). `progress(n)` counts the rays done
-    (with clouds, as their pass finishes them: the sky behind is quick)."""
+    image whose `image_mask` (h, w) pixels the rays are, where given). `progress(n)` counts
+    the rays done (with clouds, as their pass finishes them: the sky behind is quick)."""
     if clouds is not None:
         _check_cloud_solver(solver)
         behind, distance = _sky_and_surfaces(solver, position, rays, world_light,
                                              ground or Ground(), clouds, None)
         return clouds_in_front(solver, clouds, position, rays, world_light, behind=behind,
-                               max_distance=distance, pixels=pixels, progress=progress)
+                               max_distance=distance, image_mask=image_mask,
+                               progress=progress)
     if ground is None:
         return solver.sky_radiance(position, rays, world_light, progress)
     return _sky_and_surfaces(solver, position, rays, world_light, ground, None, progress)[0]

@@ -237,11 +237,11 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     glow = (objects.airglow and sky.body == "earth"
             and observer_radius < profile.bottom_radius_m + LOWEST_AIRGLOW_M)
 
-    def radiance_of(rays: np.ndarray, pixels: np.ndarray) -> np.ndarray:
+    def radiance_of(rays: np.ndarray, mask: np.ndarray) -> np.ndarray:
         total = np.zeros((rays.shape[0], profile.n_wavelengths)) if not lights else None
         for index, (world_light, scale) in enumerate(lights):  # the solver chunks the rays
             lit = diffuse_radiance(solver, position, rays, world_light, ground=ground,
-                                   clouds=clouds, pixels=pixels,
+                                   clouds=clouds, image_mask=mask,
                                    progress=progress if index == 0 else None)  # count once
             lit *= scale
             if index == 0:

@@ -292,8 +292,7 @@ def _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, sun_phase,
     against the segment's attenuation."""
     params, profiles, textures = cloud[0], cloud[1], cloud[2]
     extinction, albedo = cloud[3], cloud[4]
-    n_wl = trans.size
-    mid = n_wl // 2
+    mid = trans.size // 2
     start_source, end_source = scratch[0], scratch[1]
     s = t0
     last_empty = t0  # where the water was last seen to be 0 (or the layer's edge)
@@ -312,9 +311,7 @@ def _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, sun_phase,
         t = s + jitter * step
         water = _water_along(origin, v, t, layer, params, profiles, textures)
         if water <= 0.0:
-            xx, yy, zz = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
-            margin = edge_margin(params, profiles, textures, layer, xx, yy, zz,
-                                 math.sqrt(xx * xx + yy * yy + zz * zz))
+            margin = _margin_along(origin, v, t, layer, params, profiles, textures)
             refined = have_start = inside = False
             last_empty = t
             if margin > -NEAR_EDGE:
@@ -346,20 +343,8 @@ def _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, sun_phase,
                        scratch[2], scratch[3])
         _source_at(origin, v, s + step, layer, sun, cloud, light, sun_phase, end_source,
                    scratch[2], scratch[3])
-        sigma_mid = extinction[layer, mid] * water
-        extinct_mid = math.exp(-sigma_mid * step)
-        weight = trans[mid] * (1.0 - extinct_mid)
-        state[0] += weight * (s + _mean_depth(sigma_mid, step, extinct_mid))
-        state[1] += weight
-        alive = False
-        for k in range(n_wl):
-            sigma = extinction[layer, k] * water
-            e = math.exp(-sigma * step)
-            glow[k] += trans[k] * albedo[layer, k] * _segment_integral(
-                start_source[k], end_source[k], sigma, step, e)
-            trans[k] *= e
-            alive |= trans[k] > TRANSMITTANCE_CUTOFF
-        if not alive:
+        if not _add_segment(extinction[layer], albedo[layer], water, (s, step), start_source,
+                            end_source, trans, glow, (1.0, 1.0), state):
             state[3] = 1.0
             return
         start_source[:] = end_source
@@ -367,11 +352,45 @@ def _march_layer(origin, v, t0, t1, layer, jitter, sun, cloud, light, sun_phase,
         s += step
 
 
+@njit(cache=True)
+def _add_segment(extinction, albedo, water, segment, j0, j1, trans, glow, shares, state):
+    """One segment (start, length [m]) through `water` [g m^-3] with the source J going from
+    j0 to j1 (n_wl,) along it (module docstring), per band: glow += share_glow trans albedo
+    int J sigma e^(-sigma x) dx, trans *= e^(-sigma length); the mid band's extinction, times
+    share_depth, weights the segment's mean depth into state[0:2]. `shares` = (share_glow,
+    share_depth). Returns whether any band's transmittance is still above the cutoff."""
+    start, length = segment
+    share_glow, share_depth = shares
+    mid = trans.size // 2
+    sigma_mid = extinction[mid] * water
+    extinct_mid = math.exp(-sigma_mid * length)
+    weight = share_depth * trans[mid] * (1.0 - extinct_mid)
+    state[0] += weight * (start + _mean_depth(sigma_mid, length, extinct_mid))
+    state[1] += weight
+    alive = False
+    for k in range(trans.size):
+        sigma = extinction[k] * water
+        e = math.exp(-sigma * length)
+        glow[k] += trans[k] * albedo[k] * _segment_integral(j0[k], j1[k], sigma, length,
+                                                            e) * share_glow
+        trans[k] *= e
+        alive |= trans[k] > TRANSMITTANCE_CUTOFF
+    return alive
+
+
 @njit(cache=True, inline="always")
 def _water_along(origin, v, t, layer, params, profiles, textures):
     """Water content [g m^-3] of `layer` at distance t along the ray."""
     x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
     return layer_water(params, profiles, textures, layer, x, y, z,
+                       math.sqrt(x * x + y * y + z * z))
+
+
+@njit(cache=True, inline="always")
+def _margin_along(origin, v, t, layer, params, profiles, textures):
+    """`edge_margin` of `layer` at distance t along the ray."""
+    x, y, z = origin[0] + t * v[0], origin[1] + t * v[1], origin[2] + t * v[2]
+    return edge_margin(params, profiles, textures, layer, x, y, z,
                        math.sqrt(x * x + y * y + z * z))
 
 
@@ -632,21 +651,10 @@ def _cross_columns(origin, v, t0, t1, layer, sun, cloud, light, sun_phase, trans
                 dt = min(step, t1 - s)
                 _column_source_at(origin, v, s + dt, layer, water, sun, cloud, light,
                                   sun_phase, end_source, scratch[2], scratch[3])
-                sigma_mid = extinction[layer, mid] * water
-                extinct_mid = math.exp(-sigma_mid * dt)
-                weight = (trans[mid] * cover * COLUMN_SHARES[b] * column_t[mid]
-                          * (1.0 - extinct_mid))
-                state[0] += weight * (s + _mean_depth(sigma_mid, dt, extinct_mid))
-                state[1] += weight
-                alive = False
-                for k in range(n_wl):
-                    sigma = extinction[layer, k] * water
-                    e = math.exp(-sigma * dt)
-                    mean_glow[k] += column_t[k] * albedo[layer, k] * _segment_integral(
-                        start_source[k], end_source[k], sigma, dt, e) * COLUMN_SHARES[b]
-                    column_t[k] *= e
-                    alive |= column_t[k] > TRANSMITTANCE_CUTOFF
-                if not alive:
+                share = COLUMN_SHARES[b]
+                if not _add_segment(extinction[layer], albedo[layer], water, (s, dt),
+                                    start_source, end_source, column_t, mean_glow,
+                                    (share, trans[mid] * cover * share), state):
                     break
                 start_source[:] = end_source
                 s += dt

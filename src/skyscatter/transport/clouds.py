@@ -132,13 +132,13 @@ def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndar
                     sun: np.ndarray, *, behind: np.ndarray,
                     max_distance: np.ndarray | None = None,
                     lighting: CloudLighting | None = None,
-                    pixels: np.ndarray | None = None,
+                    image_mask: np.ndarray | None = None,
                     progress: Callable[[int], None] | None = None) -> np.ndarray:
     """Radiance (n, n_wl) [W m^-2 sr^-1 nm^-1] along unit world `rays` (n, 3) from `origin`
     (3,) with the clouds of `field` in front of `behind` (n, n_wl), the radiance without them
     (module docstring), the sun along unit `sun` (3,). Rays stop at the planet's ground or
-    at `max_distance` (n,) [m] (terrain). With `pixels` (h, w), the index of each pixel's ray
-    (-1 where none), the clouds are marched on a coarse lattice first and between its points
+    at `max_distance` (n,) [m] (terrain). With `image_mask` (h, w), whose True pixels the rays
+    are in row-major order, the clouds are marched on a coarse lattice first and between its points
     only where neighbours differ by more than `REFINE_TOLERANCE` (`adaptive_pixels`).
     `progress(n)` is told of the rays as they are marched or interpolated."""
     report = progress or (lambda n: None)
@@ -149,9 +149,10 @@ def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndar
               else np.asarray(max_distance, dtype=np.float64))
     light = cloud_lighting(solver, field, origin) if lighting is None else lighting
     shadows = air_shadows(solver, field, origin, rays, sun, stop=limits)
+    every_ray = np.arange(rays.shape[0])
     # each ray's jitter from its pixel's index (row-major), as the viewer's shader has it
-    ids = np.arange(rays.shape[0]) if pixels is None else np.flatnonzero(pixels.ravel() >= 0)
-    over = _CloudsOver(ids, field.wavelengths_nm.size)
+    over = _CloudsOver(every_ray if image_mask is None else np.flatnonzero(image_mask.ravel()),
+                       field.wavelengths_nm.size)
 
     def evaluate(indices: np.ndarray) -> None:
         for start in range(0, indices.size, CHUNK_RAYS):
@@ -164,9 +165,11 @@ def clouds_in_front(solver, field: CloudField, origin: np.ndarray, rays: np.ndar
         report(int(agree.sum()))
         return agree
 
-    if pixels is None:
-        evaluate(np.arange(rays.shape[0]))
+    if image_mask is None:
+        evaluate(every_ray)
     else:
+        pixels = np.full(image_mask.shape, -1)  # each pixel's ray, -1 where none
+        pixels[image_mask] = every_ray
         refine(pixels, coarse_spacing(rays, pixels), evaluate, settle)
     result = np.multiply(behind, over.transmittance)
     result += over.added
