@@ -51,9 +51,11 @@ PREFIX = ("#version 300 es\nprecision highp float;\nprecision highp int;\n"
 FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n"
 LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
            "shaders/sky.glsl", "shaders/tonemap.glsl"]
-PROGRAMS = {"sky": [*LIBRARY, "shaders/clouds.glsl", "shaders/main.frag"],
-            "composite": ["generated/constants.glsl", "shaders/tonemap.glsl",
-                          "shaders/composite.frag"]}
+SKY = [*LIBRARY, "shaders/clouds.glsl", "shaders/main.frag"]
+PROGRAMS = {"sky": (SKY, ""), "cloudy_sky": (SKY, "#define CLOUDS\n"),
+            "cloud_map": ([*LIBRARY, "shaders/clouds.glsl", "shaders/cloud_map.frag"], ""),
+            "composite": (["generated/constants.glsl", "shaders/tonemap.glsl",
+                           "shaders/composite.frag"], "")}
 # bench_viewer.py's VIEW and the page's defaults (controls.js NUMBERS)
 VIEW = {"sun_zenith": 60.0, "sun_azimuth": 200.0, "heading": 180.0, "pitch": 10.0,
         "roll": 0.0, "fov": 60.0, "fisheye_fov": 180.0, "altitude_m": 2.0, "lat": 45.0,
@@ -63,7 +65,8 @@ CLOUD_VIEW = dict(VIEW, sun_zenith=35.0, sun_azimuth=160.0, heading=150.0, pitch
                   ev100=13.5, cloud_time_s=600.0)
 CLOUD_PRESETS = ("cumulus", "stratocumulus")
 CLOUD_CASES = (("perspective", 1920, 1080), ("perspective", 1280, 720))
-CLOUD_UNITS = ("noise", "params", "profiles", "phase", "optics")  # texture units 4-8 (viewer.js)
+CLOUD_UNITS = ("noise", "profiles", "phase", "optics")  # texture units 4-7 (viewer.js)
+MAP_UNITS = ("low", "middle", "high")  # texture units 8-10: the clouds' shadow map (viewer.js)
 CASES = (("perspective", 1920, 1080), ("fisheye", 1080, 1080))
 CASE_DRAWS = (("sky pass", 1, False), ("frame (sky + composite)", 1, True),  # atmospheres,
               ("frame, 2 atmospheres", 2, True))                           # composite pass
@@ -121,7 +124,7 @@ def prepare(out: Path, cache_dir: str | None) -> None:
         arrays["cloud_params"] = params
         np.savez(out / f"clouds-{name}.npz", header=json.dumps(gpu.header),
                  view=json.dumps(view), clouds=json.dumps(uniforms), message_bytes=len(message),
-                 **arrays)
+                 map=json.dumps(_map_uniforms(params, site, view)), **arrays)
         print(f"clouds {name}: {len(message) / 2**20:.1f} MiB message")
 
 
@@ -130,6 +133,7 @@ def _cloud_uniforms(gpu, site, seconds: float) -> tuple[np.ndarray, dict]:
     clouds' time `seconds`: the parameter table with the wind's columns, the noise origins."""
     from skyscatter.atmosphere import _cloud_sampling as columns
     from skyscatter.atmosphere.cloud_config import MAX_CLOUD_LAYERS
+    from skyscatter.viewer.codegen import cloud_param_vec4s
 
     params = np.array(gpu.arrays["params"], dtype=np.float64)
     n = gpu.header["texture_size"]
@@ -150,9 +154,37 @@ def _cloud_uniforms(gpu, site, seconds: float) -> tuple[np.ndarray, dict]:
         origins[3 * layer] = np.mod(m * tile, n)
         origins[3 * layer + 1] = np.mod(m[[2, 0, 1]] * tile / columns.COVERAGE_TILE_RATIO, n)
         origins[3 * layer + 2] = np.mod(m * row[columns.INV_DETAIL_SCALE] * n, n)
+    packed = np.zeros((MAX_CLOUD_LAYERS, 4 * cloud_param_vec4s()))
+    packed[:len(params)] = params[:, :packed.shape[1]]
     return params.astype(np.float32), {
         "u_cloud_layers": int(gpu.header["n_layers"]), "u_cloud_texture_size": float(n),
-        "u_cloud_origin": origins.reshape(-1).tolist()}
+        "u_cloud_params": packed.reshape(-1).astype(np.float32).tolist(),
+        "u_cloud_origin": origins.reshape(-1).tolist(),
+        "u_cloud_ground_shade": list(gpu.header["ground_shade_xyz"])}
+
+
+def _map_uniforms(params: np.ndarray, site, view: dict) -> dict:
+    """viewer.js `drawCloudMap`'s uniforms of the shadow map for CLOUD_VIEW (a 16:9 image):
+    transport.air_shadows.map_frame over the rays of a 192 x 108 image (the page: 17 x 17)."""
+    from skyscatter.atmosphere import _cloud_sampling as columns
+    from skyscatter.render.camera import PerspectiveCamera
+    from skyscatter.transport.air_shadows import SHADOW_MAX_M, map_frame, shaded_stretch
+
+    v = CLOUD_VIEW
+    local, _ = PerspectiveCamera(192, 108, v["fov"], heading_deg=v["heading"],
+                                 pitch_deg=v["pitch"]).directions()
+    rays = site.direction_to_world(local.reshape(-1, 3))
+    low, high = float(params[:, columns.BASE_R].min()), float(params[:, columns.TOP_R].max())
+    origin = np.asarray(view["u_camera_position"])
+    sun = np.asarray(view["u_sun_direction"])
+    stretch = shaded_stretch(origin, rays, np.full(len(rays), np.inf),
+                             float(np.linalg.norm(origin) - v["altitude_m"]), high)
+    frame = map_frame(low, high, rays, stretch, sun)
+    assert frame is not None and stretch[:, 1].max() <= SHADOW_MAX_M + 1.0
+    return {"u_map_on": 1, "u_map_e1": frame.e1.tolist(), "u_map_e2": frame.e2.tolist(),
+            "u_map_corner": frame.corner.tolist(), "u_map_texel": frame.texel,
+            "u_map_size": list(frame.shape),
+            "u_map_levels": [low, float(frame.levels[1] - frame.levels[0])]}
 
 
 def _source(names: list[str]) -> str:
@@ -166,18 +198,54 @@ class Frame:
     def __init__(self, ctx, tables: list[dict]) -> None:
         self.ctx = ctx
         self.version_line = "#version 300 es"
-        self.programs = {key: self._program(_source(names)) for key, names in PROGRAMS.items()}
+        self.programs = {key: self._program(defines + _source(names))
+                         for key, (names, defines) in PROGRAMS.items()}
         quad = ctx.buffer(np.array([-1, -1, 3, -1, -1, 3], dtype="f4").tobytes())
         self.quads = {key: ctx.vertex_array(program, [(quad, "2f", "position")])
                       for key, program in self.programs.items()}
         self.tables = [self._upload(t) for t in tables]
         self.clouds = self._upload_clouds(None)
+        self.map = None  # the clouds' shadow map (`set_clouds`)
         self.view = None  # the tables' view; the clouds' own with clouds (`set_clouds`)
 
     def set_clouds(self, data: dict | None) -> None:
-        """Draw `data`'s clouds (a clouds-NAME.npz, loaded) in its view, or none."""
+        """Draw `data`'s clouds (a clouds-NAME.npz, loaded) in its view, or none; with clouds,
+        the shadow map's targets (viewer.js mapTargets: three RGBA16F textures, linear)."""
+        import moderngl
+
         self.clouds = self._upload_clouds(data)
         self.view = None if data is None else data["view"]
+        self.map = None
+        if data is not None:
+            n_u, n_w = data["map"]["u_map_size"]
+            size = (n_u, n_w * data["header"]["n_layers"])
+            textures = [self.ctx.texture(size, 4, dtype="f2") for _ in MAP_UNITS]
+            for texture in textures:
+                texture.filter = (moderngl.LINEAR, moderngl.LINEAR)
+                texture.repeat_x = texture.repeat_y = False
+            self.map = {"textures": textures, "framebuffer": self.ctx.framebuffer(textures),
+                        "uniforms": data["map"]}
+
+    def draw_map(self) -> None:
+        """Viewer.drawCloudMap: cloud_map.frag, one pass a layer into its rows of the map."""
+        program = self.programs["cloud_map"]
+        self._bind_clouds(program)
+        view = self.view
+        self._set(program, {**self.map["uniforms"], "u_camera_position": view["u_camera_position"],
+                            "u_sun_direction": view["u_sun_direction"]})
+        self.map["framebuffer"].use()
+        n_u, n_w = self.map["uniforms"]["u_map_size"]
+        for layer in range(self.clouds["uniforms"]["u_cloud_layers"]):
+            self.ctx.viewport = (0, layer * n_w, n_u, n_w)
+            program["u_map_layer"].value = layer
+            self.quads["cloud_map"].render(vertices=3)
+
+    def _bind_clouds(self, program) -> None:
+        """Viewer.bindClouds: the cloud textures on units 4-8 and their uniforms."""
+        for unit, name in enumerate(CLOUD_UNITS, start=4):
+            self.clouds["textures"][name].use(location=unit)
+            self._set(program, {f"u_cloud_{name}": unit})  # the map pass reads only some
+        self._set(program, self.clouds["uniforms"])
 
     def resize(self, width: int, height: int) -> None:
         """Targets of w x h: the float frame (RGBA16F, as Viewer.target) and the canvas (RGBA8)."""
@@ -253,8 +321,9 @@ class Frame:
         if data is None:
             noise = ctx.texture3d((1, 1, 1), 2, np.zeros(2, "f2").tobytes(), dtype="f2")
             flat = {key: np.zeros((1, 1, width), "f4") for key, width in
-                    (("params", 1), ("profiles", 2), ("phase", 3), ("optics", 3))}
-            uniforms = {"u_cloud_layers": 0, "u_cloud_texture_size": 1.0}
+                    (("profiles", 2), ("phase", 3), ("optics", 3))}
+            uniforms = {"u_cloud_layers": 0, "u_cloud_texture_size": 1.0,
+                        "u_cloud_ground_shade": [1.0, 1.0, 1.0]}
         else:
             header = data["header"]
             depth, height, width, _ = data["cloud_noise"].shape
@@ -264,8 +333,7 @@ class Frame:
             optics = np.stack([np.asarray(header[key], "f4") for key in (
                 "mass_extinction_xyz_m2_g", "single_scattering_albedo_xyz", "asymmetry_xyz")],
                 axis=1)  # (layers, 3, 3)
-            flat = {"params": data["cloud_params"].reshape(layers, -1, 1),
-                    "profiles": data["cloud_profiles"], "phase": data["cloud_phase"],
+            flat = {"profiles": data["cloud_profiles"], "phase": data["cloud_phase"],
                     "optics": optics}
             uniforms = data["clouds"]
         noise.filter = (moderngl.LINEAR, moderngl.LINEAR)
@@ -295,21 +363,25 @@ class Frame:
 
     def draw_sky(self, tables: dict, projection: int) -> None:
         """Viewer.drawSky(w, h, "exposed") with `tables` bound."""
-        program = self.programs["sky"]
+        key = "sky" if self.map is None else "cloudy_sky"
+        program = self.programs[key]
         for unit, name in enumerate(("transmittance", "irradiance", "scattering", "phase")):
             tables["textures"][name].use(location=unit)
             program[f"u_{name}"].value = unit
         self._set(program, tables["uniforms"])
-        for unit, name in enumerate(CLOUD_UNITS, start=4):
-            self.clouds["textures"][name].use(location=unit)
-            program[f"u_cloud_{name}"].value = unit
-        self._set(program, self.clouds["uniforms"])
+        if self.map is not None:
+            self._bind_clouds(program)
+            for unit, (name, texture) in enumerate(zip(MAP_UNITS, self.map["textures"]),
+                                                   start=8):
+                texture.use(location=unit)
+                self._set(program, {f"u_cloud_map_{name}": unit})
+            self._set(program, self.map["uniforms"])
         view = dict(tables["view"] if self.view is None else self.view)
         tan_v = view.pop("u_tan_half_fov")
         self._set(program, {**view, "u_resolution": (self.width, self.height),
                             "u_projection": projection, "u_output": 2,  # OUTPUT_EXPOSED
                             "u_half_extent": (tan_v * self.width / self.height, tan_v)})
-        self.quads["sky"].render(vertices=3)
+        self.quads[key].render(vertices=3)
 
     def draw(self, projection: int, atmospheres: int, composite: bool = True) -> None:
         """Viewer.draw: the sky of `atmospheres` table sets (added) into the float frame, then
@@ -353,7 +425,7 @@ def _load_clouds(path: Path) -> dict:
     with np.load(path) as npz:
         data = {name: npz[name] for name in npz.files
                 if name.startswith("cloud_") and name != "clouds"}
-        for name in ("header", "view", "clouds"):
+        for name in ("header", "view", "clouds", "map"):
             data[name] = json.loads(str(npz[name]))
         data["message_bytes"] = int(npz["message_bytes"])
     return data
@@ -400,22 +472,37 @@ def run(directory: Path, frames: int, warm_up: int, png: Path | None) -> None:
     for name in CLOUD_PRESETS:
         clouds = _load_clouds(directory / f"clouds-{name}.npz")
         frame.set_clouds(clouds)
+        n_u, n_w = clouds["map"]["u_map_size"]
+        gpu, wall = _time(ctx, frame.draw_map, frames, warm_up)
+        rows.append(("preview", f"map {n_u}x{n_w}", f"{name}: shadow map", np.median(gpu),
+                     np.percentile(gpu, 95), np.median(wall), np.percentile(wall, 95)))
+        print(f"clouds {name}: shadow map {n_u}x{n_w}: GPU {rows[-1][3]:.3f} ms")
         for projection, width, height in CLOUD_CASES:
             frame.resize(width, height)
-            draw = partial(frame.draw, 0, 1, True)
-            gpu, wall = _time(ctx, draw, frames, warm_up)
-            row = ("preview", f"{projection} {width}x{height}", f"frame with {name}",
-                   np.median(gpu), np.percentile(gpu, 95), np.median(wall),
-                   np.percentile(wall, 95))
-            rows.append(row)
-            print(f"clouds {name} ({clouds['message_bytes'] / 2**20:.1f} MiB) {row[1]}: GPU "
-                  f"{row[3]:.3f} ms (p95 {row[4]:.3f}), wall {row[5]:.3f} ms (p95 {row[6]:.3f})")
+            cases = ((f"frame with {name}", partial(frame.draw, 0, 1, True)),
+                     (f"{name}, map redrawn", partial(_map_and_frame, frame)))
+            for case, draw in cases:
+                gpu, wall = _time(ctx, draw, frames, warm_up)
+                row = ("preview", f"{projection} {width}x{height}", case,
+                       np.median(gpu), np.percentile(gpu, 95), np.median(wall),
+                       np.percentile(wall, 95))
+                rows.append(row)
+                print(f"clouds {name} ({clouds['message_bytes'] / 2**20:.1f} MiB) {row[1]} "
+                      f"{case}: GPU {row[3]:.3f} ms (p95 {row[4]:.3f}), wall {row[5]:.3f} ms "
+                      f"(p95 {row[6]:.3f})")
+            frame.draw(0, 1)
             _check(frame, f"clouds-{name}-{width}x{height}", png)
     print(f"\n{'tables':8s} {'image':22s} {'case':24s} {'GPU median':>10s} {'p95':>7s} "
           f"{'wall median':>11s} {'p95':>7s}  [ms], {frames} frames")
     for row in rows:
         print(f"{row[0]:8s} {row[1]:22s} {row[2]:24s} {row[3]:10.3f} {row[4]:7.3f} "
               f"{row[5]:11.3f} {row[6]:7.3f}")
+
+
+def _map_and_frame(frame: Frame) -> None:
+    """A frame whose view, sun or clouds moved: the shadow map drawn again, then the frame."""
+    frame.draw_map()
+    frame.draw(0, 1)
 
 
 def _check(frame: Frame, name: str, png: Path | None) -> None:

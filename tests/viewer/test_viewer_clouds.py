@@ -45,9 +45,10 @@ SIZE = (320, 240)
 # sequence of segments: single pixels differ by up to 111 of 255 at edges), from a float16
 # noise tile filtered in hardware, with the optics in three XYZ channels against the
 # renderer's 8 wavelengths (gpu_clouds); the clouds' shadows in the air are taken from table
-# differences and direct marches instead of the CPU's density integral and shadow map
-# (clouds.glsl air_shadow_loss). Measured 42.0 dB (cumulus) and 38.1 dB (stratocumulus) at
-# 320 x 240 (docs/viewer.md, Clouds); the clear page's image is at 13.9 and 14.0 dB.
+# differences instead of the CPU's density integral, and from a float16 shadow map placed over
+# a 17 x 17 grid of the rays instead of all of them (clouds.glsl air_shadow_loss). Measured
+# 43.6 dB (cumulus) and 38.1 dB (stratocumulus) at 320 x 240 (docs/viewer.md, Clouds), 24.4
+# and 21.9 dB without the shadows in the air; the clear page's image is at 13.9 and 14.0 dB.
 MIN_CLOUD_PSNR_DB = 35.0
 
 
@@ -87,6 +88,43 @@ def test_cloud_screenshot_matches_cpu_renderer(name, page, viewer_url, tmp_path,
                       ev100=f"{ev100:.6f}", compensation=1)
     assert psnr_db(clear, cpu) < psnr_db(gpu, cpu) - 5.0  # the clouds are what matches
     assert not page.errors
+
+
+@pytest.mark.parametrize("projection", ["perspective", "fisheye"])
+def test_page_places_the_shadow_map_as_the_renderer(projection, page, viewer_url):
+    """geometry.js mapFrame over the page's 17 x 17 grid of rays against
+    transport.air_shadows.map_frame over every ray of the CPU camera: the same axes and levels,
+    the extent from the grid (and a fisheye's rim) close to the one from every pixel."""
+    from skyscatter.transport.air_shadows import SHADOW_MAX_M, map_frame, shaded_stretch
+
+    view = dict(CLOUD_VIEWS["cumulus"], projection=projection)
+    width, height = 320, 180
+    open_view(page, viewer_url, view, width=width, height=height)
+    place = page.evaluate(f"""() => {{
+        const v = window.skyscatter.viewer;
+        return v.cloudMapFrame(v.viewUniforms({width}, {height}), {width}, {height}); }}""")
+    service = viewer_url.service
+    _, profile, _ = service.spectral_tables(service.parse({"atmosphere": "earth",
+                                                           "quality": "preview"}))
+    bottom = profile.bottom_radius_m
+    viewpoint = api.viewpoint_at(view["altitude_m"], bottom, view["lat"], view["lon"])
+    local, valid = camera_of(view, width, height).directions()
+    rays = viewpoint.direction_to_world(local[valid])
+    field = cloud_field(api.load_clouds("cumulus"), bottom, np.array([550.0]))
+    sun = viewpoint.direction_to_world(sun_direction(view["sun_zenith"], view["sun_azimuth"]))
+    origin = viewpoint.position_m
+    stretch = shaded_stretch(origin, rays, np.full(len(rays), np.inf), bottom,
+                             field.highest_radius_m)
+    assert stretch[:, 1].max() <= SHADOW_MAX_M + 1.0
+    frame = map_frame(field.lowest_radius_m, field.highest_radius_m, rays, stretch, sun)
+    np.testing.assert_allclose(place["e1"], frame.e1, atol=1e-6)  # float32 sun direction
+    np.testing.assert_allclose(place["e2"], frame.e2, atol=1e-6)
+    np.testing.assert_allclose(place["levels"], [frame.levels[0],
+                                                 frame.levels[1] - frame.levels[0]], rtol=1e-6)
+    # the extent: within 2 % at each end (a fisheye's farthest rays lie between its samples)
+    assert place["texel"] == pytest.approx(frame.texel, rel=0.02)
+    np.testing.assert_allclose(place["shape"], frame.shape, rtol=0.02, atol=2)
+    np.testing.assert_allclose(place["corner"], frame.corner, atol=0.02 * 512 * frame.texel)
 
 
 def test_cloud_optics_are_the_spectral_ones_weighted_by_the_sun():

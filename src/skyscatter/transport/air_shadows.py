@@ -37,8 +37,8 @@ from skyscatter.transport import _air_shadow_kernels
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
 
 __all__ = ["MAP_LEVELS", "MAP_MIN_TEXEL_M", "MAP_MAX_TEXEL_M", "MAP_TEXELS",
-           "SHADOW_MAX_M", "SUN_MU", "AirShadows",
-           "air_shadows"]
+           "SHADOW_MAX_M", "SUN_MU", "AirShadows", "MapFrame",
+           "air_shadows", "map_frame", "shaded_stretch"]
 
 SHADOW_MAX_M = 40000.0  # the shaded stretch of a view ray ends this far from where it starts [m]
 MAP_TEXELS = 512  # the map's lines across its longer side, at most ...
@@ -70,7 +70,7 @@ class AirShadows:
         region the map was made for are shaded from its nearest lines. `ray_ids` (n,) (default
         0 .. n-1) seed each ray's jitter."""
         origin, sun = self.origin, self.sun
-        stretch = _shaded_stretch(origin, rays, stop, float(solver.profile.bottom_radius_m),
+        stretch = shaded_stretch(origin, rays, stop, float(solver.profile.bottom_radius_m),
                                   float(self.shadow_map[5][-1]))
         loss = np.zeros((rays.shape[0], solver.profile.n_wavelengths))
         marched = np.flatnonzero(stretch[:, 1] > stretch[:, 0])
@@ -99,7 +99,7 @@ def air_shadows(solver, field, origin: np.ndarray, rays: np.ndarray, sun: np.nda
     `sun` (3,); None where its map would be coarser than `MAP_MAX_TEXEL_M` (views from
     space: the shadows in the air are far below a pixel)."""
     profile = solver.profile
-    stretch = _shaded_stretch(origin, rays, stop, float(profile.bottom_radius_m),
+    stretch = shaded_stretch(origin, rays, stop, float(profile.bottom_radius_m),
                               field.highest_radius_m)
     shadow_map = _shadow_map(field, origin, rays, stretch, sun)
     if shadow_map is None:
@@ -108,10 +108,11 @@ def air_shadows(solver, field, origin: np.ndarray, rays: np.ndarray, sun: np.nda
                       (field.mass_extinction_m2_g, field.asymmetry))
 
 
-def _shaded_stretch(origin: np.ndarray, rays: np.ndarray, stop: np.ndarray, bottom_r: float,
-                    top_r: float) -> np.ndarray:
-    """(n, 2): where each ray is below the highest cloud top, before `stop` and the ground,
-    at most `SHADOW_MAX_M` long (empty: start = end)."""
+def shaded_stretch(origin: np.ndarray, rays: np.ndarray, stop: np.ndarray, bottom_r: float,
+                   top_r: float) -> np.ndarray:
+    """(n, 2): where each of unit world `rays` (n, 3) from `origin` [m] is below the sphere
+    `top_r` (the highest cloud top), before `stop` (n,) and the sphere `bottom_r` (the
+    ground), at most `SHADOW_MAX_M` long (empty: start = end) [m]."""
     b = rays @ origin
     c = float(origin @ origin)
     disc = b * b - c + top_r * top_r
@@ -125,10 +126,25 @@ def _shaded_stretch(origin: np.ndarray, rays: np.ndarray, stop: np.ndarray, bott
     return np.stack([start, np.maximum(end, start)], axis=-1)
 
 
-def _shadow_map(field, origin: np.ndarray, rays: np.ndarray, stretch: np.ndarray,
-                sun: np.ndarray) -> tuple | None:
-    """(water, e1, e2, corner, texel, levels) of `_air_shadow_kernels.shadow_loss` over the
-    stretches' projections across the sun's beam (None: coarser than `MAP_MAX_TEXEL_M`)."""
+@dataclass(frozen=True, eq=False)
+class MapFrame:
+    """Where the shadow map's lines lie: through origin + u e1 + w e2 (world, unit `e1`, `e2`
+    across the sun's beam) at texel centres u, w = corner + (i + 0.5) texel [m], `shape`
+    (n_u, n_w) of them, each with the water from where it leaves each sphere of `levels` [m]."""
+
+    e1: np.ndarray
+    e2: np.ndarray
+    corner: np.ndarray
+    texel: float
+    shape: tuple[int, int]
+    levels: np.ndarray
+
+
+def map_frame(lowest_r: float, highest_r: float, rays: np.ndarray, stretch: np.ndarray,
+              sun: np.ndarray) -> MapFrame | None:
+    """The `MapFrame` over the projections of the rays' shaded `stretch` (n, 2) [m] across the
+    sun's beam, levels between the radii of the lowest cloud base and the highest top; None
+    where its texels would be coarser than `MAP_MAX_TEXEL_M`."""
     e1 = np.cross(sun, [0.0, 0.0, 1.0] if abs(sun[2]) < 0.9 else [1.0, 0.0, 0.0])
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(sun, e1)
@@ -138,13 +154,23 @@ def _shadow_map(field, origin: np.ndarray, rays: np.ndarray, stretch: np.ndarray
     texel = max(float((high - low).max()) / (MAP_TEXELS - 2), MAP_MIN_TEXEL_M)
     if texel > MAP_MAX_TEXEL_M:
         return None
-    corner = low - texel
     n_u, n_w = (np.ceil((high - low) / texel).astype(int) + 2).tolist()
-    levels = np.linspace(field.lowest_radius_m, field.highest_radius_m, MAP_LEVELS)
-    water = np.empty((n_u, n_w, MAP_LEVELS, field.n_layers))
-    _air_shadow_kernels.sun_line_water(origin, e1, e2, sun, corner, texel, levels, field.params,
-                                       field.profiles, field.textures, water)
-    return water, e1, e2, corner, texel, levels
+    return MapFrame(e1, e2, low - texel, texel, (n_u, n_w),
+                    np.linspace(lowest_r, highest_r, MAP_LEVELS))
+
+
+def _shadow_map(field, origin: np.ndarray, rays: np.ndarray, stretch: np.ndarray,
+                sun: np.ndarray) -> tuple | None:
+    """(water, e1, e2, corner, texel, levels) of `_air_shadow_kernels.shadow_loss` over the
+    stretches' projections across the sun's beam (None: coarser than `MAP_MAX_TEXEL_M`)."""
+    frame = map_frame(field.lowest_radius_m, field.highest_radius_m, rays, stretch, sun)
+    if frame is None:
+        return None
+    water = np.empty((*frame.shape, MAP_LEVELS, field.n_layers))
+    _air_shadow_kernels.sun_line_water(origin, frame.e1, frame.e2, sun, frame.corner,
+                                       frame.texel, frame.levels, field.params, field.profiles,
+                                       field.textures, water)
+    return water, frame.e1, frame.e2, frame.corner, frame.texel, frame.levels
 
 
 def _air_arrays(solver, field) -> tuple:

@@ -74,6 +74,12 @@ def cloud_columns() -> dict[str, int]:
     return {name: int(getattr(_cloud_sampling, name)) for name in CLOUD_COLUMNS}
 
 
+def cloud_param_vec4s() -> int:
+    """vec4s per layer of the shader's parameter uniform: the row's first columns, up to the
+    last one the viewer reads (viewer.js `cloudUniforms` packs them)."""
+    return (max(cloud_columns().values()) + 4) // 4
+
+
 def _glsl_number(value: float | int) -> str:
     return repr(float(value)) if isinstance(value, float) else str(value)
 
@@ -83,12 +89,16 @@ def _cloud_lines() -> list[str]:
     transport/_cloud_kernels.py, transport/air_shadows.py)."""
     lines = [f"#define CLOUD_{name} {index}" for name, index in cloud_columns().items()]
     lines += [f"#define CLOUD_N_PARAMS {_cloud_sampling.N_PARAMS}",
+              f"#define CLOUD_PARAM_VEC4S {cloud_param_vec4s()}",
               f"#define CLOUD_PHASE_ANGLES {_cloud_sampling.PHASE_ANGLES}",
               f"const float COVERAGE_TILE_RATIO = {_cloud_sampling.COVERAGE_TILE_RATIO!r};",
               f"#define MAX_CLOUD_LAYERS {MAX_CLOUD_LAYERS}",
               f"#define MAX_PROFILE_NODES {MAX_PROFILE_NODES}",
               f"#define SHADOW_SAMPLES {_air_shadow_kernels.SHADOW_SAMPLES}",
-              f"const float SHADOW_MAX_M = {float(air_shadows.SHADOW_MAX_M)!r};"]
+              f"const float SHADOW_MAX_M = {float(air_shadows.SHADOW_MAX_M)!r};",
+              f"#define MAP_LEVELS {air_shadows.MAP_LEVELS}",
+              f"const float MAP_STEP_M = {float(_air_shadow_kernels.MAP_STEP_M)!r};",
+              f"const int MAP_MAX_STEPS = {_air_shadow_kernels.MAP_MAX_STEPS};"]
     for name in CLOUD_KERNEL_CONSTANTS:
         value = getattr(_cloud_kernels, name)
         kind = "int" if isinstance(value, int) else "float"
@@ -123,6 +133,16 @@ def constants_glsl() -> str:
     return "\n".join(lines) + "\n"
 
 
+def _shadow_map_layout() -> dict:
+    """What the page needs to place the clouds' shadow map (transport.air_shadows.map_frame):
+    its levels, packed four to a texel, and the bounds of its texels."""
+    if air_shadows.MAP_LEVELS != 12:
+        raise ValueError("cloud_map.frag writes the shadow map's levels as three outputs of four")
+    return {"levels": air_shadows.MAP_LEVELS, "texels": air_shadows.MAP_TEXELS,
+            "min_texel_m": air_shadows.MAP_MIN_TEXEL_M, "max_texel_m": air_shadows.MAP_MAX_TEXEL_M,
+            "shadow_max_m": air_shadows.SHADOW_MAX_M}
+
+
 def layout_json() -> str:
     """The table message's format, for the JavaScript decoder."""
     return json.dumps({"generated_by": "skyscatter.viewer.codegen from viewer/gpu_tables.py, "
@@ -144,8 +164,10 @@ def layout_json() -> str:
                                   "format_version": CLOUD_FORMAT_VERSION,
                                   "columns": cloud_columns(),
                                   "n_params": _cloud_sampling.N_PARAMS,
+                                  "param_vec4s": cloud_param_vec4s(),
                                   "max_layers": MAX_CLOUD_LAYERS,
                                   "coverage_tile_ratio": _cloud_sampling.COVERAGE_TILE_RATIO,
+                                  "shadow_map": _shadow_map_layout(),
                                   "arrays": CLOUD_LAYOUT}},
                       indent=2) + "\n"
 

@@ -54,3 +54,45 @@ export function pixelDirection(state, canvas, x, y) {
   return [-u * s, -v * s, Math.cos(theta)];
 }
 
+
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+
+// twin of transport.air_shadows.shaded_stretch for one unit world ray from `origin` [m]: where
+// it is below the sphere topR, before the sphere bottomR, at most maxM long: [start, end] [m]
+export function shadedStretch(origin, ray, bottomR, topR, maxM) {
+  const b = dot(ray, origin);
+  const c = dot(origin, origin);
+  const disc = b * b - c + topR * topR;
+  const start = Math.max(-b - Math.sqrt(Math.max(disc, 0)), 0);
+  const groundDisc = b * b - c + bottomR * bottomR;
+  const ground = groundDisc > 0 && b < 0 ? -b - Math.sqrt(groundDisc) : Infinity;
+  const end = Math.min(disc > 0 ? -b + Math.sqrt(disc) : 0, Math.max(ground, 0), start + maxM);
+  return [start, Math.max(end, start)];
+}
+
+// twin of transport.air_shadows.map_frame: where the clouds' shadow map lies for world `rays`
+// (unit) and their `stretches` ([start, end] [m]), the sun along unit `sun`, levels from
+// radius lowR to highR [m]; `map` the layout's clouds.shadow_map. {e1, e2, corner [m],
+// texel [m], shape [n_u, n_w], levels [first radius, spacing] [m]} or null (too coarse)
+export function mapFrame(rays, stretches, sun, lowR, highR, map) {
+  let e1 = cross(sun, Math.abs(sun[2]) < 0.9 ? [0, 0, 1] : [1, 0, 0]);
+  e1 = e1.map((v) => v / Math.hypot(...e1));
+  const e2 = cross(sun, e1);
+  const low = [Infinity, Infinity];
+  const high = [-Infinity, -Infinity];
+  rays.forEach((ray, i) => {
+    for (const t of stretches[i]) {
+      const point = ray.map((v) => v * t);
+      [dot(point, e1), dot(point, e2)].forEach((x, k) => {
+        low[k] = Math.min(low[k], x);
+        high[k] = Math.max(high[k], x);
+      });
+    }
+  });
+  const texel = Math.max(Math.max(high[0] - low[0], high[1] - low[1]) / (map.texels - 2), map.min_texel_m);
+  if (texel > map.max_texel_m) return null;
+  return {e1, e2, corner: low.map((v) => v - texel), texel,
+          shape: [0, 1].map((k) => Math.ceil((high[k] - low[k]) / texel) + 2),
+          levels: [lowR, (highR - lowR) / (map.levels - 1)]};
+}

@@ -128,8 +128,8 @@ function floatTexture(gl, internal, format, width, height, data) {
 }
 
 // The textures of decoded clouds (or of none: 1-texel stand-ins, so that every sampler of the
-// sky program has a texture of its own type); `params` is a copy the page fills with the
-// wind's columns (viewer.js `cloudUniforms`) and uploads again with `uploadCloudParams`
+// sky program has a texture of its own type); `params` (n_layers rows of CLOUD_N_PARAMS) is a
+// copy the page fills with the wind's columns and sends as uniforms (viewer.js `cloudUniforms`)
 export function uploadClouds(gl, decoded) {
   const none = decoded === null;
   const header = none ? {n_layers: 0, texture_size: 1} : decoded.header;
@@ -149,7 +149,6 @@ export function uploadClouds(gl, decoded) {
                               [gl.TEXTURE_WRAP_R, gl.CLAMP_TO_EDGE]]) {
     gl.texParameteri(gl.TEXTURE_3D, key, value);
   }
-  const nParams = none ? 1 : decoded.arrays.params.shape[1];
   const params = none ? new Float32Array(1) : Float32Array.from(decoded.arrays.params.data);
   const profileRows = none ? 1 : decoded.arrays.profiles.shape[1];
   const optics = new Float32Array(layers * 9);
@@ -164,7 +163,6 @@ export function uploadClouds(gl, decoded) {
     params,
     textures: {
       noise,
-      params: floatTexture(gl, gl.R32F, gl.RED, nParams, layers, params),
       profiles: floatTexture(gl, gl.RG32F, gl.RG, profileRows, layers,
                              none ? new Float32Array(2) : decoded.arrays.profiles.data),
       phase: floatTexture(gl, gl.RGB32F, gl.RGB, angles, layers,
@@ -172,14 +170,6 @@ export function uploadClouds(gl, decoded) {
       optics: floatTexture(gl, gl.RGB32F, gl.RGB, 3, layers, optics),
     },
   };
-}
-
-// Uploads `clouds.params` (after the page changed its wind columns)
-export function uploadCloudParams(gl, clouds) {
-  gl.bindTexture(gl.TEXTURE_2D, clouds.textures.params);
-  gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
-  gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, clouds.params.length / Math.max(clouds.header.n_layers, 1),
-                   Math.max(clouds.header.n_layers, 1), gl.RED, gl.FLOAT, clouds.params);
 }
 
 export function deleteClouds(gl, clouds) {

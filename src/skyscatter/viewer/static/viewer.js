@@ -4,16 +4,21 @@
 // places the sun by hand or from a date, time and place; clouds (shaders/clouds.glsl) from the
 // server's cloud message, moved by their wind over the clouds' time.
 import {apiFetch, apiJson} from "./api.js";
-import {decodeClouds, decodeTables, deleteClouds, deleteTables, fetchLayout, uploadCloudParams,
-        uploadClouds, uploadTables} from "./tables.js";
+import {decodeClouds, decodeTables, deleteClouds, deleteTables, fetchLayout, uploadClouds,
+        uploadTables} from "./tables.js";
 import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
-import {cameraBasis, localFrame, sunDirection, toWorld} from "./geometry.js";
+import {cameraBasis, localFrame, mapFrame, pixelDirection, shadedStretch, sunDirection,
+        toWorld} from "./geometry.js";
 
 const LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
                  "shaders/sky.glsl", "shaders/tonemap.glsl"];
-// Programs: [vertex sources, fragment sources] (files under static/; "" = the full-screen triangle)
+const SKY = [...LIBRARY, "shaders/clouds.glsl", "shaders/main.frag"];
+// Programs: [vertex sources, fragment sources, defines] (files under static/; "" = the
+// full-screen triangle); the sky without clouds is a program of its own (main.frag)
 const PROGRAMS = {
-  sky: [[""], [...LIBRARY, "shaders/clouds.glsl", "shaders/main.frag"]],
+  sky: [[""], SKY],
+  cloudy_sky: [[""], SKY, "#define CLOUDS\n"],
+  cloud_map: [[""], [...LIBRARY, "shaders/clouds.glsl", "shaders/cloud_map.frag"]],
   stars: [[...LIBRARY.slice(0, 4), "shaders/stars.vert"],
           ["generated/constants.glsl", "shaders/camera.glsl", "shaders/stars.frag"]],
   composite: [[""], ["generated/constants.glsl", "shaders/tonemap.glsl", "shaders/composite.frag"]],
@@ -23,7 +28,9 @@ const FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(positio
 const METER_SIZE = [64, 36];  // the auto-exposure meter renders the view this small
 const DEG = Math.PI / 180;
 const J2000_MS = Date.UTC(2000, 0, 1, 12);  // the clouds' epoch (api.J2000_UTC)
-const CLOUD_UNITS = ["noise", "params", "profiles", "phase", "optics"];  // texture units 4-8
+const CLOUD_UNITS = ["noise", "profiles", "phase", "optics"];  // texture units 4-7
+const MAP_UNITS = ["low", "middle", "high"];  // texture units 8-10: the clouds' shadow map
+const MAP_GRID = 16;  // the shadow map is placed over the rays of (MAP_GRID + 1)^2 pixels
 
 // Exposure change [EV] for a scene of log-average luminance L [cd m^-2] (twin of
 // render.tonemap.night_compensation_ev, Krawczyk et al. 2005): 0 by day, down to a floor in
@@ -46,14 +53,15 @@ function compile(gl, type, source) {
 }
 
 async function buildPrograms(gl) {
-  const names = new Set(Object.values(PROGRAMS).flat(2).filter((name) => name));
+  const names = new Set(Object.values(PROGRAMS).flatMap(([vertex, fragment]) => [...vertex, ...fragment])
+                                                 .filter((name) => name));
   const texts = {"": FULL_SCREEN};
   await Promise.all([...names].map(async (name) => { texts[name] = await (await fetch(`static/${name}`)).text(); }));
   const programs = {};
-  for (const [key, [vertex, fragment]] of Object.entries(PROGRAMS)) {
+  for (const [key, [vertex, fragment, defines = ""]] of Object.entries(PROGRAMS)) {
     const program = gl.createProgram();
     gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, PREFIX + vertex.map((n) => texts[n]).join("\n")));
-    gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, PREFIX + fragment.map((n) => texts[n]).join("\n")));
+    gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, PREFIX + defines + fragment.map((n) => texts[n]).join("\n")));
     gl.bindAttribLocation(program, 0, key === "stars" ? "a_direction" : "position");
     if (key === "stars") gl.bindAttribLocation(program, 1, "a_irradiance");
     gl.linkProgram(program);
@@ -111,17 +119,20 @@ class Viewer {
   // The clouds' uniforms for a camera at `position` (world [m]): the wind's columns of the
   // parameter table (OFFSET = wind t, ALONG = its direction, in the site's east-north-up frame,
   // as atmosphere.cloud_field with to_world and time_s; the coverage when the page sets it),
-  // uploaded when they changed, and the noise coordinates of the camera, three per layer
-  // (shape, weather, detail), reduced modulo the tile in double precision (clouds.glsl)
+  // each row's first columns packed as the shader's u_cloud_params, and the noise
+  // coordinates of the camera, three per layer (shape, weather, detail), reduced modulo the
+  // tile in double precision (clouds.glsl)
   cloudUniforms(position) {
     const clouds = this.clouds;
     const header = clouds.header;
     const layers = header.n_layers;
     const max = this.layout.clouds.max_layers;
     const origins = new Float32Array(9 * max);
+    const width = 4 * this.layout.clouds.param_vec4s;
+    const packed = new Float32Array(width * max);
     if (!layers) {
-      return {u_cloud_layers: 0, u_cloud_origin: origins, u_cloud_texture_size: 1,
-              u_cloud_ground_shade: [1, 1, 1]};
+      return {u_cloud_layers: 0, u_cloud_origin: origins, u_cloud_params: packed,
+              u_cloud_texture_size: 1, u_cloud_ground_shade: [1, 1, 1]};
     }
     const s = this.state;
     const columns = this.layout.clouds.columns;
@@ -152,27 +163,125 @@ class Viewer {
       origins.set(m.map((v) => wrap(v * tile)), 9 * layer);
       origins.set([m[2], m[0], m[1]].map((v) => wrap(v * large)), 9 * layer + 3);
       origins.set(m.map((v) => wrap(v * fine)), 9 * layer + 6);
+      packed.set(params.subarray(row, row + width), width * layer);
     }
-    const signature = params.join(",");
-    if (signature !== clouds.uploaded) {
-      uploadCloudParams(this.gl, clouds);
-      clouds.uploaded = signature;
-    }
-    return {u_cloud_layers: layers, u_cloud_origin: origins, u_cloud_texture_size: n,
-            u_cloud_ground_shade: header.ground_shade_xyz};
+    return {u_cloud_layers: layers, u_cloud_origin: origins, u_cloud_params: packed,
+            u_cloud_texture_size: n, u_cloud_ground_shade: header.ground_shade_xyz};
   }
 
-  // The cloud textures on units 4-8 (always bound: stand-ins without clouds) and uniforms
+  // The cloud textures on units 4-7 (always bound: stand-ins without clouds) and uniforms
   bindClouds(program, position) {
     const gl = this.gl;
-    gl.activeTexture(gl.TEXTURE4 + CLOUD_UNITS.indexOf("params"));  // an upload binds there
-    const uniforms = this.cloudUniforms(position);  // first: it may upload the parameters
+    const uniforms = this.cloudUniforms(position);
     CLOUD_UNITS.forEach((key, i) => {
       gl.activeTexture(gl.TEXTURE4 + i);
       gl.bindTexture(key === "noise" ? gl.TEXTURE_3D : gl.TEXTURE_2D, this.clouds.textures[key]);
       gl.uniform1i(this.uniform(program, `u_cloud_${key}`), 4 + i);
     });
     this.setUniforms(program, uniforms);
+  }
+
+  // Where the clouds' shadow map lies for the view at w x h (geometry.js mapFrame over the
+  // rays of a grid of its pixels and, for a fisheye, of its rim), or null
+  cloudMapFrame(view, width, height) {
+    const s = this.state;
+    const {columns, shadow_map: map} = this.layout.clouds;
+    const params = this.clouds.params;
+    const stride = params.length / this.clouds.header.n_layers;
+    const radii = (column) => Array.from({length: this.clouds.header.n_layers},
+                                         (_, layer) => params[layer * stride + column]);
+    const [lowR, highR] = [Math.min(...radii(columns.BASE_R)), Math.max(...radii(columns.TOP_R))];
+    const frame = localFrame(s.lat * DEG, s.lon * DEG);
+    const size = {clientWidth: width, clientHeight: height};
+    const rays = [];
+    for (let i = 0; i <= MAP_GRID; ++i) {
+      for (let j = 0; j <= MAP_GRID; ++j) {
+        rays.push(toWorld(frame, pixelDirection(s, size, i * width / MAP_GRID, j * height / MAP_GRID)));
+      }
+    }
+    if (s.projection === "fisheye") {  // its rim, where the rays reach farthest
+      const radius = Math.min(width, height) / 2;
+      for (let k = 0; k < 4 * MAP_GRID; ++k) {
+        const angle = 2 * Math.PI * k / (4 * MAP_GRID);
+        rays.push(toWorld(frame, pixelDirection(s, size, width / 2 + radius * Math.cos(angle),
+                                                height / 2 + radius * Math.sin(angle))));
+      }
+    }
+    const stretches = rays.map((ray) => shadedStretch(view.u_camera_position, ray, this.tables.header.bottom_radius_m,
+                                                      highR, map.shadow_max_m));
+    return mapFrame(rays, stretches, view.u_sun_direction, lowR, highR, map);
+  }
+
+  // Three RGBA16F textures of w x h (the shadow map's levels, four each) and their framebuffer
+  mapTargets(width, height) {
+    const gl = this.gl;
+    const old = this.map;
+    if (old && old.width === width && old.height === height) return old;
+    if (old) { old.textures.forEach((t) => gl.deleteTexture(t)); gl.deleteFramebuffer(old.framebuffer); }
+    const framebuffer = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
+    const textures = MAP_UNITS.map((_, i) => {
+      const texture = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, texture);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA16F, width, height, 0, gl.RGBA, gl.FLOAT, null);
+      for (const [key, value] of [[gl.TEXTURE_MIN_FILTER, gl.LINEAR], [gl.TEXTURE_MAG_FILTER, gl.LINEAR],
+                                  [gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE], [gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE]]) {
+        gl.texParameteri(gl.TEXTURE_2D, key, value);
+      }
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0 + i, gl.TEXTURE_2D, texture, 0);
+      return texture;
+    });
+    this.map = {textures, framebuffer, width, height};
+    return this.map;
+  }
+
+  // The clouds' shadow map for the view (cloud_map.frag, one pass a layer into its rows of the
+  // three textures), drawn again only when where it lies, the sun or the clouds changed; its
+  // uniforms for the sky ({u_map_on: 0}: no map without float render targets or where its
+  // texels would be too coarse, views from space; then no shadows in the air)
+  drawCloudMap(view, width, height) {
+    const place = this.floatTargets ? this.cloudMapFrame(view, width, height) : null;
+    if (!place) return {u_map_on: 0};
+    const gl = this.gl;
+    const layers = this.clouds.header.n_layers;
+    const [nU, nW] = place.shape;
+    const uniforms = {u_map_on: 1, u_map_e1: place.e1, u_map_e2: place.e2, u_map_corner: place.corner,
+                      u_map_texel: place.texel, u_map_size: place.shape, u_map_levels: place.levels};
+    const clouds = this.cloudUniforms(view.u_camera_position);
+    const key = JSON.stringify([uniforms, view.u_camera_position, view.u_sun_direction, this.cloudsVersion,
+                                Array.from(clouds.u_cloud_params)]);
+    if (key === this.mapKey) return uniforms;
+    const previous = gl.getParameter(gl.FRAMEBUFFER_BINDING);
+    MAP_UNITS.forEach((_, i) => {  // not read while drawn into
+      gl.activeTexture(gl.TEXTURE8 + i);
+      gl.bindTexture(gl.TEXTURE_2D, null);
+    });
+    const targets = this.mapTargets(nU, nW * layers);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, targets.framebuffer);
+    gl.drawBuffers(MAP_UNITS.map((_, i) => gl.COLOR_ATTACHMENT0 + i));
+    gl.useProgram(this.programs.cloud_map);
+    this.bindClouds("cloud_map", view.u_camera_position);
+    this.setUniforms("cloud_map", {...uniforms, u_camera_position: view.u_camera_position,
+                                   u_sun_direction: view.u_sun_direction});
+    gl.bindVertexArray(this.fullScreen);
+    for (let layer = 0; layer < layers; ++layer) {
+      gl.viewport(0, layer * nW, nU, nW);
+      this.setUniforms("cloud_map", {u_map_layer: layer});
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, previous);
+    this.mapKey = key;
+    return uniforms;
+  }
+
+  // The shadow map's textures on units 8-10
+  bindCloudMap(program) {
+    const gl = this.gl;
+    MAP_UNITS.forEach((key, i) => {
+      gl.activeTexture(gl.TEXTURE8 + i);
+      gl.bindTexture(gl.TEXTURE_2D, this.map ? this.map.textures[i] : null);
+      gl.uniform1i(this.uniform(program, `u_cloud_map_${key}`), 8 + i);
+    });
   }
 
   uniform(program, name) {
@@ -233,7 +342,7 @@ class Viewer {
   setUniforms(program, values) {
     const gl = this.gl;
     const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows", "u_output",
-                          "u_radius_warp_identity", "u_cloud_layers"]);
+                          "u_radius_warp_identity", "u_cloud_layers", "u_map_on", "u_map_layer"]);
     const matrices = new Set(["u_camera_basis", "u_local_to_world", "u_site_to_world"]);
     for (const [name, value] of Object.entries(values)) {
       const location = this.uniform(program, name);
@@ -244,6 +353,7 @@ class Viewer {
       else if (name === "u_sun_disk") gl.uniform3fv(location, value);
       else if (name === "u_radius_warp") gl.uniform4fv(location, value);
       else if (name === "u_cloud_origin") gl.uniform3fv(location, value);
+      else if (name === "u_cloud_params") gl.uniform4fv(location, value);
       else if (!Array.isArray(value)) gl.uniform1f(location, value);
       else if (value.length === 2) gl.uniform2fv(location, value);
       else if (value.length === 3) gl.uniform3fv(location, value);
@@ -266,12 +376,16 @@ class Viewer {
   // The sky pass into the bound framebuffer (w x h): output "display", "meter" or "exposed"
   drawSky(width, height, output) {
     const gl = this.gl;
-    gl.useProgram(this.programs.sky);
-    gl.viewport(0, 0, width, height);
-    this.bindTables("sky");
+    const cloudy = this.clouds.header.n_layers > 0;
+    const program = cloudy ? "cloudy_sky" : "sky";
     const view = this.viewUniforms(width, height);
-    this.bindClouds("sky", view.u_camera_position);
-    this.setUniforms("sky", {...view, u_output: this.layout.outputs.indexOf(output)});
+    const map = cloudy ? this.drawCloudMap(view, width, height) : {};
+    gl.useProgram(this.programs[program]);
+    gl.viewport(0, 0, width, height);
+    this.bindTables(program);
+    this.bindClouds(program, view.u_camera_position);
+    if (cloudy) this.bindCloudMap(program);
+    this.setUniforms(program, {...view, ...map, u_output: this.layout.outputs.indexOf(output)});
     gl.bindVertexArray(this.fullScreen);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }

@@ -40,12 +40,16 @@ const float HALF_MAX = 65504.0;  // largest float16 of the frame target
 #define CLOUD_ALONG_Z 16
 #define CLOUD_STRETCH_MINUS_ONE 17
 #define CLOUD_N_PARAMS 47
+#define CLOUD_PARAM_VEC4S 5
 #define CLOUD_PHASE_ANGLES 1024
 const float COVERAGE_TILE_RATIO = 7.31;
 #define MAX_CLOUD_LAYERS 8
 #define MAX_PROFILE_NODES 32
 #define SHADOW_SAMPLES 16
 const float SHADOW_MAX_M = 40000.0;
+#define MAP_LEVELS 12
+const float MAP_STEP_M = 60.0;
+const int MAP_MAX_STEPS = 160;
 const float STEP_M = 80.0;
 const float STEP_GROWTH = 0.006;
 const int COARSE_STEPS = 3;

@@ -18,23 +18,40 @@
 // reach FAR_START: 1300 km for the cumulus preset); the light tables over (radius, sun
 // zenith cosine) are the atmosphere's tables read directly (cloud_light), not resampled on
 // transport.clouds.cloud_lighting's grid; the clouds' shadows in the air (air_shadow_loss)
-// take the air's single scattering from table differences and march the clouds' water
-// towards the sun directly, where transport.air_shadows integrates the air's densities and
-// reads a shadow map.
+// take the air's single scattering from table differences, where transport.air_shadows
+// integrates the air's densities; both read the clouds' water from a shadow map of the same
+// frame (the page's fitted to a grid of its rays, cloud_map.frag drawing it in float32 and
+// storing float16).
 
 uniform vec3 u_camera_position;             // planet-centred [m]
 uniform int u_cloud_layers;                 // 0: no clouds
 uniform highp sampler3D u_cloud_noise;      // RG: shape, detail (gpu_clouds: layers stacked)
-uniform highp sampler2D u_cloud_params;     // R32F (CLOUD_N_PARAMS, n_layers), texelFetch
+// each layer's first 4 CLOUD_PARAM_VEC4S columns of the parameter table (viewer.js
+// cloudUniforms): uniforms, not a texture, as each sample of the water reads a dozen
+uniform vec4 u_cloud_params[MAX_CLOUD_LAYERS * CLOUD_PARAM_VEC4S];
 uniform highp sampler2D u_cloud_profiles;   // RG32F (n_rows, n_layers), texelFetch
 uniform highp sampler2D u_cloud_phase;      // RGB32F (CLOUD_PHASE_ANGLES, n_layers), XYZ
 uniform highp sampler2D u_cloud_optics;     // RGB32F (3, n_layers): k_ext [m^2 g^-1], albedo, g
 uniform float u_cloud_texture_size;         // n, texels per tile side
 uniform vec3 u_cloud_ground_shade;          // transport.clouds.ground_shade, XYZ
 uniform vec3 u_cloud_origin[3 * MAX_CLOUD_LAYERS];  // q_camera: shape, weather, detail [texels]
+// The shadow map (cloud_map.frag; transport.air_shadows.MapFrame): three RGBA16F textures of
+// four levels each (low, middle, high), the layers stacked along their height, n_w rows each;
+// lines through camera + u e1 + w e2 with u, w = corner + (i + 0.5, j + 0.5) texel; levels at
+// radii x + k y; none drawn (u_map_on 0): no shadows in the air
+uniform highp sampler2D u_cloud_map_low;
+uniform highp sampler2D u_cloud_map_middle;
+uniform highp sampler2D u_cloud_map_high;
+uniform int u_map_on;
+uniform vec3 u_map_e1;
+uniform vec3 u_map_e2;
+uniform vec2 u_map_corner;      // [m]
+uniform float u_map_texel;      // [m]
+uniform vec2 u_map_size;        // n_u, n_w
+uniform vec2 u_map_levels;      // first radius, spacing [m]
 
 float cloud_param(int layer, int column) {
-    return texelFetch(u_cloud_params, ivec2(column, layer), 0).r;
+    return u_cloud_params[layer * CLOUD_PARAM_VEC4S + column / 4][column % 4];
 }
 
 vec3 cloud_optics(int layer, int which) {
@@ -508,6 +525,33 @@ vec3 cloud_transmittance(vec3 d, vec3 dir, float max_distance) {
     return exp(-depth);
 }
 
+float map_level(int k) {
+    return u_map_levels.x + float(k) * u_map_levels.y;
+}
+
+// level k of the map at texture coordinates uv (bilinear: the hardware's, on float16)
+float map_level_water(int k, vec2 uv) {
+    int group = k / 4;
+    vec4 texel = group == 0 ? texture(u_cloud_map_low, uv)
+               : group == 1 ? texture(u_cloud_map_middle, uv) : texture(u_cloud_map_high, uv);
+    return texel[k - 4 * group];
+}
+
+// twin of _air_shadow_kernels._sun_water for one layer: its water [g m^-2] towards the sun
+// from d (relative to the camera) at radius r, bilinear across the map, linear in radius
+// between its levels; 0 at or above the highest level
+float map_water(int layer, vec3 d, float r) {
+    if (r >= map_level(MAP_LEVELS - 1)) return 0.0;
+    vec2 ij = clamp((vec2(dot(d, u_map_e1), dot(d, u_map_e2)) - u_map_corner) / u_map_texel,
+                    vec2(0.5), u_map_size - 0.5);
+    vec2 uv = vec2(ij.x / u_map_size.x,
+                   (float(layer) * u_map_size.y + ij.y) / (float(u_cloud_layers) * u_map_size.y));
+    float f = clamp((r - u_map_levels.x) / u_map_levels.y, 0.0, float(MAP_LEVELS - 1));
+    int k = min(int(f), MAP_LEVELS - 2);
+    f -= float(k);
+    return map_level_water(k, uv) * (1.0 - f) + map_level_water(k + 1, uv) * f;
+}
+
 // The phase-weighted and the plain sums of the single-scattering tables (no orders >= 2) at
 // (r, mu, mu_s, nu) in the half of the mu axis `hits_ground` names, seen from the observer
 // through `through` (the air's transmittance to there): T sum_s p_s(nu) S_s and T sum_s S_s
@@ -536,8 +580,9 @@ void single_scattering_sums(float r, float mu, float mu_s, float nu, bool hits_g
 // dS_s the single scattering of constituent s on sample j's stretch (the difference of two
 // table lookups, as aerial_perspective; the CPU integrates the air's densities instead) and
 // T_c, N the clouds' direct transmittance and two-stream net flux towards the sun from the
-// sample, their water marched directly (the CPU reads it from a shadow map)
+// sample, their water from the shadow map (map_water)
 vec3 air_shadow_loss(vec3 v, vec3 sun_dir, float stop, uint index) {
+    if (u_map_on == 0) return vec3(0.0);
     float top_r = 0.0;
     for (int layer = 0; layer < MAX_CLOUD_LAYERS; ++layer) {
         if (layer >= u_cloud_layers) break;
@@ -585,12 +630,13 @@ vec3 air_shadow_loss(vec3 v, vec3 sun_dir, float stop, uint index) {
         plain_lo = plain_hi;
         float t = lo + jitter_ * (hi - lo);
         vec3 p = u_camera_position + t * v;
-        float mu_s_p = dot(p, sun_dir) / length(p);
+        float r_p = length(p);
+        float mu_s_p = dot(p, sun_dir) / r_p;
         vec3 tau = vec3(0.0);
         vec3 b_tau = vec3(0.0);
         for (int layer = 0; layer < MAX_CLOUD_LAYERS; ++layer) {
             if (layer >= u_cloud_layers) break;
-            vec3 depth = cloud_optics(layer, 0) * layer_water_path(layer, t * v, sun_dir, 1e30);
+            vec3 depth = cloud_optics(layer, 0) * map_water(layer, t * v, r_p);
             tau += depth;
             b_tau += 0.5 * (1.0 - cloud_optics(layer, 2)) * depth;
         }

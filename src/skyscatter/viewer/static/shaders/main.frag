@@ -1,7 +1,9 @@
 // The viewer's frame: one camera ray per pixel, the sky (and ground) from the tables, the
 // clouds in front (clouds.glsl), the sun disk (all in CIE XYZ), linear sRGB, exposure and tone
-// mapping (render/scene.py's render_sky + api.save_image's PNG path). u_camera_position
-// (planet-centred [m]) is declared in clouds.glsl.
+// mapping (render/scene.py's render_sky + api.save_image's PNG path). The clouds' code is
+// compiled only where CLOUDS is defined (viewer.js "cloudy_sky", drawn while clouds are
+// shown): present in a clear frame's program, it cost that frame its registers (2.2 times
+// its GPU time). u_camera_position (planet-centred [m]) is declared in clouds.glsl.
 
 uniform vec3 u_sun_direction;    // world, unit
 uniform float u_exposure;        // exposure_scale(EV100, compensation)
@@ -50,28 +52,30 @@ void main() {
         return;
     }
     vec3 dir = u_local_to_world * local.xyz;
-    vec3 radiance;
-    if (u_cloud_layers > 0) {  // render/scene.py diffuse_radiance with clouds
-        // the ground in the clouds' shadow (its direct sunlight times their transmittance at
-        // the middle wavelength, here Y: render/surfaces.py), then the clouds in front
-        float t_ground = ground_distance(dir);
-        float sunlit = t_ground < 1e29
-            ? cloud_transmittance(t_ground * dir, u_sun_direction, 1e30).y : 1.0;
-        radiance = sky_radiance(u_camera_position, dir, u_sun_direction, sunlit);
-        // the pixel's row-major index: the march's jitter, as the CPU renderer numbers it
-        uint row = uint(u_resolution.y - gl_FragCoord.y);
-        uint index = row * uint(u_resolution.x) + uint(gl_FragCoord.x);
-        radiance = clouds_in_front(dir, u_sun_direction, radiance, 1e30, index);
-    } else {
-        radiance = sky_radiance(u_camera_position, dir, u_sun_direction, 1.0);
-    }
+#ifdef CLOUDS
+    // render/scene.py diffuse_radiance with clouds: the ground in the clouds' shadow (its
+    // direct sunlight times their transmittance at the middle wavelength, here Y:
+    // render/surfaces.py), then the clouds in front
+    float t_ground = ground_distance(dir);
+    float sunlit = t_ground < 1e29
+        ? cloud_transmittance(t_ground * dir, u_sun_direction, 1e30).y : 1.0;
+    vec3 radiance = sky_radiance(u_camera_position, dir, u_sun_direction, sunlit);
+    // the pixel's row-major index: the march's jitter, as the CPU renderer numbers it
+    uint row = uint(u_resolution.y - gl_FragCoord.y);
+    uint index = row * uint(u_resolution.x) + uint(gl_FragCoord.x);
+    radiance = clouds_in_front(dir, u_sun_direction, radiance, 1e30, index);
+#else
+    vec3 radiance = sky_radiance(u_camera_position, dir, u_sun_direction, 1.0);
+#endif
     vec3 transmittance = sun_transmittance(u_camera_position, u_sun_direction);
     if (any(greaterThan(transmittance, vec3(0.0)))) {
         vec3 sun_local = transpose(u_local_to_world) * u_sun_direction;
         vec3 disk = sun_disk(gl_FragCoord.xy, local.xyz, sun_local, transmittance);
-        if (u_cloud_layers > 0 && any(greaterThan(disk, vec3(0.0)))) {  // behind the clouds
+#ifdef CLOUDS
+        if (any(greaterThan(disk, vec3(0.0)))) {  // behind the clouds
             disk *= cloud_transmittance(vec3(0.0), u_sun_direction, 1e30);
         }
+#endif
         radiance += disk;
     }
     if (u_output == OUTPUT_METER) {  // luminance [cd m^-2] and whether the pixel looks up
