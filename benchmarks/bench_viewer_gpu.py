@@ -329,7 +329,6 @@ class Frame:
             depth, height, width, _ = data["cloud_noise"].shape
             noise = ctx.texture3d((width, height, depth), 2, data["cloud_noise"].tobytes(),
                                   dtype="f2", alignment=1)
-            layers = header["n_layers"]
             optics = np.stack([np.asarray(header[key], "f4") for key in (
                 "mass_extinction_xyz_m2_g", "single_scattering_albedo_xyz", "asymmetry_xyz")],
                 axis=1)  # (layers, 3, 3)
@@ -371,8 +370,8 @@ class Frame:
         self._set(program, tables["uniforms"])
         if self.map is not None:
             self._bind_clouds(program)
-            for unit, (name, texture) in enumerate(zip(MAP_UNITS, self.map["textures"]),
-                                                   start=8):
+            textures = zip(MAP_UNITS, self.map["textures"], strict=True)
+            for unit, (name, texture) in enumerate(textures, start=8):
                 texture.use(location=unit)
                 self._set(program, {f"u_cloud_map_{name}": unit})
             self._set(program, self.map["uniforms"])
