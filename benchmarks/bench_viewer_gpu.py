@@ -51,11 +51,17 @@ PREFIX = ("#version 300 es\nprecision highp float;\nprecision highp int;\n"
 FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n"
 LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
            "shaders/sky.glsl", "shaders/tonemap.glsl"]
-SKY = [*LIBRARY, "shaders/clouds.glsl", "shaders/main.frag"]
-PROGRAMS = {"sky": (SKY, ""), "cloudy_sky": (SKY, "#define CLOUDS\n"),
-            "cloud_map": ([*LIBRARY, "shaders/clouds.glsl", "shaders/cloud_map.frag"], ""),
+CLOUDY = [*LIBRARY, "shaders/clouds.glsl"]
+SKY = [*CLOUDY, "shaders/main.frag"]
+# viewer.js PROGRAMS: (fragment sources, defines, vertex source; None: FULL_SCREEN)
+PROGRAMS = {"sky": (SKY, "", None), "cloudy_sky": (SKY, "#define CLOUDS\n", None),
+            "cloud_final": (SKY, "#define CLOUDS\n#define CLOUDS_REFINED\n", None),
+            "cloud_map": ([*CLOUDY, "shaders/cloud_map.frag"], "", None),
+            "cloud_behind": ([*CLOUDY, "shaders/cloud_behind.frag"], "", None),
+            "cloud_level": ([*CLOUDY, "shaders/cloud_level.frag"], "", None),
+            "cloud_scatter": (["shaders/cloud_scatter.frag"], "", "shaders/cloud_scatter.vert"),
             "composite": (["generated/constants.glsl", "shaders/tonemap.glsl",
-                           "shaders/composite.frag"], "")}
+                           "shaders/composite.frag"], "", None)}
 # bench_viewer.py's VIEW and the page's defaults (controls.js NUMBERS)
 VIEW = {"sun_zenith": 60.0, "sun_azimuth": 200.0, "heading": 180.0, "pitch": 10.0,
         "roll": 0.0, "fov": 60.0, "fisheye_fov": 180.0, "altitude_m": 2.0, "lat": 45.0,
@@ -124,7 +130,8 @@ def prepare(out: Path, cache_dir: str | None) -> None:
         arrays["cloud_params"] = params
         np.savez(out / f"clouds-{name}.npz", header=json.dumps(gpu.header),
                  view=json.dumps(view), clouds=json.dumps(uniforms), message_bytes=len(message),
-                 map=json.dumps(_map_uniforms(params, site, view)), **arrays)
+                 map=json.dumps(_map_uniforms(params, site, view)),
+                 spacing=json.dumps(_spacings(site)), **arrays)
         print(f"clouds {name}: {len(message) / 2**20:.1f} MiB message")
 
 
@@ -187,6 +194,47 @@ def _map_uniforms(params: np.ndarray, site, view: dict) -> dict:
             "u_map_levels": [low, float(frame.levels[1] - frame.levels[0])]}
 
 
+def _spacings(site) -> dict:
+    """viewer.js drawRefinedClouds' first spacing for CLOUD_VIEW at each size of CLOUD_CASES
+    (transport.adaptive_pixels.coarse_spacing of the CPU camera's rays)."""
+    from skyscatter.render.camera import PerspectiveCamera
+    from skyscatter.transport.adaptive_pixels import coarse_spacing
+
+    spacings = {}
+    for _, width, height in CLOUD_CASES:
+        camera = PerspectiveCamera(width, height, CLOUD_VIEW["fov"],
+                                   heading_deg=CLOUD_VIEW["heading"],
+                                   pitch_deg=CLOUD_VIEW["pitch"])
+        local, _ = camera.directions()
+        pixels = np.arange(width * height).reshape(height, width)
+        spacings[f"{width}x{height}"] = coarse_spacing(local.reshape(-1, 3), pixels)
+    return spacings
+
+
+# The sky pass as a compute shader (`Frame.compute_sky`): main.frag's main() called per image
+# pixel, its output stored in the float frame (RGBA16F)
+COMPUTE_MAIN = """
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba16f, binding = 0) uniform writeonly highp image2D u_image;
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (p.x >= int(u_resolution.x) || p.y >= int(u_resolution.y)) return;
+    frag_coord = vec4(vec2(p) + 0.5, 0.0, 1.0);
+    fragment_main();
+    imageStore(u_image, p, frag_colour);
+}
+"""
+
+
+def _compute_source(names: list[str], defines: str) -> str:
+    """The fragment program of `names` as desktop GLSL 4.30 compute: main.frag's output a
+    variable, its main() `fragment_main`, gl_FragCoord the pixel's centre."""
+    text = (_source(names).replace("out vec4 frag_colour;", "vec4 frag_colour;")
+            .replace("void main()", "void fragment_main()").replace("gl_FragCoord", "frag_coord"))
+    prefix = PREFIX.replace("#version 300 es", "#version 430")
+    return prefix + "vec4 frag_coord;\n" + defines + text + COMPUTE_MAIN
+
+
 def _source(names: list[str]) -> str:
     return "\n".join((STATIC / name).read_text() for name in names)
 
@@ -198,11 +246,16 @@ class Frame:
     def __init__(self, ctx, tables: list[dict]) -> None:
         self.ctx = ctx
         self.version_line = "#version 300 es"
-        self.programs = {key: self._program(defines + _source(names))
-                         for key, (names, defines) in PROGRAMS.items()}
+        self.programs = {
+            key: self._program(defines + _source(names),
+                               FULL_SCREEN if vertex is None else _source([vertex]))
+            for key, (names, defines, vertex) in PROGRAMS.items()}
         quad = ctx.buffer(np.array([-1, -1, 3, -1, -1, 3], dtype="f4").tobytes())
         self.quads = {key: ctx.vertex_array(program, [(quad, "2f", "position")])
-                      for key, program in self.programs.items()}
+                      for key, program in self.programs.items() if key != "cloud_scatter"}
+        self.points = ctx.vertex_array(self.programs["cloud_scatter"], [])
+        self.refined = True  # clouds by the adaptive refinement (viewer.js), else every pixel
+        self.compute = {}  # compute shaders of `compute_sky`
         self.tables = [self._upload(t) for t in tables]
         self.clouds = self._upload_clouds(None)
         self.map = None  # the clouds' shadow map (`set_clouds`)
@@ -225,6 +278,7 @@ class Frame:
                 texture.repeat_x = texture.repeat_y = False
             self.map = {"textures": textures, "framebuffer": self.ctx.framebuffer(textures),
                         "uniforms": data["map"]}
+            self.spacings = data["spacing"]
 
     def draw_map(self) -> None:
         """Viewer.drawCloudMap: cloud_map.frag, one pass a layer into its rows of the map."""
@@ -256,19 +310,34 @@ class Frame:
         self.frame.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.frame_buffer = self.ctx.framebuffer([self.frame])
         self.screen = self.ctx.framebuffer([self.ctx.renderbuffer((width, height), 4)])
+        if self.map is not None:  # viewer.js drawRefinedClouds' targets and first spacing
+            self.spacing = self.spacings[f"{width}x{height}"]
+            grid = (-(-width // 2), -(-height // 2)) if self.spacing > 1 else (width, height)
+            self.refine_targets = [self._float_targets((width, height), 1),
+                                   self._float_targets((width, height), 2),
+                                   self._float_targets(grid, 2)]
 
-    def _program(self, fragment: str):
+    def _float_targets(self, size: tuple[int, int], count: int) -> dict:
+        """viewer.js textureTargets: `count` RGBA32F textures of `size`, one framebuffer."""
+        import moderngl
+
+        textures = [self.ctx.texture(size, 4, dtype="f4") for _ in range(count)]
+        for texture in textures:
+            texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return {"textures": textures, "framebuffer": self.ctx.framebuffer(textures)}
+
+    def _program(self, fragment: str, vertex: str):
         """Compiles as the page does; NVIDIA's desktop GL takes `#version 300 es` under
         ARB_ES3_compatibility, else the version line becomes desktop GLSL 3.30 (here only)."""
         import moderngl
 
         try:
-            return self.ctx.program(vertex_shader=PREFIX + FULL_SCREEN,
+            return self.ctx.program(vertex_shader=PREFIX + vertex,
                                     fragment_shader=PREFIX + fragment)
         except moderngl.Error:
             self.version_line = "#version 330 core"
             prefix = PREFIX.replace("#version 300 es", self.version_line)
-            return self.ctx.program(vertex_shader=prefix + FULL_SCREEN,
+            return self.ctx.program(vertex_shader=prefix + vertex,
                                     fragment_shader=prefix + fragment)
 
     def _upload(self, data: dict) -> dict:
@@ -360,13 +429,26 @@ class Frame:
             else:
                 uniform.value = tuple(value) if isinstance(value, (list, tuple)) else value
 
-    def draw_sky(self, tables: dict, projection: int) -> None:
-        """Viewer.drawSky(w, h, "exposed") with `tables` bound."""
+    def compute_sky(self, tables: dict, projection: int) -> None:
+        """`draw_sky`'s one pass (the clear sky, or every pixel marched through the clouds) as
+        a compute shader into the float frame: the same code on all of a GPU's
+        multiprocessors, where an H100's or H200's pixel shaders run on two of its TPCs
+        (NVIDIA H100 Tensor Core GPU Architecture whitepaper, 2022)."""
         key = "sky" if self.map is None else "cloudy_sky"
-        program = self.programs[key]
+        if key not in self.compute:
+            names, defines, _ = PROGRAMS[key]
+            self.compute[key] = self.ctx.compute_shader(_compute_source(names, defines))
+        program = self._setup(key, tables, projection, self.compute[key])
+        self.frame.bind_to_image(0, read=False, write=True)
+        program.run(-(-self.width // 8), -(-self.height // 8))
+
+    def _setup(self, key: str, tables: dict, projection: int, program=None):
+        """viewer.js drawSky's bindings for program `key` (or the compute `program`): tables,
+        clouds, shadow map, view."""
+        program = self.programs[key] if program is None else program
         for unit, name in enumerate(("transmittance", "irradiance", "scattering", "phase")):
             tables["textures"][name].use(location=unit)
-            program[f"u_{name}"].value = unit
+            self._set(program, {f"u_{name}": unit})
         self._set(program, tables["uniforms"])
         if self.map is not None:
             self._bind_clouds(program)
@@ -380,7 +462,64 @@ class Frame:
         self._set(program, {**view, "u_resolution": (self.width, self.height),
                             "u_projection": projection, "u_output": 2,  # OUTPUT_EXPOSED
                             "u_half_extent": (tan_v * self.width / self.height, tan_v)})
-        self.quads[key].render(vertices=3)
+        return program
+
+    def _bind_refinement(self, program, samplers: list) -> None:
+        """viewer.js bindRefinement: (name, texture) pairs on units 11-13."""
+        for unit, (name, texture) in enumerate(samplers, start=11):
+            texture.use(location=unit)
+            self._set(program, {name: unit})
+
+    def draw_sky(self, tables: dict, projection: int) -> None:
+        """Viewer.drawSky(w, h, "exposed") with `tables` bound (into the bound target)."""
+        if self.map is None or not self.refined:
+            key = "sky" if self.map is None else "cloudy_sky"
+            self._setup(key, tables, projection)
+            self.quads[key].render(vertices=3)
+            return
+        target = self.ctx.fbo
+        behind, known = self.draw_refined(tables, projection)
+        target.use()
+        program = self._setup("cloud_final", tables, projection)
+        self._bind_refinement(program, [("u_behind", behind["textures"][0]),
+                                        ("u_known_t", known["textures"][0]),
+                                        ("u_known_a", known["textures"][1])])
+        self.quads["cloud_final"].render(vertices=3)
+
+    def draw_refined(self, tables: dict, projection: int) -> tuple[dict, dict]:
+        """Viewer.drawRefinedClouds: the radiance behind the clouds, the lattice and the levels
+        (cloud_level.frag, cloud_scatter); returns the behind and known targets."""
+        import moderngl
+
+        width, height = self.width, self.height
+        behind, known, level = self.refine_targets
+        behind["framebuffer"].use()
+        self._setup("cloud_behind", tables, projection)
+        self.quads["cloud_behind"].render(vertices=3)
+        spacing = self.spacing
+        passes = [(spacing, 0, 0, 1)]
+        half = spacing // 2
+        while half >= 1:
+            passes += [(spacing, 0, half, 0), (spacing, half, 0, 0), (spacing, half, half, 0)]
+            spacing, half = half, half // 2
+        for step, dy, dx, first in passes:
+            columns, rows = -(-(width - dx) // step), -(-(height - dy) // step)
+            level["framebuffer"].use()
+            self.ctx.viewport = (0, 0, columns, rows)
+            program = self._setup("cloud_level", tables, projection)
+            self._bind_refinement(program, [("u_behind", behind["textures"][0]),
+                                            ("u_known_t", known["textures"][0]),
+                                            ("u_known_a", known["textures"][1])])
+            program["u_level"].value = (step, dy, dx, first)
+            self.quads["cloud_level"].render(vertices=3)
+            known["framebuffer"].use()
+            scatter = self.programs["cloud_scatter"]
+            self._bind_refinement(scatter, [("u_level_t", level["textures"][0]),
+                                            ("u_level_a", level["textures"][1])])
+            self._set(scatter, {"u_level": (step, dy, dx, first), "u_level_columns": columns,
+                                "u_resolution": (width, height)})
+            self.points.render(moderngl.POINTS, vertices=columns * rows)
+        return behind, known
 
     def draw(self, projection: int, atmospheres: int, composite: bool = True) -> None:
         """Viewer.draw: the sky of `atmospheres` table sets (added) into the float frame, then
@@ -424,7 +563,7 @@ def _load_clouds(path: Path) -> dict:
     with np.load(path) as npz:
         data = {name: npz[name] for name in npz.files
                 if name.startswith("cloud_") and name != "clouds"}
-        for name in ("header", "view", "clouds", "map"):
+        for name in ("header", "view", "clouds", "map", "spacing"):
             data[name] = json.loads(str(npz[name]))
         data["message_bytes"] = int(npz["message_bytes"])
     return data
@@ -443,27 +582,37 @@ def run(directory: Path, frames: int, warm_up: int, png: Path | None) -> None:
     """Times every case and prints one line each; ends with a summary table."""
     import moderngl
 
-    ctx = moderngl.create_standalone_context(backend="egl", require=330)
+    try:  # compute shaders (`Frame.compute_sky`) need OpenGL 4.3
+        ctx = moderngl.create_standalone_context(backend="egl", require=430)
+    except Exception:  # noqa: BLE001 - any driver's refusal: then without them
+        ctx = moderngl.create_standalone_context(backend="egl", require=330)
+    compute = ctx.version_code >= 430
     print(f"GL_RENDERER {ctx.info['GL_RENDERER']}; GL_VERSION {ctx.info['GL_VERSION']}")
     rows = []
+
+    def timed(quality: str, image: str, case: str, draw) -> None:
+        gpu, wall = _time(ctx, draw, frames, warm_up)
+        rows.append((quality, image, case, np.median(gpu), np.percentile(gpu, 95),
+                     np.median(wall), np.percentile(wall, 95)))
+        print(f"{quality} {image} {case}: GPU {rows[-1][3]:.3f} ms (p95 {rows[-1][4]:.3f}), "
+              f"wall {rows[-1][5]:.3f} ms (p95 {rows[-1][6]:.3f})")
+
     for quality in ("full", "preview"):
         data = _load(directory / f"earth-{quality}.npz")
         header = data["header"]
-        label = (f"earth {quality} ({header['n_wavelengths']} wavelengths, scattering "
-                 f"{header['scattering_shape']}, {data['message_bytes'] / 2**20:.1f} MiB)")
+        print(f"earth {quality}: {header['n_wavelengths']} wavelengths, scattering "
+              f"{header['scattering_shape']}, {data['message_bytes'] / 2**20:.1f} MiB")
         frame = Frame(ctx, [data, data])  # two uploads: the second atmosphere's own textures
         for projection, width, height in CASES:
             frame.resize(width, height)
             index = ["perspective", "fisheye"].index(projection)
+            image = f"{projection} {width}x{height}"
             for name, atmospheres, composite in CASE_DRAWS:
-                draw = partial(frame.draw, index, atmospheres, composite)
-                gpu, wall = _time(ctx, draw, frames, warm_up)
-                row = (quality, f"{projection} {width}x{height}", name,
-                       np.median(gpu), np.percentile(gpu, 95), np.median(wall),
-                       np.percentile(wall, 95))
-                rows.append(row)
-                print(f"{label} {row[1]} {name}: GPU {row[3]:.3f} ms (p95 {row[4]:.3f}), "
-                      f"wall {row[5]:.3f} ms (p95 {row[6]:.3f}); shaders {frame.version_line}")
+                timed(quality, image, name, partial(frame.draw, index, atmospheres, composite))
+            if compute:
+                compute = _try_compute(partial(timed, quality, image, "sky pass as compute",
+                                               partial(frame.compute_sky, frame.tables[0], index)),
+                                       frame, index)
             frame.draw(index, 1)
             _check(frame, f"{quality}-{projection}", png)
     data = _load(directory / "earth-preview.npz")
@@ -472,36 +621,68 @@ def run(directory: Path, frames: int, warm_up: int, png: Path | None) -> None:
         clouds = _load_clouds(directory / f"clouds-{name}.npz")
         frame.set_clouds(clouds)
         n_u, n_w = clouds["map"]["u_map_size"]
-        gpu, wall = _time(ctx, frame.draw_map, frames, warm_up)
-        rows.append(("preview", f"map {n_u}x{n_w}", f"{name}: shadow map", np.median(gpu),
-                     np.percentile(gpu, 95), np.median(wall), np.percentile(wall, 95)))
-        print(f"clouds {name}: shadow map {n_u}x{n_w}: GPU {rows[-1][3]:.3f} ms")
+        timed("preview", f"map {n_u}x{n_w}", f"{name}: shadow map", frame.draw_map)
         for projection, width, height in CLOUD_CASES:
             frame.resize(width, height)
-            cases = ((f"frame with {name}", partial(frame.draw, 0, 1, True)),
-                     (f"{name}, map redrawn", partial(_map_and_frame, frame)))
-            for case, draw in cases:
-                gpu, wall = _time(ctx, draw, frames, warm_up)
-                row = ("preview", f"{projection} {width}x{height}", case,
-                       np.median(gpu), np.percentile(gpu, 95), np.median(wall),
-                       np.percentile(wall, 95))
-                rows.append(row)
-                print(f"clouds {name} ({clouds['message_bytes'] / 2**20:.1f} MiB) {row[1]} "
-                      f"{case}: GPU {row[3]:.3f} ms (p95 {row[4]:.3f}), wall {row[5]:.3f} ms "
-                      f"(p95 {row[6]:.3f})")
-            frame.draw(0, 1)
+            image = f"{projection} {width}x{height}"
+            frame.refined = False
+            timed("preview", image, f"{name}, every pixel", partial(frame.draw, 0, 1))
+            every_pixel = _screen(frame)
+            if compute:
+                compute = _try_compute(partial(timed, "preview", image,
+                                               f"{name}, every pixel, compute",
+                                               partial(frame.compute_sky, frame.tables[0], 0)),
+                                       frame, 0)
+            frame.refined = True
+            timed("preview", image, f"{name}, map redrawn", partial(_map_and_frame, frame))
+            timed("preview", image, f"frame with {name}", partial(frame.draw, 0, 1))
             _check(frame, f"clouds-{name}-{width}x{height}", png)
-    print(f"\n{'tables':8s} {'image':22s} {'case':24s} {'GPU median':>10s} {'p95':>7s} "
+            error = _screen(frame).astype(float) - every_pixel
+            print(f"  refined against every pixel marched: PSNR "
+                  f"{10 * np.log10(255.0**2 / np.mean(error**2)):.1f} dB")
+    print(f"\n{'tables':8s} {'image':22s} {'case':36s} {'GPU median':>10s} {'p95':>7s} "
           f"{'wall median':>11s} {'p95':>7s}  [ms], {frames} frames")
     for row in rows:
-        print(f"{row[0]:8s} {row[1]:22s} {row[2]:24s} {row[3]:10.3f} {row[4]:7.3f} "
+        print(f"{row[0]:8s} {row[1]:22s} {row[2]:36s} {row[3]:10.3f} {row[4]:7.3f} "
               f"{row[5]:11.3f} {row[6]:7.3f}")
+
+
+def _try_compute(time_it, frame: Frame, projection: int) -> bool:
+    """Times a compute case and compares it with the fragment pass; False (no more compute
+    cases) where the driver does not take the compute shader."""
+    import moderngl
+
+    try:
+        time_it()
+    except moderngl.Error as error:
+        print(f"  no compute cases: {str(error)[:300]}")
+        return False
+    _compare_compute(frame, projection)
+    return True
+
+
+def _compare_compute(frame: Frame, projection: int) -> None:
+    """Prints how far the compute pass's float frame lies from the fragment pass's."""
+    frame.frame_buffer.use()
+    frame.draw_sky(frame.tables[0], projection)
+    fragment = np.frombuffer(frame.frame.read(), dtype="f2").astype(float)
+    frame.compute_sky(frame.tables[0], projection)
+    frame.ctx.finish()
+    computed = np.frombuffer(frame.frame.read(), dtype="f2").astype(float)
+    largest = np.abs(computed - fragment).max() / np.abs(fragment).max()
+    print(f"  compute against fragment: largest difference {largest:.2e} of the largest value")
 
 
 def _map_and_frame(frame: Frame) -> None:
     """A frame whose view, sun or clouds moved: the shadow map drawn again, then the frame."""
     frame.draw_map()
     frame.draw(0, 1)
+
+
+def _screen(frame: Frame) -> np.ndarray:
+    """The canvas (h, w, 3) uint8, top row first."""
+    shown = np.frombuffer(frame.screen.read(components=4), dtype="u1")
+    return shown.reshape(frame.height, frame.width, 4)[::-1, :, :3]
 
 
 def _check(frame: Frame, name: str, png: Path | None) -> None:

@@ -30,7 +30,8 @@ from skyscatter.render.tonemap import (
     OPERATORS,
 )
 from skyscatter.spectrum.colour import _SRGB_LINEAR_LIMIT, xyz_to_rgb
-from skyscatter.transport import _air_shadow_kernels, _cloud_kernels, air_shadows
+from skyscatter.transport import _air_shadow_kernels, _cloud_kernels, adaptive_pixels, air_shadows
+from skyscatter.transport.clouds import REFINE_TOLERANCE
 from skyscatter.transport.table_parameterisation import SPREAD_MIN
 from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS
 from skyscatter.viewer.gpu_clouds import CLOUD_FORMAT_VERSION, CLOUD_LAYOUT, CLOUD_MAGIC
@@ -98,7 +99,8 @@ def _cloud_lines() -> list[str]:
               f"const float SHADOW_MAX_M = {float(air_shadows.SHADOW_MAX_M)!r};",
               f"#define MAP_LEVELS {air_shadows.MAP_LEVELS}",
               f"const float MAP_STEP_M = {float(_air_shadow_kernels.MAP_STEP_M)!r};",
-              f"const int MAP_MAX_STEPS = {_air_shadow_kernels.MAP_MAX_STEPS};"]
+              f"const int MAP_MAX_STEPS = {_air_shadow_kernels.MAP_MAX_STEPS};",
+              f"const float REFINE_TOLERANCE = {REFINE_TOLERANCE!r};"]
     for name in CLOUD_KERNEL_CONSTANTS:
         value = getattr(_cloud_kernels, name)
         kind = "int" if isinstance(value, int) else "float"
@@ -112,7 +114,7 @@ def constants_glsl() -> str:
                                     "transport/table_parameterisation.py, transport/tables.py, "
                                     "spectrum/colour.py, atmosphere/_cloud_sampling.py, "
                                     "transport/_cloud_kernels.py, "
-                                    "transport/air_shadows.py"),
+                                    "transport/air_shadows.py, transport/clouds.py"),
              f"const float PI = {math.pi!r};",
              f"const float SPREAD_MIN = {SPREAD_MIN!r};",
              f"#define RADIUS_WARP_SEGMENTS {RADIUS_WARP_SEGMENTS}",
@@ -168,6 +170,9 @@ def layout_json() -> str:
                                   "max_layers": MAX_CLOUD_LAYERS,
                                   "coverage_tile_ratio": _cloud_sampling.COVERAGE_TILE_RATIO,
                                   "shadow_map": _shadow_map_layout(),
+                                  "refinement": {
+                                      "max_spacing": adaptive_pixels.MAX_SPACING,
+                                      "spacing_angle_rad": adaptive_pixels.SPACING_ANGLE_RAD},
                                   "arrays": CLOUD_LAYOUT}},
                       indent=2) + "\n"
 

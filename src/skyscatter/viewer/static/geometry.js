@@ -96,3 +96,29 @@ export function mapFrame(rays, stretches, sun, lowR, highR, map) {
           shape: [0, 1].map((k) => Math.ceil((high[k] - low[k]) / texel) + 2),
           levels: [lowR, (highR - lowR) / (map.levels - 1)]};
 }
+
+// twin of transport.adaptive_pixels.coarse_spacing for the page's w x h image (its rays every
+// 8th row as there, and every 8th column): the largest power of two up to maxSpacing whose
+// lattice points lie within `angle` [rad] of each other, from the median angle between
+// horizontally neighbouring pixels
+export function coarseSpacing(state, width, height, maxSpacing, angle) {
+  const size = {clientWidth: width, clientHeight: height};
+  const radius = Math.min(width, height) / 2;
+  const hasRay = (x, y) => state.projection !== "fisheye" || Math.hypot(x - width / 2, y - height / 2) <= radius;
+  const angles = [];
+  for (let row = 0; row < height; row += 8) {
+    for (let col = 0; col + 1 < width; col += 8) {
+      const [x, y] = [col + 0.5, row + 0.5];
+      if (!hasRay(x, y) || !hasRay(x + 1, y)) continue;
+      const cosine = dot(pixelDirection(state, size, x, y), pixelDirection(state, size, x + 1, y));
+      angles.push(Math.acos(Math.min(Math.max(cosine, -1), 1)));
+    }
+  }
+  if (!angles.length) return 1;
+  angles.sort((a, b) => a - b);
+  const middle = angles.length >> 1;
+  const step = angles.length % 2 ? angles[middle] : 0.5 * (angles[middle - 1] + angles[middle]);
+  let spacing = 1;
+  while (spacing < maxSpacing && 2 * spacing * step <= angle) spacing *= 2;
+  return spacing;
+}

@@ -7,18 +7,24 @@ import {apiFetch, apiJson} from "./api.js";
 import {decodeClouds, decodeTables, deleteClouds, deleteTables, fetchLayout, uploadClouds,
         uploadTables} from "./tables.js";
 import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
-import {cameraBasis, localFrame, mapFrame, pixelDirection, shadedStretch, sunDirection,
-        toWorld} from "./geometry.js";
+import {cameraBasis, coarseSpacing, localFrame, mapFrame, pixelDirection, shadedStretch,
+        sunDirection, toWorld} from "./geometry.js";
 
 const LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
                  "shaders/sky.glsl", "shaders/tonemap.glsl"];
-const SKY = [...LIBRARY, "shaders/clouds.glsl", "shaders/main.frag"];
+const CLOUDY = [...LIBRARY, "shaders/clouds.glsl"];
+const SKY = [...CLOUDY, "shaders/main.frag"];
 // Programs: [vertex sources, fragment sources, defines] (files under static/; "" = the
-// full-screen triangle); the sky without clouds is a program of its own (main.frag)
+// full-screen triangle); the sky without clouds is a program of its own (main.frag), the
+// clouds are drawn in passes (drawRefinedClouds), or marched in one without float targets
 const PROGRAMS = {
   sky: [[""], SKY],
   cloudy_sky: [[""], SKY, "#define CLOUDS\n"],
-  cloud_map: [[""], [...LIBRARY, "shaders/clouds.glsl", "shaders/cloud_map.frag"]],
+  cloud_final: [[""], SKY, "#define CLOUDS\n#define CLOUDS_REFINED\n"],
+  cloud_map: [[""], [...CLOUDY, "shaders/cloud_map.frag"]],
+  cloud_behind: [[""], [...CLOUDY, "shaders/cloud_behind.frag"]],
+  cloud_level: [[""], [...CLOUDY, "shaders/cloud_level.frag"]],
+  cloud_scatter: [["shaders/cloud_scatter.vert"], ["shaders/cloud_scatter.frag"]],
   stars: [[...LIBRARY.slice(0, 4), "shaders/stars.vert"],
           ["generated/constants.glsl", "shaders/camera.glsl", "shaders/stars.frag"]],
   composite: [[""], ["generated/constants.glsl", "shaders/tonemap.glsl", "shaders/composite.frag"]],
@@ -30,6 +36,7 @@ const DEG = Math.PI / 180;
 const J2000_MS = Date.UTC(2000, 0, 1, 12);  // the clouds' epoch (api.J2000_UTC)
 const CLOUD_UNITS = ["noise", "profiles", "phase", "optics"];  // texture units 4-7
 const MAP_UNITS = ["low", "middle", "high"];  // texture units 8-10: the clouds' shadow map
+const REFINE_UNIT = 11;  // texture units 11-13: the clouds' refinement (bindRefinement)
 const MAP_GRID = 16;  // the shadow map is placed over the rays of (MAP_GRID + 1)^2 pixels
 
 // Exposure change [EV] for a scene of log-average luminance L [cd m^-2] (twin of
@@ -86,6 +93,9 @@ class Viewer {
     this.locations = new Map();
     const gl = this.gl;
     this.fullScreen = gl.createVertexArray();
+    this.noAttributes = gl.createVertexArray();  // points placed by gl_VertexID
+    this.targets = new Map();  // float render targets of the clouds' refinement
+    this.spacings = new Map();  // its first lattice's spacing by projection and size
     gl.bindVertexArray(this.fullScreen);
     gl.bindBuffer(gl.ARRAY_BUFFER, gl.createBuffer());
     gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 3, -1, -1, 3]), gl.STATIC_DRAW);
@@ -274,6 +284,106 @@ class Viewer {
     return uniforms;
   }
 
+  // RGBA32F textures of w x h, `count` of them, attached to one framebuffer (its draw buffers),
+  // kept as this.targets[name]
+  textureTargets(name, width, height, count) {
+    const gl = this.gl;
+    const old = this.targets.get(name);
+    if (old && old.width === width && old.height === height) return old;
+    if (old) { old.textures.forEach((t) => gl.deleteTexture(t)); gl.deleteFramebuffer(old.framebuffer); }
+    const framebuffer = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
+    const textures = Array.from({length: count}, (_, i) => {
+      const texture = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, texture);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, width, height, 0, gl.RGBA, gl.FLOAT, null);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0 + i, gl.TEXTURE_2D, texture, 0);
+      return texture;
+    });
+    gl.drawBuffers(textures.map((_, i) => gl.COLOR_ATTACHMENT0 + i));
+    this.targets.set(name, {textures, framebuffer, width, height});
+    return this.targets.get(name);
+  }
+
+  // `program`'s samplers of the refinement: [name, targets, which texture (0)] on units 11-13;
+  // no other texture stays bound there (a pass may draw into it)
+  bindRefinement(program, samplers) {
+    const gl = this.gl;
+    for (let i = 0; i < 3; ++i) {
+      gl.activeTexture(gl.TEXTURE0 + REFINE_UNIT + i);
+      gl.bindTexture(gl.TEXTURE_2D, null);
+    }
+    samplers.forEach(([name, targets, which = 0], i) => {
+      gl.activeTexture(gl.TEXTURE0 + REFINE_UNIT + i);
+      gl.bindTexture(gl.TEXTURE_2D, targets.textures[which]);
+      gl.uniform1i(this.uniform(program, name), REFINE_UNIT + i);
+    });
+  }
+
+  // The clouds of the view by adaptive refinement over the pixels (twin of
+  // transport.adaptive_pixels.refine, as transport.clouds.clouds_in_front uses it): the
+  // radiance behind them (cloud_behind.frag), then a lattice of every s-th pixel marched and,
+  // level by level, the pixels between (cloud_level.frag on a compact grid, put in place by
+  // cloud_scatter); main.frag with CLOUDS_REFINED composes the frame from what this returns,
+  // the targets {behind, known} (`slot`: "frame" or "meter", each its own)
+  drawRefinedClouds(view, map, slot) {
+    const gl = this.gl;
+    const [width, height] = view.u_resolution;
+    const previous = gl.getParameter(gl.FRAMEBUFFER_BINDING);
+    const s = this.state;
+    const refinement = this.layout.clouds.refinement;
+    const key = JSON.stringify([s.projection, s.fov, s.fisheye_fov, width, height]);
+    if (!this.spacings.has(key)) {  // the rays' angles do not turn with the camera
+      this.spacings.set(key, coarseSpacing(s, width, height, refinement.max_spacing,
+                                           refinement.spacing_angle_rad));
+    }
+    let spacing = this.spacings.get(key);
+    const behind = this.textureTargets(`${slot} behind`, width, height, 1);
+    const known = this.textureTargets(`${slot} known`, width, height, 2);
+    const grid = spacing > 1 ? [Math.ceil(width / 2), Math.ceil(height / 2)] : [width, height];
+    const level = this.textureTargets(`${slot} level`, ...grid, 2);
+    const setUp = (program) => {
+      gl.useProgram(this.programs[program]);
+      this.bindTables(program);
+      this.bindClouds(program, view.u_camera_position);
+      this.bindCloudMap(program);
+      this.setUniforms(program, {...view, ...map});
+    };
+    gl.bindFramebuffer(gl.FRAMEBUFFER, behind.framebuffer);
+    gl.viewport(0, 0, width, height);
+    setUp("cloud_behind");
+    this.bindRefinement("cloud_behind", []);
+    gl.bindVertexArray(this.fullScreen);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    const passes = [[spacing, 0, 0, 1]];  // the lattice, then three offsets a level
+    for (let half = spacing >> 1; half >= 1; spacing = half, half >>= 1) {
+      passes.push([spacing, 0, half, 0], [spacing, half, 0, 0], [spacing, half, half, 0]);
+    }
+    for (const pass of passes) {
+      const [step, dy, dx] = pass;
+      const columns = Math.ceil((width - dx) / step);
+      const rows = Math.ceil((height - dy) / step);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, level.framebuffer);
+      gl.viewport(0, 0, columns, rows);
+      setUp("cloud_level");
+      this.bindRefinement("cloud_level", [["u_behind", behind], ["u_known_t", known], ["u_known_a", known, 1]]);
+      this.setUniforms("cloud_level", {u_level: pass});
+      gl.bindVertexArray(this.fullScreen);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, known.framebuffer);
+      gl.viewport(0, 0, width, height);
+      gl.useProgram(this.programs.cloud_scatter);
+      this.bindRefinement("cloud_scatter", [["u_level_t", level], ["u_level_a", level, 1]]);
+      this.setUniforms("cloud_scatter", {u_level: pass, u_level_columns: columns, u_resolution: [width, height]});
+      gl.bindVertexArray(this.noAttributes);
+      gl.drawArrays(gl.POINTS, 0, columns * rows);
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, previous);
+    return {behind, known};
+  }
+
   // The shadow map's textures on units 8-10
   bindCloudMap(program) {
     const gl = this.gl;
@@ -342,7 +452,8 @@ class Viewer {
   setUniforms(program, values) {
     const gl = this.gl;
     const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows", "u_output",
-                          "u_radius_warp_identity", "u_cloud_layers", "u_map_on", "u_map_layer"]);
+                          "u_radius_warp_identity", "u_cloud_layers", "u_map_on", "u_map_layer",
+                          "u_level_columns"]);
     const matrices = new Set(["u_camera_basis", "u_local_to_world", "u_site_to_world"]);
     for (const [name, value] of Object.entries(values)) {
       const location = this.uniform(program, name);
@@ -354,6 +465,7 @@ class Viewer {
       else if (name === "u_radius_warp") gl.uniform4fv(location, value);
       else if (name === "u_cloud_origin") gl.uniform3fv(location, value);
       else if (name === "u_cloud_params") gl.uniform4fv(location, value);
+      else if (name === "u_level") gl.uniform4iv(location, value);
       else if (!Array.isArray(value)) gl.uniform1f(location, value);
       else if (value.length === 2) gl.uniform2fv(location, value);
       else if (value.length === 3) gl.uniform3fv(location, value);
@@ -377,14 +489,18 @@ class Viewer {
   drawSky(width, height, output) {
     const gl = this.gl;
     const cloudy = this.clouds.header.n_layers > 0;
-    const program = cloudy ? "cloudy_sky" : "sky";
+    const refined = cloudy && this.floatTargets;
+    const program = refined ? "cloud_final" : cloudy ? "cloudy_sky" : "sky";
     const view = this.viewUniforms(width, height);
     const map = cloudy ? this.drawCloudMap(view, width, height) : {};
+    const targets = refined ? this.drawRefinedClouds(view, map, output === "meter" ? "meter" : "frame") : null;
     gl.useProgram(this.programs[program]);
     gl.viewport(0, 0, width, height);
     this.bindTables(program);
     this.bindClouds(program, view.u_camera_position);
     if (cloudy) this.bindCloudMap(program);
+    if (refined) this.bindRefinement(program, [["u_behind", targets.behind], ["u_known_t", targets.known],
+                                               ["u_known_a", targets.known, 1]]);
     this.setUniforms(program, {...view, ...map, u_output: this.layout.outputs.indexOf(output)});
     gl.bindVertexArray(this.fullScreen);
     gl.drawArrays(gl.TRIANGLES, 0, 3);

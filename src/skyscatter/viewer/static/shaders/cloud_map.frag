@@ -7,7 +7,6 @@
 // noise's erosion; each level's share read off the running sum, linear within a step.
 
 uniform int u_map_layer;
-uniform vec3 u_sun_direction;  // world, unit
 
 layout(location = 0) out vec4 water_low;
 layout(location = 1) out vec4 water_middle;

@@ -24,6 +24,7 @@
 // storing float16).
 
 uniform vec3 u_camera_position;             // planet-centred [m]
+uniform vec3 u_sun_direction;               // world, unit
 uniform int u_cloud_layers;                 // 0: no clouds
 uniform highp sampler3D u_cloud_noise;      // RG: shape, detail (gpu_clouds: layers stacked)
 // each layer's first 4 CLOUD_PARAM_VEC4S columns of the parameter table (viewer.js
@@ -49,6 +50,12 @@ uniform vec2 u_map_corner;      // [m]
 uniform float u_map_texel;      // [m]
 uniform vec2 u_map_size;        // n_u, n_w
 uniform vec2 u_map_levels;      // first radius, spacing [m]
+// The adaptive refinement over the pixels (viewer.js drawRefinedClouds), RGBA32F of the image's
+// size: the radiance behind the clouds (cloud_behind.frag), and each pixel's T (XYZ) and hit,
+// and A (XYZ) of L = T L_behind + A, known so far (cloud_level.frag, cloud_scatter.frag)
+uniform highp sampler2D u_behind;
+uniform highp sampler2D u_known_t;
+uniform highp sampler2D u_known_a;
 
 float cloud_param(int layer, int column) {
     return u_cloud_params[layer * CLOUD_PARAM_VEC4S + column / 4][column % 4];
@@ -649,16 +656,19 @@ vec3 air_shadow_loss(vec3 v, vec3 sun_dir, float stop, uint index) {
     return loss;
 }
 
-// twin of transport.clouds.clouds_in_front for one ray v from the camera: the clouds put in
-// front of `behind` (the sky or ground without them), with the air between and the light the
-// clouds' shadows take from it (air_shadow_loss, dL):
-// L = T_c (L_behind - S) + max(S - dL, 0) + T_air L_c; a ray that meets no cloud
-// max(L_behind - dL, 0)
-vec3 clouds_in_front(vec3 v, vec3 sun_dir, vec3 behind, float t_max, uint index) {
-    vec3 trans, glow;
-    vec2 depth_hit = march_clouds(v, t_max, sun_dir, index, trans, glow);
-    if (depth_hit.y == 0.0) {
-        return max(behind - air_shadow_loss(v, sun_dir, t_max, index), vec3(0.0));
+// twin of transport.clouds._CloudsOver.march for one ray v from the camera: the clouds in
+// front of whatever lies behind them, with the air between and the light the clouds' shadows
+// take from it (air_shadow_loss, dL), as L = T L_behind + A: T = T_c and
+// A = -T_c S + max(S - dL, 0) + T_air L_c; a ray that meets no cloud (hit 0) T = 1, A = -dL
+void clouds_over(vec3 v, vec3 sun_dir, float t_max, uint index, out vec3 t, out vec3 a,
+                 out float hit) {
+    vec3 glow;
+    vec2 depth_hit = march_clouds(v, t_max, sun_dir, index, t, glow);
+    hit = depth_hit.y;
+    if (hit == 0.0) {
+        t = vec3(1.0);
+        a = -air_shadow_loss(v, sun_dir, t_max, index);
+        return;
     }
     float depth = depth_hit.x;
     vec3 air_light;
@@ -666,6 +676,23 @@ vec3 clouds_in_front(vec3 v, vec3 sun_dir, vec3 behind, float t_max, uint index)
                                                 u_camera_position + depth * v, sun_dir,
                                                 air_light);
     vec3 loss = air_shadow_loss(v, sun_dir, depth, index);
-    return trans * (behind - air_light) + max(air_light - loss, vec3(0.0))
-           + air_transmittance * glow;
+    a = max(air_light - loss, vec3(0.0)) - t * air_light + air_transmittance * glow;
+}
+
+// twin of transport.clouds.clouds_in_front for one ray: the clouds put in front of `behind`
+// (the sky or ground without them), at least 0
+vec3 clouds_in_front(vec3 v, vec3 sun_dir, vec3 behind, float t_max, uint index) {
+    vec3 t, a;
+    float hit;
+    clouds_over(v, sun_dir, t_max, index, t, a, hit);
+    return max(t * behind + a, vec3(0.0));
+}
+
+// render/scene.py diffuse_radiance's background with clouds along world `dir`: the sky, or
+// the ground with its direct sunlight times the clouds' transmittance at the middle
+// wavelength, here Y (render/surfaces.py)
+vec3 radiance_behind_clouds(vec3 dir, vec3 sun_dir) {
+    float t_ground = ground_distance(dir);
+    float sunlit = t_ground < 1e29 ? cloud_transmittance(t_ground * dir, sun_dir, 1e30).y : 1.0;
+    return sky_radiance(u_camera_position, dir, sun_dir, sunlit);
 }

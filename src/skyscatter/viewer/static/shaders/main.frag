@@ -1,11 +1,12 @@
 // The viewer's frame: one camera ray per pixel, the sky (and ground) from the tables, the
 // clouds in front (clouds.glsl), the sun disk (all in CIE XYZ), linear sRGB, exposure and tone
 // mapping (render/scene.py's render_sky + api.save_image's PNG path). The clouds' code is
-// compiled only where CLOUDS is defined (viewer.js "cloudy_sky", drawn while clouds are
-// shown): present in a clear frame's program, it cost that frame its registers (2.2 times
-// its GPU time). u_camera_position (planet-centred [m]) is declared in clouds.glsl.
+// compiled only where CLOUDS is defined: present in a clear frame's program, it cost that frame
+// its registers (2.2 times its GPU time). With CLOUDS_REFINED (viewer.js "cloud_final") the
+// clouds come from the adaptive refinement's textures (L = T L_behind + A), else each pixel
+// marches them ("cloudy_sky", without float render targets). u_camera_position and
+// u_sun_direction (world) are declared in clouds.glsl.
 
-uniform vec3 u_sun_direction;    // world, unit
 uniform float u_exposure;        // exposure_scale(EV100, compensation)
 uniform int u_operator;
 uniform int u_output;            // OUTPUT_DISPLAY, OUTPUT_METER or OUTPUT_EXPOSED
@@ -52,18 +53,16 @@ void main() {
         return;
     }
     vec3 dir = u_local_to_world * local.xyz;
-#ifdef CLOUDS
-    // render/scene.py diffuse_radiance with clouds: the ground in the clouds' shadow (its
-    // direct sunlight times their transmittance at the middle wavelength, here Y:
-    // render/surfaces.py), then the clouds in front
-    float t_ground = ground_distance(dir);
-    float sunlit = t_ground < 1e29
-        ? cloud_transmittance(t_ground * dir, u_sun_direction, 1e30).y : 1.0;
-    vec3 radiance = sky_radiance(u_camera_position, dir, u_sun_direction, sunlit);
+#if defined(CLOUDS_REFINED)
+    ivec2 texel = ivec2(gl_FragCoord.xy);
+    vec3 radiance = max(texelFetch(u_known_t, texel, 0).rgb * texelFetch(u_behind, texel, 0).rgb
+                        + texelFetch(u_known_a, texel, 0).rgb, vec3(0.0));
+#elif defined(CLOUDS)
     // the pixel's row-major index: the march's jitter, as the CPU renderer numbers it
     uint row = uint(u_resolution.y - gl_FragCoord.y);
     uint index = row * uint(u_resolution.x) + uint(gl_FragCoord.x);
-    radiance = clouds_in_front(dir, u_sun_direction, radiance, 1e30, index);
+    vec3 radiance = clouds_in_front(dir, u_sun_direction,
+                                    radiance_behind_clouds(dir, u_sun_direction), 1e30, index);
 #else
     vec3 radiance = sky_radiance(u_camera_position, dir, u_sun_direction, 1.0);
 #endif
