@@ -58,6 +58,8 @@ PROGRAMS = {"sky": (SKY, "", None), "cloudy_sky": (SKY, "#define CLOUDS\n", None
             "cloud_final": (SKY, "#define CLOUDS\n#define CLOUDS_REFINED\n", None),
             "cloud_map": ([*CLOUDY, "shaders/cloud_map.frag"], "", None),
             "cloud_behind": ([*CLOUDY, "shaders/cloud_behind.frag"], "", None),
+            "cloud_settle": ([*CLOUDY, "shaders/cloud_level.frag"], "#define CLOUD_SETTLE\n",
+                             None),
             "cloud_level": ([*CLOUDY, "shaders/cloud_level.frag"], "", None),
             "cloud_scatter": (["shaders/cloud_scatter.frag"], "", "shaders/cloud_scatter.vert"),
             "composite": (["generated/constants.glsl", "shaders/tonemap.glsl",
@@ -315,16 +317,18 @@ class Frame:
             grid = (-(-width // 2), -(-height // 2)) if self.spacing > 1 else (width, height)
             self.refine_targets = [self._float_targets((width, height), 1),
                                    self._float_targets((width, height), 2),
-                                   self._float_targets(grid, 2)]
+                                   self._float_targets(grid, 2, depth=True)]
 
-    def _float_targets(self, size: tuple[int, int], count: int) -> dict:
-        """viewer.js textureTargets: `count` RGBA32F textures of `size`, one framebuffer."""
+    def _float_targets(self, size: tuple[int, int], count: int, depth: bool = False) -> dict:
+        """viewer.js textureTargets: `count` RGBA32F textures of `size`, one framebuffer (with
+        a depth buffer if `depth`)."""
         import moderngl
 
         textures = [self.ctx.texture(size, 4, dtype="f4") for _ in range(count)]
         for texture in textures:
             texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        return {"textures": textures, "framebuffer": self.ctx.framebuffer(textures)}
+        buffer = self.ctx.depth_renderbuffer(size) if depth else None
+        return {"textures": textures, "framebuffer": self.ctx.framebuffer(textures, buffer)}
 
     def _program(self, fragment: str, vertex: str):
         """Compiles as the page does; NVIDIA's desktop GL takes `#version 300 es` under
@@ -497,26 +501,36 @@ class Frame:
         self._setup("cloud_behind", tables, projection)
         self.quads["cloud_behind"].render(vertices=3)
         spacing = self.spacing
-        passes = [(spacing, 0, 0, 1)]
+        passes = [(spacing, 0, 0)]
         half = spacing // 2
         while half >= 1:
-            passes += [(spacing, 0, half, 0), (spacing, half, 0, 0), (spacing, half, half, 0)]
+            passes += [(spacing, 0, half), (spacing, half, 0), (spacing, half, half)]
             spacing, half = half, half // 2
-        for step, dy, dx, first in passes:
+        ctx = self.ctx
+        for index, (step, dy, dx) in enumerate(passes):
             columns, rows = -(-(width - dx) // step), -(-(height - dy) // step)
             level["framebuffer"].use()
-            self.ctx.viewport = (0, 0, columns, rows)
-            program = self._setup("cloud_level", tables, projection)
-            self._bind_refinement(program, [("u_behind", behind["textures"][0]),
-                                            ("u_known_t", known["textures"][0]),
-                                            ("u_known_a", known["textures"][1])])
-            program["u_level"].value = (step, dy, dx, first)
-            self.quads["cloud_level"].render(vertices=3)
+            level["framebuffer"].depth_mask = True
+            level["framebuffer"].clear(depth=1.0)  # 1: every pixel left to march
+            ctx.viewport = (0, 0, columns, rows)
+            ctx.enable(moderngl.DEPTH_TEST)
+            keys = ("cloud_settle", "cloud_level") if index else ("cloud_level",)
+            for key in keys:  # the settled pixels at depth 0, the rest marched at depth 0.5
+                program = self._setup(key, tables, projection)
+                self._bind_refinement(program, [("u_behind", behind["textures"][0]),
+                                                ("u_known_t", known["textures"][0]),
+                                                ("u_known_a", known["textures"][1])])
+                program["u_level"].value = (step, dy, dx)
+                ctx.depth_func = "1" if key == "cloud_settle" else "<"
+                level["framebuffer"].depth_mask = key == "cloud_settle"
+                self.quads[key].render(vertices=3)
+            level["framebuffer"].depth_mask = True
+            ctx.disable(moderngl.DEPTH_TEST)
             known["framebuffer"].use()
             scatter = self.programs["cloud_scatter"]
             self._bind_refinement(scatter, [("u_level_t", level["textures"][0]),
                                             ("u_level_a", level["textures"][1])])
-            self._set(scatter, {"u_level": (step, dy, dx, first), "u_level_columns": columns,
+            self._set(scatter, {"u_level": (step, dy, dx), "u_level_columns": columns,
                                 "u_resolution": (width, height)})
             self.points.render(moderngl.POINTS, vertices=columns * rows)
         return behind, known

@@ -23,6 +23,7 @@ const PROGRAMS = {
   cloud_final: [[""], SKY, "#define CLOUDS\n#define CLOUDS_REFINED\n"],
   cloud_map: [[""], [...CLOUDY, "shaders/cloud_map.frag"]],
   cloud_behind: [[""], [...CLOUDY, "shaders/cloud_behind.frag"]],
+  cloud_settle: [[""], [...CLOUDY, "shaders/cloud_level.frag"], "#define CLOUD_SETTLE\n"],
   cloud_level: [[""], [...CLOUDY, "shaders/cloud_level.frag"]],
   cloud_scatter: [["shaders/cloud_scatter.vert"], ["shaders/cloud_scatter.frag"]],
   stars: [[...LIBRARY.slice(0, 4), "shaders/stars.vert"],
@@ -284,13 +285,17 @@ class Viewer {
     return uniforms;
   }
 
-  // RGBA32F textures of w x h, `count` of them, attached to one framebuffer (its draw buffers),
-  // kept as this.targets[name]
-  textureTargets(name, width, height, count) {
+  // RGBA32F textures of w x h, `count` of them, attached to one framebuffer (its draw buffers)
+  // with a depth buffer if `depth`, kept as this.targets[name]
+  textureTargets(name, width, height, count, depth = false) {
     const gl = this.gl;
     const old = this.targets.get(name);
     if (old && old.width === width && old.height === height) return old;
-    if (old) { old.textures.forEach((t) => gl.deleteTexture(t)); gl.deleteFramebuffer(old.framebuffer); }
+    if (old) {
+      old.textures.forEach((t) => gl.deleteTexture(t));
+      if (old.depth) gl.deleteRenderbuffer(old.depth);
+      gl.deleteFramebuffer(old.framebuffer);
+    }
     const framebuffer = gl.createFramebuffer();
     gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
     const textures = Array.from({length: count}, (_, i) => {
@@ -303,7 +308,13 @@ class Viewer {
       return texture;
     });
     gl.drawBuffers(textures.map((_, i) => gl.COLOR_ATTACHMENT0 + i));
-    this.targets.set(name, {textures, framebuffer, width, height});
+    const buffer = depth ? gl.createRenderbuffer() : null;
+    if (buffer) {
+      gl.bindRenderbuffer(gl.RENDERBUFFER, buffer);
+      gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, width, height);
+      gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, buffer);
+    }
+    this.targets.set(name, {textures, framebuffer, depth: buffer, width, height});
     return this.targets.get(name);
   }
 
@@ -343,7 +354,7 @@ class Viewer {
     const behind = this.textureTargets(`${slot} behind`, width, height, 1);
     const known = this.textureTargets(`${slot} known`, width, height, 2);
     const grid = spacing > 1 ? [Math.ceil(width / 2), Math.ceil(height / 2)] : [width, height];
-    const level = this.textureTargets(`${slot} level`, ...grid, 2);
+    const level = this.textureTargets(`${slot} level`, ...grid, 2, true);
     const setUp = (program) => {
       gl.useProgram(this.programs[program]);
       this.bindTables(program);
@@ -357,21 +368,36 @@ class Viewer {
     this.bindRefinement("cloud_behind", []);
     gl.bindVertexArray(this.fullScreen);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
-    const passes = [[spacing, 0, 0, 1]];  // the lattice, then three offsets a level
+    const passes = [[spacing, 0, 0]];  // the lattice, then three offsets a level
     for (let half = spacing >> 1; half >= 1; spacing = half, half >>= 1) {
-      passes.push([spacing, 0, half, 0], [spacing, half, 0, 0], [spacing, half, half, 0]);
+      passes.push([spacing, 0, half], [spacing, half, 0], [spacing, half, half]);
     }
-    for (const pass of passes) {
+    const inputs = [["u_behind", behind], ["u_known_t", known], ["u_known_a", known, 1]];
+    passes.forEach((pass, index) => {
       const [step, dy, dx] = pass;
       const columns = Math.ceil((width - dx) / step);
       const rows = Math.ceil((height - dy) / step);
       gl.bindFramebuffer(gl.FRAMEBUFFER, level.framebuffer);
       gl.viewport(0, 0, columns, rows);
-      setUp("cloud_level");
-      this.bindRefinement("cloud_level", [["u_behind", behind], ["u_known_t", known], ["u_known_a", known, 1]]);
-      this.setUniforms("cloud_level", {u_level: pass});
       gl.bindVertexArray(this.fullScreen);
+      gl.depthMask(true);
+      gl.clear(gl.DEPTH_BUFFER_BIT);  // 1: every pixel left to march
+      gl.enable(gl.DEPTH_TEST);
+      if (index > 0) {  // the settled pixels: depth 0
+        setUp("cloud_settle");
+        this.bindRefinement("cloud_settle", inputs);
+        this.setUniforms("cloud_settle", {u_level: pass});
+        gl.depthFunc(gl.ALWAYS);
+        gl.drawArrays(gl.TRIANGLES, 0, 3);
+      }
+      setUp("cloud_level");  // the rest, at depth 0.5
+      this.bindRefinement("cloud_level", inputs);
+      this.setUniforms("cloud_level", {u_level: pass});
+      gl.depthFunc(gl.LESS);
+      gl.depthMask(false);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
+      gl.depthMask(true);
+      gl.disable(gl.DEPTH_TEST);
       gl.bindFramebuffer(gl.FRAMEBUFFER, known.framebuffer);
       gl.viewport(0, 0, width, height);
       gl.useProgram(this.programs.cloud_scatter);
@@ -379,7 +405,7 @@ class Viewer {
       this.setUniforms("cloud_scatter", {u_level: pass, u_level_columns: columns, u_resolution: [width, height]});
       gl.bindVertexArray(this.noAttributes);
       gl.drawArrays(gl.POINTS, 0, columns * rows);
-    }
+    });
     gl.bindFramebuffer(gl.FRAMEBUFFER, previous);
     return {behind, known};
   }
@@ -465,7 +491,7 @@ class Viewer {
       else if (name === "u_radius_warp") gl.uniform4fv(location, value);
       else if (name === "u_cloud_origin") gl.uniform3fv(location, value);
       else if (name === "u_cloud_params") gl.uniform4fv(location, value);
-      else if (name === "u_level") gl.uniform4iv(location, value);
+      else if (name === "u_level") gl.uniform3iv(location, value);
       else if (!Array.isArray(value)) gl.uniform1f(location, value);
       else if (value.length === 2) gl.uniform2fv(location, value);
       else if (value.length === 3) gl.uniform3fv(location, value);

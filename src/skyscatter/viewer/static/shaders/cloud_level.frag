@@ -1,13 +1,16 @@
 // One level of the adaptive refinement over the pixels (twin of transport.adaptive_pixels.refine
 // with transport.clouds._CloudsOver's march and settle): fragment (i, j) of a compact grid is
 // the pixel at column dx + i s, row dy + j s (rows from the top). On the first lattice it is
-// marched; later its two or four neighbours half a spacing away, known from earlier levels
-// (u_known_t, u_known_a), give it their mean where all met a cloud or all missed and their
-// radiance over its own background (u_behind) agrees within REFINE_TOLERANCE in every channel,
-// and it is marched where they do not or one of them is missing (the image's edge, a
-// fisheye's rim). viewer.js then puts the grid in its places (cloud_scatter.frag).
+// marched; later, with CLOUD_SETTLE defined, its two or four neighbours half a spacing away,
+// known from earlier levels (u_known_t, u_known_a), give it their mean where all met a cloud or
+// all missed and their radiance over its own background (u_behind) agrees within
+// REFINE_TOLERANCE in every channel, and that pass marks it (depth 0); the pixels it left
+// (neighbours that differ, or one missing: the image's edge, a fisheye's rim) are marched by
+// this shader without CLOUD_SETTLE, drawn behind them (viewer.js drawRefinedClouds: the depth
+// test rejects the settled ones before they are shaded, so the GPU's threads march only those
+// left). viewer.js then puts the grid in its places (cloud_scatter.frag).
 
-uniform ivec4 u_level;  // spacing s, dy, dx, 1 on the first lattice
+uniform ivec3 u_level;  // spacing s, dy, dx
 
 layout(location = 0) out vec4 level_t;  // T (XYZ), hit
 layout(location = 1) out vec4 level_a;  // A (XYZ)
@@ -61,28 +64,34 @@ void main() {
     int dx = u_level.z;
     ivec2 target = ivec2(dx, dy) + ivec2(gl_FragCoord.xy) * s;
     vec4 local = camera_direction(vec2(texel_of(target)) + 0.5);
+#ifdef CLOUD_SETTLE
+    gl_FragDepth = 0.0;
     if (local.w == 0.0) {  // no ray (outside a fisheye's circle)
         level_t = vec4(1.0, 1.0, 1.0, 0.0);
         level_a = vec4(0.0);
         return;
     }
-    if (u_level.w == 0) {
-        ivec2 offsets[4];
-        int count = 2;
-        if (dx == 0) {
-            offsets[0] = ivec2(0, -dy);
-            offsets[1] = ivec2(0, dy);
-        } else if (dy == 0) {
-            offsets[0] = ivec2(-dx, 0);
-            offsets[1] = ivec2(dx, 0);
-        } else {
-            offsets[0] = ivec2(-dx, -dy);
-            offsets[1] = ivec2(dx, -dy);
-            offsets[2] = ivec2(-dx, dy);
-            offsets[3] = ivec2(dx, dy);
-            count = 4;
-        }
-        if (settle(target, offsets, count, level_t, level_a)) return;
+    ivec2 offsets[4];
+    int count = 2;
+    if (dx == 0) {
+        offsets[0] = ivec2(0, -dy);
+        offsets[1] = ivec2(0, dy);
+    } else if (dy == 0) {
+        offsets[0] = ivec2(-dx, 0);
+        offsets[1] = ivec2(dx, 0);
+    } else {
+        offsets[0] = ivec2(-dx, -dy);
+        offsets[1] = ivec2(dx, -dy);
+        offsets[2] = ivec2(-dx, dy);
+        offsets[3] = ivec2(dx, dy);
+        count = 4;
+    }
+    if (!settle(target, offsets, count, level_t, level_a)) discard;
+#else
+    if (local.w == 0.0) {
+        level_t = vec4(1.0, 1.0, 1.0, 0.0);
+        level_a = vec4(0.0);
+        return;
     }
     vec3 t, a;
     float hit;
@@ -90,4 +99,5 @@ void main() {
     clouds_over(u_local_to_world * local.xyz, u_sun_direction, 1e30, index, t, a, hit);
     level_t = vec4(t, hit);
     level_a = vec4(a, 0.0);
+#endif
 }

@@ -2,7 +2,7 @@
 // in their places in the image-sized textures: one point a pixel, at column dx + i s, row
 // dy + j s (rows from the top)
 
-uniform ivec4 u_level;  // spacing s, dy, dx
+uniform ivec3 u_level;  // spacing s, dy, dx
 uniform int u_level_columns;
 uniform vec2 u_resolution;
 
