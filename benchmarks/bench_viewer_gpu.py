@@ -13,7 +13,16 @@ percentile of N frames after a warm-up.
 With clouds (issue 19): the same frame with the cumulus and stratocumulus presets in
 CLOUD_VIEW (bench_viewer.py's and tests/viewer/test_viewer_clouds.py's view), the preview
 tables; the cloud message uploaded as tables.js `uploadClouds` does and the wind's columns and
-noise origins set as viewer.js `cloudUniforms` does (clouds-NAME.npz).
+noise origins set as viewer.js `cloudUniforms` does (clouds-NAME.npz); the shadow map placed
+as viewer.js places it (transport.air_shadows.map_frame) and drawn once, as the page does for
+a still view; the frame by the page's adaptive refinement (viewer.js drawRefinedClouds, its
+first spacing from transport.adaptive_pixels.coarse_spacing), and for comparison with every
+pixel marched in one pass, with the shadow map drawn again ("map redrawn"), and the PSNR
+between the refined and the every-pixel frame.
+
+Where the context offers OpenGL 4.3, the one-pass sky (clear, or every pixel marched through
+the clouds) is also timed as a compute shader of the same code (`Frame.compute_sky`): an
+H100's or H200's pixel shaders run on two of its TPCs, compute on all of them.
 
 The viewer shows one atmosphere at a time; "one more atmosphere on screen" is measured as a
 second sky pass from a second, separately uploaded copy of the same tables, added into the same

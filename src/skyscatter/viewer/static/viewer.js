@@ -223,29 +223,6 @@ class Viewer {
     return mapFrame(rays, stretches, view.u_sun_direction, lowR, highR, map);
   }
 
-  // Three RGBA16F textures of w x h (the shadow map's levels, four each) and their framebuffer
-  mapTargets(width, height) {
-    const gl = this.gl;
-    const old = this.map;
-    if (old && old.width === width && old.height === height) return old;
-    if (old) { old.textures.forEach((t) => gl.deleteTexture(t)); gl.deleteFramebuffer(old.framebuffer); }
-    const framebuffer = gl.createFramebuffer();
-    gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
-    const textures = MAP_UNITS.map((_, i) => {
-      const texture = gl.createTexture();
-      gl.bindTexture(gl.TEXTURE_2D, texture);
-      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA16F, width, height, 0, gl.RGBA, gl.FLOAT, null);
-      for (const [key, value] of [[gl.TEXTURE_MIN_FILTER, gl.LINEAR], [gl.TEXTURE_MAG_FILTER, gl.LINEAR],
-                                  [gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE], [gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE]]) {
-        gl.texParameteri(gl.TEXTURE_2D, key, value);
-      }
-      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0 + i, gl.TEXTURE_2D, texture, 0);
-      return texture;
-    });
-    this.map = {textures, framebuffer, width, height};
-    return this.map;
-  }
-
   // The clouds' shadow map for the view (cloud_map.frag, one pass a layer into its rows of the
   // three textures), drawn again only when where it lies, the sun or the clouds changed; its
   // uniforms for the sky ({u_map_on: 0}: no map without float render targets or where its
@@ -267,9 +244,9 @@ class Viewer {
       gl.activeTexture(gl.TEXTURE8 + i);
       gl.bindTexture(gl.TEXTURE_2D, null);
     });
-    const targets = this.mapTargets(nU, nW * layers);
+    const targets = this.textureTargets("map", nU, nW * layers, MAP_UNITS.length,
+                                        {format: gl.RGBA16F, filter: gl.LINEAR});
     gl.bindFramebuffer(gl.FRAMEBUFFER, targets.framebuffer);
-    gl.drawBuffers(MAP_UNITS.map((_, i) => gl.COLOR_ATTACHMENT0 + i));
     gl.useProgram(this.programs.cloud_map);
     this.bindClouds("cloud_map", view.u_camera_position);
     this.setUniforms("cloud_map", {...uniforms, u_camera_position: view.u_camera_position,
@@ -285,9 +262,11 @@ class Viewer {
     return uniforms;
   }
 
-  // RGBA32F textures of w x h, `count` of them, attached to one framebuffer (its draw buffers)
-  // with a depth buffer if `depth`, kept as this.targets[name]
-  textureTargets(name, width, height, count, depth = false) {
+  // Float textures of w x h, `count` of them (`format`, RGBA32F unless given; `filter`,
+  // NEAREST unless given; edges clamped), attached to one framebuffer (its draw buffers) with a
+  // depth buffer if `depth`, kept as this.targets[name]
+  textureTargets(name, width, height, count, {format = this.gl.RGBA32F, filter = this.gl.NEAREST,
+                                              depth = false} = {}) {
     const gl = this.gl;
     const old = this.targets.get(name);
     if (old && old.width === width && old.height === height) return old;
@@ -301,9 +280,11 @@ class Viewer {
     const textures = Array.from({length: count}, (_, i) => {
       const texture = gl.createTexture();
       gl.bindTexture(gl.TEXTURE_2D, texture);
-      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, width, height, 0, gl.RGBA, gl.FLOAT, null);
-      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
-      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      gl.texImage2D(gl.TEXTURE_2D, 0, format, width, height, 0, gl.RGBA, gl.FLOAT, null);
+      for (const [key, value] of [[gl.TEXTURE_MIN_FILTER, filter], [gl.TEXTURE_MAG_FILTER, filter],
+                                  [gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE], [gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE]]) {
+        gl.texParameteri(gl.TEXTURE_2D, key, value);
+      }
       gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0 + i, gl.TEXTURE_2D, texture, 0);
       return texture;
     });
@@ -354,7 +335,7 @@ class Viewer {
     const behind = this.textureTargets(`${slot} behind`, width, height, 1);
     const known = this.textureTargets(`${slot} known`, width, height, 2);
     const grid = spacing > 1 ? [Math.ceil(width / 2), Math.ceil(height / 2)] : [width, height];
-    const level = this.textureTargets(`${slot} level`, ...grid, 2, true);
+    const level = this.textureTargets(`${slot} level`, ...grid, 2, {depth: true});
     const setUp = (program) => {
       gl.useProgram(this.programs[program]);
       this.bindTables(program);
@@ -415,7 +396,8 @@ class Viewer {
     const gl = this.gl;
     MAP_UNITS.forEach((key, i) => {
       gl.activeTexture(gl.TEXTURE8 + i);
-      gl.bindTexture(gl.TEXTURE_2D, this.map ? this.map.textures[i] : null);
+      const map = this.targets.get("map");
+      gl.bindTexture(gl.TEXTURE_2D, map ? map.textures[i] : null);
       gl.uniform1i(this.uniform(program, `u_cloud_map_${key}`), 8 + i);
     });
   }
