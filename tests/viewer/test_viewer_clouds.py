@@ -17,6 +17,7 @@ from skyscatter.atmosphere.cloud_config import CLOUD_PRESETS_DIR
 from skyscatter.atmosphere.cloud_field import cloud_field
 from skyscatter.errors import InputError
 from skyscatter.render.scene import render_sky, sun_direction
+from skyscatter.render.sky_at_time import render_sky_at
 from skyscatter.spectrum.colour import cmf_weights
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.transport.clouds import kernel_arrays
@@ -51,6 +52,9 @@ SIZE = (320, 240)
 # (docs/viewer.md, Clouds), 24.4 and 21.9 dB without the shadows in the air (each pixel
 # marched); the clear page's image is at 13.9 and 14.0 dB.
 MIN_CLOUD_PSNR_DB = 35.0
+# ... and of a starry night under cumulus: the stars dominate its differences, so the limit
+# sits between the 41.2 dB measured and the 35.5 dB of stars drawn through the clouds
+MIN_NIGHT_CLOUD_PSNR_DB = 38.0
 
 
 def cpu_cloud_png(server, view: dict, path, width: int, height: int) -> tuple[np.ndarray, float]:
@@ -87,6 +91,50 @@ def test_cloud_screenshot_matches_cpu_renderer(name, page, viewer_url, tmp_path)
     clear = open_view(page, viewer_url, dict(view, clouds="none"), width=width, height=height,
                       ev100=f"{ev100:.6f}", compensation=1)
     assert psnr_db(clear, cpu) < psnr_db(gpu, cpu) - 5.0  # the clouds are what matches
+    assert not page.errors
+
+
+def test_clouds_hide_the_stars_as_on_the_cpu(page, viewer_url, tmp_path):
+    """A moonless night under cumulus (the stars brighter than V 6.5, as the clear night of
+    test_viewer_browser): each star dimmed by the clouds' transmittance along its line of sight
+    (stars.vert with CLOUDS), as `render_sky_at` with the same clouds at the same date; under an
+    overcast stratus no star is left."""
+    time, lat, lon, size, ev100 = "2024-01-10T22:00Z", 52.5, 13.4, 256, -6.0
+    service = viewer_url.service
+    atmosphere, profile, tables = service.spectral_tables(
+        service.parse({"atmosphere": "earth", "quality": "preview"}))
+    observer = api.make_observer(time, lat, lon)
+    viewpoint = api.viewpoint_at(0.0, profile.bottom_radius_m, lat, lon)  # the page's camera
+    view = {"projection": "fisheye", "altitude_m": 0, "lat": lat, "lon": lon, "time": time}
+    shots = {}
+    for name in ("cumulus", "stratus"):
+        # with a date, the clouds' time is the seconds since J2000 (viewer.js cloudTime)
+        field = cloud_field(api.load_clouds(name), profile.bottom_radius_m,
+                            profile.wavelengths_nm, to_world=viewpoint.to_world,
+                            time_s=(observer.time_utc - api.J2000_UTC).total_seconds())
+        image = render_sky_at(LutSolver(profile, tables=tables), api.FisheyeCamera(size),
+                              viewpoint, atmosphere.planet.star,
+                              api.sky_ephemeris(atmosphere, observer),
+                              objects=api.SkyObjects(moon=False, airglow=False,
+                                                     magnitude_limit=6.5), clouds=field)
+        api.save_image(image, tmp_path / f"{name}.png", ev100=ev100)
+        cpu = np.asarray(Image.open(tmp_path / f"{name}.png").convert("RGB"))
+        shots[name] = cpu, open_view(page, viewer_url, dict(view, clouds=name), width=size,
+                                     height=size, ev100=ev100, compensation=1)
+    clear = open_view(page, viewer_url, view, width=size, height=size, ev100=ev100,
+                      compensation=1)
+
+    def star_pixels(image: np.ndarray) -> int:
+        return int(np.count_nonzero(image.max(axis=-1) > 40))  # the night sky itself is darker
+
+    cpu, gpu = shots["cumulus"]
+    # measured: 285 star pixels clear, 94 under the cumulus (the CPU 103: stars on cloud edges,
+    # where float32 and float64 marches part), 0 under the stratus; 41.2 dB, and 35.5 dB when
+    # the page drew every star through the clouds
+    assert 0 < star_pixels(gpu) < star_pixels(clear)
+    assert star_pixels(gpu) == pytest.approx(star_pixels(cpu), rel=0.2)
+    assert psnr_db(gpu, cpu) >= MIN_NIGHT_CLOUD_PSNR_DB
+    assert star_pixels(shots["stratus"][1]) == 0
     assert not page.errors
 
 

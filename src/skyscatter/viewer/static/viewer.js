@@ -28,6 +28,8 @@ const PROGRAMS = {
   cloud_scatter: [["shaders/cloud_scatter.vert"], ["shaders/cloud_scatter.frag"]],
   stars: [[...LIBRARY.slice(0, 4), "shaders/stars.vert"],
           ["generated/constants.glsl", "shaders/camera.glsl", "shaders/stars.frag"]],
+  cloudy_stars: [[...LIBRARY.slice(0, 4), "shaders/clouds.glsl", "shaders/stars.vert"],
+                 ["generated/constants.glsl", "shaders/camera.glsl", "shaders/stars.frag"], "#define CLOUDS\n"],
   composite: [[""], ["generated/constants.glsl", "shaders/tonemap.glsl", "shaders/composite.frag"]],
 };
 const PREFIX = "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler3D;\n";
@@ -68,10 +70,11 @@ async function buildPrograms(gl) {
   const programs = {};
   for (const [key, [vertex, fragment, defines = ""]] of Object.entries(PROGRAMS)) {
     const program = gl.createProgram();
-    gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, PREFIX + vertex.map((n) => texts[n]).join("\n")));
+    gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, PREFIX + defines + vertex.map((n) => texts[n]).join("\n")));
     gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, PREFIX + defines + fragment.map((n) => texts[n]).join("\n")));
-    gl.bindAttribLocation(program, 0, key === "stars" ? "a_direction" : "position");
-    if (key === "stars") gl.bindAttribLocation(program, 1, "a_irradiance");
+    const stars = key.endsWith("stars");
+    gl.bindAttribLocation(program, 0, stars ? "a_direction" : "position");
+    if (stars) gl.bindAttribLocation(program, 1, "a_irradiance");
     gl.linkProgram(program);
     if (!gl.getProgramParameter(program, gl.LINK_STATUS)) {
       throw new Error(`shader ${key} does not link: ${gl.getProgramInfoLog(program)}`);
@@ -543,9 +546,12 @@ class Viewer {
     gl.bindFramebuffer(gl.FRAMEBUFFER, frame.framebuffer);
     this.drawSky(width, height, "exposed");
     if (this.stars && this.stars.count) {
-      gl.useProgram(this.programs.stars);
-      this.bindTables("stars");
-      this.setUniforms("stars", this.viewUniforms(width, height));
+      const stars = this.clouds.header.n_layers > 0 ? "cloudy_stars" : "stars";
+      const view = this.viewUniforms(width, height);
+      gl.useProgram(this.programs[stars]);
+      this.bindTables(stars);
+      this.bindClouds(stars, view.u_camera_position);
+      this.setUniforms(stars, view);
       gl.enable(gl.BLEND);
       gl.blendFunc(gl.ONE, gl.ONE);
       gl.bindVertexArray(this.stars.vao);
