@@ -385,9 +385,14 @@ def test_surface_shadows_far_away_are_the_columns_mean():
     close, afar = np.array([0.0, 0.0, RADIUS_M + 2.0]), np.array([0.0, 0.0, RADIUS_M + 3.0e7])
     for field, camera in ((near, close), (far, afar)):
         t = surface_cloud_transmittance(field, camera, ground, sun)
-        expected = np.exp(-field.mass_extinction_m2_g[0] * 0.05
-                          * _chord_in_slab(ground[0], sun))
-        np.testing.assert_allclose(t[0], expected, rtol=1e-6)
+        depth = field.mass_extinction_m2_g[0] * 0.05 * _chord_in_slab(ground[0], sun)
+        np.testing.assert_allclose(t[0], np.exp(-depth), rtol=1e-6)
+        # with the light the slab passes on scattered: the two-stream's closed form for a
+        # conservative slab, 1 / (1 + b tau mu_s), b = (1 - g) / 2, near and far alike
+        total = surface_cloud_transmittance(field, camera, ground, sun, diffuse=True)
+        b = 0.5 * (1.0 - field.asymmetry[0])
+        np.testing.assert_allclose(total[0], 1.0 / (1.0 + b * depth * sun[2]), rtol=1e-6)
+        assert np.all(total[0] > t[0])
 
 
 def test_the_far_field_does_not_depend_on_where_the_wind_carried_the_noise():

@@ -44,8 +44,10 @@ def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarra
                      with_distance: bool = False) -> tuple[np.ndarray, ...]:
     """(radiance (n_hit, n_wl) [W m^-2 sr^-1 nm^-1], hit (n,) bool) of the rays from
     `position` along unit `directions` (n, 3) that meet the ground or the terrain, in the
-    shadows of the terrain and of `clouds` (their transmittance towards the sun at the middle
-    wavelength: the droplets' extinction varies by ~2 % over the visible); with
+    shadows of the terrain and of `clouds` (the share of the sunlight they let through
+    towards the point, directly or scattered, at the middle wavelength: the droplets'
+    extinction varies by ~2 % over the visible; `surface_cloud_transmittance` with
+    `diffuse`); with
     `with_distance` also the distance (n,) [m] to the surface (inf for a miss). InputError
     unless the solver is a `SurfaceRadianceSolver`."""
     if not isinstance(solver, SurfaceRadianceSolver):
@@ -66,8 +68,8 @@ def surface_radiance(solver: Solver, position: np.ndarray, directions: np.ndarra
         lit = np.ones(points.shape[0], dtype=bool)
     if clouds is not None:
         middle = clouds.wavelengths_nm.size // 2
-        lit = lit * surface_cloud_transmittance(clouds, origin, points,
-                                                sun_direction)[:, middle]
+        lit = lit * surface_cloud_transmittance(clouds, origin, points, sun_direction,
+                                                diffuse=True)[:, middle]
     if ground.albedo_map is not None:
         albedo = ground.albedo_map.spectral(points, profile.wavelengths_nm)
     else:

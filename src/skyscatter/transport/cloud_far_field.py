@@ -16,6 +16,12 @@ coverage map's value where the sun ray crosses it, L the ray's chord through the
 shell and H its thickness; layers multiply (their columns overlap at random). Between the
 layer's `FAR_START` and `FAR_END` (distances from the camera) it blends smoothly with the
 marched transmittance, as the view rays do.
+
+With `diffuse` the light a cloud passes on scattered counts too, as the renderer's
+conservative two-stream slab has it (`transport._cloud_kernels`; the clouds' shadows in the
+air, `transport.air_shadows`): a water path W towards the sun lets through the share
+N = 1 / (1 + b k_ext W mu_s) of the sunlight on the horizontal, directly or scattered (b = (1 - g)
+/ 2, mu_s the sun's zenith cosine at the point), in place of exp(-k_ext W) in both forms.
 """
 
 from __future__ import annotations
@@ -41,13 +47,15 @@ __all__ = ["surface_cloud_transmittance"]
 
 
 def surface_cloud_transmittance(field: CloudField, camera: np.ndarray, points: np.ndarray,
-                                sun: np.ndarray) -> np.ndarray:
+                                sun: np.ndarray, *, diffuse: bool = False) -> np.ndarray:
     """Transmittance [-] (n, n_wl) of the clouds towards the unit `sun` (3,) from surface
     `points` (n, 3) [m] seen from `camera` (3,) [m] (module docstring): marched near the
-    camera, the independent columns' mean far from it."""
+    camera, the independent columns' mean far from it; with `diffuse` the share of the
+    sunlight that reaches the points directly or scattered by the clouds."""
     points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
     sun = np.asarray(sun, dtype=np.float64)
     n = points.shape[0]
+    mu_s = np.maximum(points @ sun / np.linalg.norm(points, axis=1), 0.0) if diffuse else None
     directions = np.ascontiguousarray(np.broadcast_to(sun, (n, 3)))
     water = np.empty((n, field.n_layers))
     _cloud_kernels.cloud_water_paths(points, directions, np.full(n, np.inf),
@@ -57,7 +65,7 @@ def surface_cloud_transmittance(field: CloudField, camera: np.ndarray, points: n
     result = np.ones((n, field.wavelengths_nm.size))
     for layer in range(field.n_layers):
         row = field.params[layer]
-        marched = np.exp(-water[:, layer, None] * field.mass_extinction_m2_g[layer])
+        marched = _passed(field, layer, water[:, layer], mu_s)
         span = row[FAR_END] - row[FAR_START]
         f = np.clip((distance - row[FAR_START]) / span, 0.0, 1.0) if span > 0 else (
             (distance > row[FAR_START]).astype(np.float64))
@@ -65,7 +73,8 @@ def surface_cloud_transmittance(field: CloudField, camera: np.ndarray, points: n
         far = f > 0.0
         transmittance = marched
         if np.any(far):
-            columns = _column_transmittance(field, layer, points[far], sun)
+            columns = _column_transmittance(field, layer, points[far], sun,
+                                            None if mu_s is None else mu_s[far])
             transmittance = marched.copy()
             transmittance[far] = (f[far, None] * columns
                                   + (1.0 - f[far, None]) * marched[far])
@@ -73,9 +82,20 @@ def surface_cloud_transmittance(field: CloudField, camera: np.ndarray, points: n
     return result
 
 
+def _passed(field: CloudField, layer: int, paths: np.ndarray,
+            mu_s: np.ndarray | None) -> np.ndarray:
+    """(n, n_wl): exp(-k_ext W) of `layer` for the water paths W (n,) towards the sun, or with
+    the sun's zenith cosines `mu_s` (n,) the two-stream's 1 / (1 + b k_ext W mu_s)."""
+    depth = paths[:, None] * field.mass_extinction_m2_g[layer]
+    if mu_s is None:
+        return np.exp(-depth)
+    return 1.0 / (1.0 + 0.5 * (1.0 - field.asymmetry[layer]) * depth * mu_s[:, None])
+
+
 def _column_transmittance(field: CloudField, layer: int, points: np.ndarray,
-                          sun: np.ndarray) -> np.ndarray:
-    """1 - c_col (1 - <exp(-k_ext W_b L / H)>) (n, n_wl) of `layer` (module docstring)."""
+                          sun: np.ndarray, mu_s: np.ndarray | None) -> np.ndarray:
+    """1 - c_col (1 - <exp(-k_ext W_b L / H)>) (n, n_wl) of `layer` (module docstring; with
+    `mu_s`, the two-stream's share in place of exp)."""
     row = field.params[layer]
     base, top = row[BASE_R], row[TOP_R]
     b = points @ sun
@@ -102,5 +122,5 @@ def _column_transmittance(field: CloudField, layer: int, points: np.ndarray,
     cloudy = np.zeros((points.shape[0], field.wavelengths_nm.size))
     for b in range(COLUMN_BINS):
         slant = np.interp(m, nodes, table[:, 1 + b]) * chord / (top - base)
-        cloudy += np.exp(-slant[:, None] * field.mass_extinction_m2_g[layer]) * COLUMN_SHARES[b]
+        cloudy += _passed(field, layer, slant, mu_s) * COLUMN_SHARES[b]
     return 1.0 - cover[:, None] * (1.0 - cloudy)

@@ -65,12 +65,14 @@ void main() {
     ivec2 target = ivec2(dx, dy) + ivec2(gl_FragCoord.xy) * s;
     vec4 local = camera_direction(vec2(texel_of(target)) + 0.5);
 #ifdef CLOUD_SETTLE
-    gl_FragDepth = 0.0;
+    gl_FragDepth = 0.0;  // settled: the march's pass leaves it
+#endif
     if (local.w == 0.0) {  // no ray (outside a fisheye's circle)
         level_t = vec4(1.0, 1.0, 1.0, 0.0);
         level_a = vec4(0.0);
         return;
     }
+#ifdef CLOUD_SETTLE
     ivec2 offsets[4];
     int count = 2;
     if (dx == 0) {
@@ -88,11 +90,6 @@ void main() {
     }
     if (!settle(target, offsets, count, level_t, level_a)) discard;
 #else
-    if (local.w == 0.0) {
-        level_t = vec4(1.0, 1.0, 1.0, 0.0);
-        level_a = vec4(0.0);
-        return;
-    }
     vec3 t, a;
     float hit;
     uint index = uint(target.y) * uint(u_resolution.x) + uint(target.x);  // row-major: the jitter

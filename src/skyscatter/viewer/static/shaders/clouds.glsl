@@ -688,11 +688,25 @@ vec3 clouds_in_front(vec3 v, vec3 sun_dir, vec3 behind, float t_max, uint index)
     return max(t * behind + a, vec3(0.0));
 }
 
+// twin of cloud_far_field.surface_cloud_transmittance with `diffuse` (its march, at the
+// middle wavelength: here Y): the share of the sunlight on the horizontal that reaches d
+// (relative to the camera) through the clouds, directly or scattered,
+// prod 1 / (1 + b k_ext W mu_s) over the layers
+float cloud_sunlight(vec3 d, vec3 sun_dir) {
+    float mu_s = max(dot(normalize(u_camera_position + d), sun_dir), 0.0);
+    float passed = 1.0;
+    for (int layer = 0; layer < MAX_CLOUD_LAYERS; ++layer) {
+        if (layer >= u_cloud_layers) break;
+        float depth = cloud_optics(layer, 0).y * layer_water_path(layer, d, sun_dir, 1e30);
+        passed /= 1.0 + 0.5 * (1.0 - cloud_optics(layer, 2).y) * depth * mu_s;
+    }
+    return passed;
+}
+
 // render/scene.py diffuse_radiance's background with clouds along world `dir`: the sky, or
-// the ground with its direct sunlight times the clouds' transmittance at the middle
-// wavelength, here Y (render/surfaces.py)
+// the ground with its sunlight passed by the clouds (render/surfaces.py)
 vec3 radiance_behind_clouds(vec3 dir, vec3 sun_dir) {
     float t_ground = ground_distance(dir);
-    float sunlit = t_ground < 1e29 ? cloud_transmittance(t_ground * dir, sun_dir, 1e30).y : 1.0;
+    float sunlit = t_ground < 1e29 ? cloud_sunlight(t_ground * dir, sun_dir) : 1.0;
     return sky_radiance(u_camera_position, dir, sun_dir, sunlit);
 }
