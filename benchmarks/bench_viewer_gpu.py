@@ -274,21 +274,15 @@ class Frame:
 
     def set_clouds(self, data: dict | None) -> None:
         """Draw `data`'s clouds (a clouds-NAME.npz, loaded) in its view, or none; with clouds,
-        the shadow map's targets (viewer.js mapTargets: three RGBA16F textures, linear)."""
-        import moderngl
-
+        the shadow map's targets (viewer.js drawCloudMap: three RGBA16F textures, linear)."""
         self.clouds = self._upload_clouds(data)
         self.view = None if data is None else data["view"]
         self.map = None
         if data is not None:
             n_u, n_w = data["map"]["u_map_size"]
-            size = (n_u, n_w * data["header"]["n_layers"])
-            textures = [self.ctx.texture(size, 4, dtype="f2") for _ in MAP_UNITS]
-            for texture in textures:
-                texture.filter = (moderngl.LINEAR, moderngl.LINEAR)
-                texture.repeat_x = texture.repeat_y = False
-            self.map = {"textures": textures, "framebuffer": self.ctx.framebuffer(textures),
-                        "uniforms": data["map"]}
+            self.map = self._float_targets((n_u, n_w * data["header"]["n_layers"]),
+                                           len(MAP_UNITS), dtype="f2", linear=True)
+            self.map["uniforms"] = data["map"]
             self.spacings = data["spacing"]
 
     def draw_map(self) -> None:
@@ -328,14 +322,18 @@ class Frame:
                                    self._float_targets((width, height), 2),
                                    self._float_targets(grid, 2, depth=True)]
 
-    def _float_targets(self, size: tuple[int, int], count: int, depth: bool = False) -> dict:
-        """viewer.js textureTargets: `count` RGBA32F textures of `size`, one framebuffer (with
-        a depth buffer if `depth`)."""
+    def _float_targets(self, size: tuple[int, int], count: int, *, dtype: str = "f4",
+                       linear: bool = False, depth: bool = False) -> dict:
+        """viewer.js textureTargets: `count` RGBA textures of `size` (float32, or `dtype`;
+        nearest, or `linear` filtering; edges clamped), one framebuffer (with a depth buffer if
+        `depth`)."""
         import moderngl
 
-        textures = [self.ctx.texture(size, 4, dtype="f4") for _ in range(count)]
+        textures = [self.ctx.texture(size, 4, dtype=dtype) for _ in range(count)]
+        filtering = moderngl.LINEAR if linear else moderngl.NEAREST
         for texture in textures:
-            texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            texture.filter = (filtering, filtering)
+            texture.repeat_x = texture.repeat_y = False
         buffer = self.ctx.depth_renderbuffer(size) if depth else None
         return {"textures": textures, "framebuffer": self.ctx.framebuffer(textures, buffer)}
 

@@ -43,7 +43,7 @@ from skyscatter.atmosphere.cloud_config import MAX_PROFILE_NODES
 from skyscatter.atmosphere.cloud_field import CloudField
 from skyscatter.transport import _cloud_kernels
 
-__all__ = ["surface_cloud_transmittance"]
+__all__ = ["surface_cloud_transmittance", "two_stream_passed"]
 
 
 def surface_cloud_transmittance(field: CloudField, camera: np.ndarray, points: np.ndarray,
@@ -82,14 +82,23 @@ def surface_cloud_transmittance(field: CloudField, camera: np.ndarray, points: n
     return result
 
 
+def two_stream_passed(field: CloudField, layer: int, paths: np.ndarray,
+                      mu: np.ndarray | float = 1.0) -> np.ndarray:
+    """(..., n_wl): the share 1 / (1 + b k_ext W mu) of a flux that a conservative two-stream
+    slab of `layer`'s water lets through, directly or scattered (module docstring), for the
+    water paths W (...) [g m^-2] along a direction of zenith cosine `mu` (...) (1: W vertical)."""
+    b = 0.5 * (1.0 - field.asymmetry[layer])
+    depth = np.asarray(paths)[..., None] * field.mass_extinction_m2_g[layer]
+    return 1.0 / (1.0 + b * depth * np.asarray(mu)[..., None])
+
+
 def _passed(field: CloudField, layer: int, paths: np.ndarray,
             mu_s: np.ndarray | None) -> np.ndarray:
     """(n, n_wl): exp(-k_ext W) of `layer` for the water paths W (n,) towards the sun, or with
-    the sun's zenith cosines `mu_s` (n,) the two-stream's 1 / (1 + b k_ext W mu_s)."""
-    depth = paths[:, None] * field.mass_extinction_m2_g[layer]
+    the sun's zenith cosines `mu_s` (n,) the two-stream's share (`two_stream_passed`)."""
     if mu_s is None:
-        return np.exp(-depth)
-    return 1.0 / (1.0 + 0.5 * (1.0 - field.asymmetry[layer]) * depth * mu_s[:, None])
+        return np.exp(-paths[:, None] * field.mass_extinction_m2_g[layer])
+    return two_stream_passed(field, layer, paths, mu_s)
 
 
 def _column_transmittance(field: CloudField, layer: int, points: np.ndarray,

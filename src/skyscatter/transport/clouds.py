@@ -47,6 +47,7 @@ from skyscatter.transport import _cloud_kernels
 from skyscatter.transport._settle_kernels import settle_mean
 from skyscatter.transport.adaptive_pixels import coarse_spacing, refine
 from skyscatter.transport.air_shadows import SUN_MU, AirShadows, air_shadows
+from skyscatter.transport.cloud_far_field import two_stream_passed
 
 __all__ = ["CloudField", "CloudLighting", "cloud_lighting", "cloud_transmittance",
            "clouds_in_front", "ground_shade", "kernel_arrays"]
@@ -110,20 +111,18 @@ def ground_shade(field: CloudField, origin: np.ndarray | None = None) -> np.ndar
     random. (A cloud's own shadow falls a base height times tan(sun zenith) away, so under a
     broken field the ground below a cloud is lit about as the area is.)"""
     shade = np.ones(field.wavelengths_nm.size)
-    b_k = 0.5 * (1.0 - field.asymmetry) * field.mass_extinction_m2_g  # (n_layers, n_wl)
     for layer, config in enumerate(field.clouds.layers):
         if config.grid is not None:
             grid = config.grid
             paths = grid.water_g_m3.sum(axis=2) * grid.spacing_m[2]  # (nx, ny) [g m^-2]
-            shade *= np.mean(1.0 / (1.0 + b_k[layer] * paths[..., None]), axis=(0, 1))
+            shade *= np.mean(two_stream_passed(field, layer, paths), axis=(0, 1))
             continue
         paths = np.empty(COLUMN_BINS)
         factor = 1.0
         if origin is not None:
             factor = coverage_map_factor(field.params, field.profiles, layer, *map(float, origin))
         cover = column_cover(field.profiles, layer, factor, paths)
-        cloudy = sum(share / (1.0 + b_k[layer] * path)
-                     for share, path in zip(COLUMN_SHARES, paths, strict=True))
+        cloudy = np.asarray(COLUMN_SHARES) @ two_stream_passed(field, layer, paths)
         shade *= 1.0 - cover + cover * cloudy
     return shade
 

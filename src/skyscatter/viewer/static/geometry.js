@@ -2,6 +2,8 @@
 // render/scene.py, for the uniforms and for placing the sun under the pointer).
 
 const DEG = Math.PI / 180;
+export const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
 
 // twin of render.camera._basis: (right, up, forward) in ENU from heading, pitch, roll [rad]
 export function cameraBasis(heading, pitch, roll) {
@@ -19,9 +21,7 @@ export function cameraBasis(heading, pitch, roll) {
 export function localFrame(lat, lon) {
   const up = [Math.cos(lat) * Math.cos(lon), Math.cos(lat) * Math.sin(lon), Math.sin(lat)];
   const east = [-Math.sin(lon), Math.cos(lon), 0];
-  const north = [up[1] * east[2] - up[2] * east[1], up[2] * east[0] - up[0] * east[2],
-                 up[0] * east[1] - up[1] * east[0]];
-  return [east, north, up];
+  return [east, cross(up, east), up];
 }
 
 // twin of render.scene.sun_direction: ENU unit vector from zenith and azimuth [deg]
@@ -54,9 +54,6 @@ export function pixelDirection(state, canvas, x, y) {
   return [-u * s, -v * s, Math.cos(theta)];
 }
 
-
-const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
 
 // twin of transport.air_shadows.shaded_stretch for one unit world ray from `origin` [m]: where
 // it is below the sphere topR, before the sphere bottomR, at most maxM long: [start, end] [m]

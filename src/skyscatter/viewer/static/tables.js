@@ -128,8 +128,8 @@ function floatTexture(gl, internal, format, width, height, data) {
 }
 
 // The textures of decoded clouds (or of none: 1-texel stand-ins, so that every sampler of the
-// sky program has a texture of its own type); `params` (n_layers rows of CLOUD_N_PARAMS) is a
-// copy the page fills with the wind's columns and sends as uniforms (viewer.js `cloudUniforms`)
+// sky program has a texture of its own type); `params` (n_layers rows of CLOUD_N_PARAMS) go to
+// the shader as uniforms, with the wind's columns filled in (viewer.js `cloudUniforms`)
 export function uploadClouds(gl, decoded) {
   const none = decoded === null;
   const header = none ? {n_layers: 0, texture_size: 1} : decoded.header;
@@ -149,7 +149,7 @@ export function uploadClouds(gl, decoded) {
                               [gl.TEXTURE_WRAP_R, gl.CLAMP_TO_EDGE]]) {
     gl.texParameteri(gl.TEXTURE_3D, key, value);
   }
-  const params = none ? new Float32Array(1) : Float32Array.from(decoded.arrays.params.data);
+  const params = none ? new Float32Array(1) : decoded.arrays.params.data;
   const profileRows = none ? 1 : decoded.arrays.profiles.shape[1];
   const optics = new Float32Array(layers * 9);
   for (let layer = 0; layer < header.n_layers; ++layer) {

@@ -7,7 +7,7 @@ import {apiFetch, apiJson} from "./api.js";
 import {decodeClouds, decodeTables, deleteClouds, deleteTables, fetchLayout, uploadClouds,
         uploadTables} from "./tables.js";
 import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
-import {cameraBasis, coarseSpacing, localFrame, mapFrame, pixelDirection, shadedStretch,
+import {cameraBasis, coarseSpacing, dot, localFrame, mapFrame, pixelDirection, shadedStretch,
         sunDirection, toWorld} from "./geometry.js";
 
 const LIBRARY = ["generated/constants.glsl", "shaders/parameterisation.glsl", "shaders/camera.glsl",
@@ -38,7 +38,8 @@ const METER_SIZE = [64, 36];  // the auto-exposure meter renders the view this s
 const DEG = Math.PI / 180;
 const J2000_MS = Date.UTC(2000, 0, 1, 12);  // the clouds' epoch (api.J2000_UTC)
 const CLOUD_UNITS = ["noise", "profiles", "phase", "optics"];  // texture units 4-7
-const MAP_UNITS = ["low", "middle", "high"];  // texture units 8-10: the clouds' shadow map
+const MAP_UNITS = ["low", "middle", "high"];  // the clouds' shadow map ...
+const MAP_UNIT = 8;  // ... on texture units 8-10
 const REFINE_UNIT = 11;  // texture units 11-13: the clouds' refinement (bindRefinement)
 const MAP_GRID = 16;  // the shadow map is placed over the rays of (MAP_GRID + 1)^2 pixels
 
@@ -98,7 +99,7 @@ class Viewer {
     const gl = this.gl;
     this.fullScreen = gl.createVertexArray();
     this.noAttributes = gl.createVertexArray();  // points placed by gl_VertexID
-    this.targets = new Map();  // float render targets of the clouds' refinement
+    this.targets = new Map();  // float render targets (textureTargets)
     this.spacings = new Map();  // its first lattice's spacing by projection and size
     gl.bindVertexArray(this.fullScreen);
     gl.bindBuffer(gl.ARRAY_BUFFER, gl.createBuffer());
@@ -130,12 +131,12 @@ class Viewer {
     return Number.isFinite(date) ? (date - J2000_MS) / 1000 : s.cloud_time;
   }
 
-  // The clouds' uniforms for a camera at `position` (world [m]): the wind's columns of the
-  // parameter table (OFFSET = wind t, ALONG = its direction, in the site's east-north-up frame,
-  // as atmosphere.cloud_field with to_world and time_s; the coverage when the page sets it),
-  // each row's first columns packed as the shader's u_cloud_params, and the noise
-  // coordinates of the camera, three per layer (shape, weather, detail), reduced modulo the
-  // tile in double precision (clouds.glsl)
+  // The clouds' uniforms for a camera at `position` (world [m]): each row's first columns of
+  // the parameter table as the shader's u_cloud_params, with the wind's columns (OFFSET = wind
+  // t, ALONG = its direction, in the site's east-north-up frame, as atmosphere.cloud_field with
+  // to_world and time_s) and the coverage when the page sets it, and the noise coordinates of
+  // the camera, three per layer (shape, weather, detail), reduced modulo the tile in double
+  // precision (clouds.glsl)
   cloudUniforms(position) {
     const clouds = this.clouds;
     const header = clouds.header;
@@ -150,43 +151,43 @@ class Viewer {
     }
     const s = this.state;
     const columns = this.layout.clouds.columns;
-    const stride = clouds.params.length / layers;
-    const original = clouds.original || (clouds.original = Float32Array.from(clouds.params));
+    const params = clouds.params;
+    const stride = params.length / layers;
     const site = localFrame(s.site_lat * DEG, s.site_lon * DEG);
     const seconds = this.cloudTime();
     const n = header.texture_size;
     const wrap = (x) => ((x % n) + n) % n;
-    const params = clouds.params;
     for (let layer = 0; layer < layers; ++layer) {
       const row = layer * stride;
+      const out = width * layer;
+      packed.set(params.subarray(row, row + width), out);
       const [east, north] = header.wind_enu_m_s[layer];
       const wind = [0, 1, 2].map((i) => site[0][i] * east + site[1][i] * north);
       const speed = Math.hypot(...wind);
       const along = speed > 0 ? wind.map((v) => v / speed) : site[0];
       const offset = wind.map((v) => v * s.wind * seconds);
-      ["OFFSET_X", "OFFSET_Y", "OFFSET_Z"].forEach((key, i) => { params[row + columns[key]] = offset[i]; });
-      ["ALONG_X", "ALONG_Y", "ALONG_Z"].forEach((key, i) => { params[row + columns[key]] = along[i]; });
-      params[row + columns.COVERAGE] = s.cloud_coverage >= 0 ? s.cloud_coverage : original[row + columns.COVERAGE];
-      const stretch = original[row + columns.STRETCH_MINUS_ONE];
+      ["OFFSET_X", "OFFSET_Y", "OFFSET_Z"].forEach((key, i) => { packed[out + columns[key]] = offset[i]; });
+      ["ALONG_X", "ALONG_Y", "ALONG_Z"].forEach((key, i) => { packed[out + columns[key]] = along[i]; });
+      if (s.cloud_coverage >= 0) packed[out + columns.COVERAGE] = s.cloud_coverage;
+      const stretch = params[row + columns.STRETCH_MINUS_ONE];
       const c = position.map((v, i) => v - offset[i]);
-      const shift = (c[0] * along[0] + c[1] * along[1] + c[2] * along[2]) * stretch / (1 + stretch);
+      const shift = dot(c, along) * stretch / (1 + stretch);
       const m = c.map((v, i) => v - shift * along[i]);
-      const tile = original[row + columns.INV_SCALE] * n;
+      const tile = params[row + columns.INV_SCALE] * n;
       const large = tile / this.layout.clouds.coverage_tile_ratio;
-      const fine = original[row + columns.INV_DETAIL_SCALE] * n;
+      const fine = params[row + columns.INV_DETAIL_SCALE] * n;
       origins.set(m.map((v) => wrap(v * tile)), 9 * layer);
       origins.set([m[2], m[0], m[1]].map((v) => wrap(v * large)), 9 * layer + 3);
       origins.set(m.map((v) => wrap(v * fine)), 9 * layer + 6);
-      packed.set(params.subarray(row, row + width), width * layer);
     }
     return {u_cloud_layers: layers, u_cloud_origin: origins, u_cloud_params: packed,
             u_cloud_texture_size: n, u_cloud_ground_shade: header.ground_shade_xyz};
   }
 
-  // The cloud textures on units 4-7 (always bound: stand-ins without clouds) and uniforms
-  bindClouds(program, position) {
+  // The cloud textures on units 4-7 (always bound: stand-ins without clouds) and their
+  // `uniforms` (cloudUniforms)
+  bindClouds(program, uniforms) {
     const gl = this.gl;
-    const uniforms = this.cloudUniforms(position);
     CLOUD_UNITS.forEach((key, i) => {
       gl.activeTexture(gl.TEXTURE4 + i);
       gl.bindTexture(key === "noise" ? gl.TEXTURE_3D : gl.TEXTURE_2D, this.clouds.textures[key]);
@@ -230,28 +231,27 @@ class Viewer {
   // three textures), drawn again only when where it lies, the sun or the clouds changed; its
   // uniforms for the sky ({u_map_on: 0}: no map without float render targets or where its
   // texels would be too coarse, views from space; then no shadows in the air)
-  drawCloudMap(view, width, height) {
-    const place = this.floatTargets ? this.cloudMapFrame(view, width, height) : null;
+  drawCloudMap(view, clouds) {
+    const place = this.floatTargets ? this.cloudMapFrame(view, ...view.u_resolution) : null;
     if (!place) return {u_map_on: 0};
     const gl = this.gl;
     const layers = this.clouds.header.n_layers;
     const [nU, nW] = place.shape;
     const uniforms = {u_map_on: 1, u_map_e1: place.e1, u_map_e2: place.e2, u_map_corner: place.corner,
                       u_map_texel: place.texel, u_map_size: place.shape, u_map_levels: place.levels};
-    const clouds = this.cloudUniforms(view.u_camera_position);
     const key = JSON.stringify([uniforms, view.u_camera_position, view.u_sun_direction, this.cloudsVersion,
                                 Array.from(clouds.u_cloud_params)]);
     if (key === this.mapKey) return uniforms;
     const previous = gl.getParameter(gl.FRAMEBUFFER_BINDING);
     MAP_UNITS.forEach((_, i) => {  // not read while drawn into
-      gl.activeTexture(gl.TEXTURE8 + i);
+      gl.activeTexture(gl.TEXTURE0 + MAP_UNIT + i);
       gl.bindTexture(gl.TEXTURE_2D, null);
     });
     const targets = this.textureTargets("map", nU, nW * layers, MAP_UNITS.length,
                                         {format: gl.RGBA16F, filter: gl.LINEAR});
     gl.bindFramebuffer(gl.FRAMEBUFFER, targets.framebuffer);
     gl.useProgram(this.programs.cloud_map);
-    this.bindClouds("cloud_map", view.u_camera_position);
+    this.bindClouds("cloud_map", clouds);
     this.setUniforms("cloud_map", {...uniforms, u_camera_position: view.u_camera_position,
                                    u_sun_direction: view.u_sun_direction});
     gl.bindVertexArray(this.fullScreen);
@@ -265,9 +265,9 @@ class Viewer {
     return uniforms;
   }
 
-  // Float textures of w x h, `count` of them (`format`, RGBA32F unless given; `filter`,
-  // NEAREST unless given; edges clamped), attached to one framebuffer (its draw buffers) with a
-  // depth buffer if `depth`, kept as this.targets[name]
+  // Float render targets: textures of w x h, `count` of them (`format`, RGBA32F unless given;
+  // `filter`, NEAREST unless given; edges clamped), attached to one framebuffer (its draw
+  // buffers) with a depth buffer if `depth`, kept as this.targets[name]
   textureTargets(name, width, height, count, {format = this.gl.RGBA32F, filter = this.gl.NEAREST,
                                               depth = false} = {}) {
     const gl = this.gl;
@@ -322,10 +322,11 @@ class Viewer {
   // radiance behind them (cloud_behind.frag), then a lattice of every s-th pixel marched and,
   // level by level, the pixels between (cloud_level.frag on a compact grid, put in place by
   // cloud_scatter); main.frag with CLOUDS_REFINED composes the frame from what this returns,
-  // the targets {behind, known} (`slot`: "frame" or "meter", each its own)
-  drawRefinedClouds(view, map, slot) {
+  // the targets {behind, known} (`uniforms`: the view's and the shadow map's; `clouds`:
+  // cloudUniforms; `slot`: "frame" or "meter", each its own)
+  drawRefinedClouds(uniforms, clouds, slot) {
     const gl = this.gl;
-    const [width, height] = view.u_resolution;
+    const [width, height] = uniforms.u_resolution;
     const previous = gl.getParameter(gl.FRAMEBUFFER_BINDING);
     const s = this.state;
     const refinement = this.layout.clouds.refinement;
@@ -342,9 +343,9 @@ class Viewer {
     const setUp = (program) => {
       gl.useProgram(this.programs[program]);
       this.bindTables(program);
-      this.bindClouds(program, view.u_camera_position);
+      this.bindClouds(program, clouds);
       this.bindCloudMap(program);
-      this.setUniforms(program, {...view, ...map});
+      this.setUniforms(program, uniforms);
     };
     gl.bindFramebuffer(gl.FRAMEBUFFER, behind.framebuffer);
     gl.viewport(0, 0, width, height);
@@ -398,10 +399,10 @@ class Viewer {
   bindCloudMap(program) {
     const gl = this.gl;
     MAP_UNITS.forEach((key, i) => {
-      gl.activeTexture(gl.TEXTURE8 + i);
+      gl.activeTexture(gl.TEXTURE0 + MAP_UNIT + i);
       const map = this.targets.get("map");
       gl.bindTexture(gl.TEXTURE_2D, map ? map.textures[i] : null);
-      gl.uniform1i(this.uniform(program, `u_cloud_map_${key}`), 8 + i);
+      gl.uniform1i(this.uniform(program, `u_cloud_map_${key}`), MAP_UNIT + i);
     });
   }
 
@@ -503,36 +504,20 @@ class Viewer {
     const refined = cloudy && this.floatTargets;
     const program = refined ? "cloud_final" : cloudy ? "cloudy_sky" : "sky";
     const view = this.viewUniforms(width, height);
-    const map = cloudy ? this.drawCloudMap(view, width, height) : {};
-    const targets = refined ? this.drawRefinedClouds(view, map, output === "meter" ? "meter" : "frame") : null;
+    const clouds = this.cloudUniforms(view.u_camera_position);
+    const map = cloudy ? this.drawCloudMap(view, clouds) : {};
+    const targets = refined ? this.drawRefinedClouds({...view, ...map}, clouds,
+                                                     output === "meter" ? "meter" : "frame") : null;
     gl.useProgram(this.programs[program]);
     gl.viewport(0, 0, width, height);
     this.bindTables(program);
-    this.bindClouds(program, view.u_camera_position);
+    this.bindClouds(program, clouds);
     if (cloudy) this.bindCloudMap(program);
     if (refined) this.bindRefinement(program, [["u_behind", targets.behind], ["u_known_t", targets.known],
                                                ["u_known_a", targets.known, 1]]);
     this.setUniforms(program, {...view, ...map, u_output: this.layout.outputs.indexOf(output)});
     gl.bindVertexArray(this.fullScreen);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
-  }
-
-  // A float render target of w x h (RGBA16F: blendable with EXT_color_buffer_float)
-  target(name, width, height, format) {
-    const gl = this.gl;
-    const old = this[name];
-    if (old && old.width === width && old.height === height) return old;
-    if (old) { gl.deleteTexture(old.texture); gl.deleteFramebuffer(old.framebuffer); }
-    const texture = gl.createTexture();
-    gl.bindTexture(gl.TEXTURE_2D, texture);
-    gl.texImage2D(gl.TEXTURE_2D, 0, format, width, height, 0, gl.RGBA, gl.FLOAT, null);
-    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
-    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
-    const framebuffer = gl.createFramebuffer();
-    gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
-    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, texture, 0);
-    this[name] = {texture, framebuffer, width, height};
-    return this[name];
   }
 
   // The whole frame into the canvas: sky and sun (exposed, float), stars added, tone-mapped
@@ -542,7 +527,7 @@ class Viewer {
       this.drawSky(width, height, "display");
       return;
     }
-    const frame = this.target("frameTarget", width, height, gl.RGBA16F);
+    const frame = this.textureTargets("frame", width, height, 1, {format: gl.RGBA16F});  // blendable
     gl.bindFramebuffer(gl.FRAMEBUFFER, frame.framebuffer);
     this.drawSky(width, height, "exposed");
     if (this.stars && this.stars.count) {
@@ -550,7 +535,7 @@ class Viewer {
       const view = this.viewUniforms(width, height);
       gl.useProgram(this.programs[stars]);
       this.bindTables(stars);
-      this.bindClouds(stars, view.u_camera_position);
+      this.bindClouds(stars, this.cloudUniforms(view.u_camera_position));
       this.setUniforms(stars, view);
       gl.enable(gl.BLEND);
       gl.blendFunc(gl.ONE, gl.ONE);
@@ -562,7 +547,7 @@ class Viewer {
     gl.useProgram(this.programs.composite);
     gl.viewport(0, 0, width, height);
     gl.activeTexture(gl.TEXTURE0);
-    gl.bindTexture(gl.TEXTURE_2D, frame.texture);
+    gl.bindTexture(gl.TEXTURE_2D, frame.textures[0]);
     gl.uniform1i(this.uniform("composite", "u_frame"), 0);
     gl.uniform1i(this.uniform("composite", "u_operator"), this.layout.operators.indexOf(this.state.operator));
     gl.bindVertexArray(this.fullScreen);
@@ -630,7 +615,7 @@ class Viewer {
     }
     const [w, h] = METER_SIZE;
     if (!this.floatTargets) return null;  // no float render targets: exposure by hand
-    const meter = this.target("meterTarget", w, h, gl.RGBA32F);
+    const meter = this.textureTargets("meter", w, h, 1);
     gl.bindFramebuffer(gl.FRAMEBUFFER, meter.framebuffer);
     this.drawSky(w, h, "meter");
     const p = new Float32Array(w * h * 4);
