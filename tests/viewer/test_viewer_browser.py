@@ -93,11 +93,15 @@ def test_screenshot_matches_cpu_renderer(name, page, viewer_url, tmp_path):
     assert not page.errors
 
 
+# A moonless night over Berlin: date, latitude, longitude [deg], image side, EV100
+NIGHT = ("2024-01-10T22:00Z", 52.5, 13.4, 256, -6.0)
+
+
 def test_night_stars_match_cpu_renderer(page, viewer_url, tmp_path):
     """A moonless night over Berlin with the stars brighter than V 6.5 (the page asks /api/sky
     for them): the same stars, at the same pixels, with the same flux as `render_sky_at`
     (moon and airglow off there, which the viewer does not draw)."""
-    time, lat, lon, size, ev100 = "2024-01-10T22:00Z", 52.5, 13.4, 256, -6.0
+    time, lat, lon, size, ev100 = NIGHT
     service = viewer_url.service
     atmosphere, profile, tables = service.spectral_tables(
         service.parse({"atmosphere": "earth", "quality": "preview"}))

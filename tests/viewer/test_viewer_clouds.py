@@ -25,7 +25,7 @@ from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.viewer import codegen
 from skyscatter.viewer.gpu_clouds import decode_clouds, encode_clouds, gpu_clouds
 
-from .test_viewer_browser import camera_of, open_view, psnr_db
+from .test_viewer_browser import NIGHT, camera_of, open_view, psnr_db
 
 # The views: cumulus at noon, looking towards the sun's side, and stratocumulus with a low
 # afternoon sun; both from the ground at 45 deg N with the clouds' time 600 s (the wind has
@@ -100,7 +100,7 @@ def test_clouds_hide_the_stars_as_on_the_cpu(page, viewer_url, tmp_path):
     test_viewer_browser): each star dimmed by the clouds' transmittance along its line of sight
     (stars.vert with CLOUDS), as `render_sky_at` with the same clouds at the same date; under an
     overcast stratus no star is left."""
-    time, lat, lon, size, ev100 = "2024-01-10T22:00Z", 52.5, 13.4, 256, -6.0
+    time, lat, lon, size, ev100 = NIGHT
     service = viewer_url.service
     atmosphere, profile, tables = service.spectral_tables(
         service.parse({"atmosphere": "earth", "quality": "preview"}))
