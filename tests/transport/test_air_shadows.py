@@ -41,8 +41,9 @@ def _expected_loss(solver, field, origin, ray, sun, stop):
         _chord(p, sun, RADIUS_M + BASE_M, field.params[0, TOP_R]) for p in middle])
     tau = water[:, None] * field.mass_extinction_m2_g[0]
     direct = np.exp(-tau)
-    b = 0.5 * (1.0 - field.asymmetry[0])
-    slab = 1.0 / (1.0 + b * tau * mu_s[:, None])
+    gamma = 0.75 * (1.0 - field.asymmetry[0])  # Eddington (transport._two_stream)
+    mu = mu_s[:, None]
+    slab = (1.0 + direct + 1.5 * mu * (1.0 - direct)) / (2.0 * (1.0 + gamma * tau * mu))
     scattering = sum(np.interp(r - profile.bottom_radius_m, profile.altitudes_m, d)[:, None] * s
                      for d, s, phase in zip(profile.density, profile.scattering_per_density,
                                             profile.phases, strict=True) if phase is not None)

@@ -13,6 +13,7 @@ from numba import njit, prange
 from skyscatter.atmosphere._cloud_sampling import BASE_R, TOP_R, smooth_layer_water
 from skyscatter.atmosphere.cloud_noise import hash32
 from skyscatter.transport._cloud_kernels import _table_lookup
+from skyscatter.transport._two_stream import EDDINGTON, beam_passed
 
 __all__ = ["MAP_MAX_STEPS", "MAP_STEP_M", "SHADOW_SAMPLES", "shadow_loss", "sun_line_water"]
 
@@ -133,13 +134,14 @@ def shadow_loss(origin, directions, ray_ids, stretch, start_transmittance, sun, 
             _table_lookup(sun_air, r_nodes, mu_nodes, r, mu_s, t_air)
             _densities(density, r - bottom, h_step, scattering_at)
             for k in range(n_wl):
-                tau, b_tau = 0.0, 0.0
+                tau, gamma_tau = 0.0, 0.0
                 for layer in range(paths.size):
                     cloud_depth = cloud_extinction[layer, k] * paths[layer]
                     tau += cloud_depth
-                    b_tau += 0.5 * (1.0 - asymmetry[layer, k]) * cloud_depth
+                    gamma_tau += EDDINGTON * (1.0 - asymmetry[layer, k]) * cloud_depth
                 direct = math.exp(-tau)
-                slab = 1.0 / (1.0 + b_tau * max(mu_s, 0.0))  # the two-stream's net flux
+                # the two-stream's net flux
+                slab = beam_passed(gamma_tau * max(mu_s, 0.0), direct, max(mu_s, 0.0))
                 single, total = 0.0, 0.0
                 for c in range(scattering_at.size):
                     sigma = scattering_at[c] * scattering[c, k]

@@ -11,37 +11,28 @@ cumulus's sunlit skin is ~10 m deep - gets its light right without noise), with
 sigma = k_ext w the extinction coefficient of the water content w (`atmosphere.cloud_field`)
 and J the light each sample scatters per unit scattering:
 
-    J = E_sun T_air(h, mu_s) p(nu) e^(-tau_sun)                  single scattering
-        + E_sun T_air mu_s K(mu_s) D(d_sun, d_anti; e^(-tau_sun))      the sun, diffused
-        + E_down D(d_up, d_down; 0) + E_up D(d_down, d_up; 0)          sky and ground
+    J = E_sun T_air(h, mu_s) p(nu) e^(-tau_sun)                      single scattering
+        + E_sun T_air mu_s B(d_sun, d_anti; mu_s)                       the sun, diffused
+        + E_down D(d_up, d_down) + E_up D(d_down, d_up)                sky and ground
 
 - single scattering of the sunlight exactly: the star's top-of-atmosphere irradiance through
-  the air (transmittance table) and through the cloud's water towards the sun, W_sun
-  [g m^-2] (marched from `LIGHT_FIRST_M`, doubling; tau_sun = k_ext W_sun), with the
-  particles' phase function (the Mie table with its diffraction peak: the silver lining);
-- the light scattered more than once, from a conservative two-stream slab (Bohren 1987,
-  Am. J. Phys. 55, 524, doi:10.1119/1.15109) around each sample: a flux F_0 entering one
-  face of a slab with optical depths d_1 to that face and d_2 to the other has the net flux
-  N = F_0 / (1 + b (d_1 + d_2)) and the sum of up- and downward fluxes S = (1 + 2 b d_2) N,
-  b = (1 - g) / 2. With the first two Legendre terms of the radiance, L0 + L1 cos, the light
-  it scatters towards the observer per unit scattering and unit F_0 is
-
-      D = (S - direct) / (2 pi) + 3 g mu (N - direct) / (4 pi)
-
-  with mu the cosine between the direction to the observer and the one into the slab, and
-  `direct` the part of F_0 still unscattered (counted above). The sun's slab is a horizontal
-  layer: its depths are the water paths towards the sun and away from it made vertical
-  (d = k_ext W mu_s), its flux E_sun T_air mu_s, weighted by the escape function of a thick
-  layer normalised at the zenith, K = (1 + 2 mu_s) / 3 (K(mu) = 3/7 (1 + 2 mu): van de Hulst
-  1980, Multiple Light Scattering, vol. 2, ch. 14; Kokhanovsky 2004, Earth-Sci. Rev. 64, 189,
-  doi:10.1016/S0012-8252(03)00042-4); the sky's diffuse light from above (the
-  indirect-irradiance table) and the ground's from below enter vertical slabs of the water
-  above and below, the ground's dimmed by the clouds around (`transport.clouds.ground_shade`,
-  in the table: against the cloud column above each sample, which left a broken field's cloud
-  bodies 6-12 % too dark). Against the published fluxes of a conservative slab (HG
-  g = 0.75, van de Hulst 1980, Table 37) this gives the reflectance and transmittance within
-  tests/transport/test_clouds.py's tolerances; 3D clouds are judged against the Monte Carlo
-  reference (docs/clouds.md).
+  the air (transmittance table) and through the cloud's water towards it, W_sun [g m^-2]
+  (marched from `LIGHT_FIRST_M`, doubling; tau_sun = k_ext W_sun), with the particles' phase
+  function (the Mie table with its diffraction peak: the silver lining);
+- the light scattered more than once, from a conservative two-stream slab in Eddington's
+  approximation around each sample (`transport._two_stream`): B for the sunlight, a beam
+  entering a horizontal slab whose optical depths from the sample to its lit and far faces are
+  the water paths towards the sun and away from it made vertical (d = k_ext W mu_s); D for the
+  sky's diffuse light from above (the indirect-irradiance table) and the ground's from below,
+  entering vertical slabs of the water above and below, the ground's dimmed by the clouds
+  around (`transport.clouds.ground_shade`, in the table: against the cloud column above each
+  sample, which left a broken field's cloud bodies 6-12 % too dark). Against DISORT for a
+  conservative slab (HG g = 0.75; tests/transport/test_clouds.py) this gives the reflectance
+  and transmittance within a few per cent for the sun up to 40 degrees from the zenith; 3D
+  clouds are judged against the Monte Carlo reference (docs/clouds.md). (Until 2026-11 the
+  model used Bohren's (1987) slab, b = (1 - g) / 2, with the escape function of a thick layer
+  for the sun's angle: it reflected 24-31 % too little with the sun 40 degrees from the
+  zenith, 36-55 % at 60 degrees, and let 16-39 % too much diffuse light through thick slabs.)
 
 A sheet layer (cirrus) is sampled once per ray, in the middle of its chord through the
 shell, with its water paths to the sun and to the shell's faces taken as uniform.
@@ -70,6 +61,7 @@ from skyscatter.atmosphere._cloud_sampling import (
     smooth_layer_water,
 )
 from skyscatter.atmosphere.cloud_noise import hash32
+from skyscatter.transport._two_stream import EDDINGTON, beam_source, diffuse_source
 
 __all__ = [
     "AMBIENT_FIRST_M",
@@ -507,34 +499,19 @@ def _light_source(r, mu_s, mu_view, nu, w_sun, w_anti, w_up, w_down, layer, clou
     _table_lookup(sky_down, r_nodes, mu_nodes, r, mu_s, down)
     _table_lookup(ground_up, r_nodes, mu_nodes, r, mu_s, up)
     slab_mu = max(mu_s, 0.0)
-    escape = (1.0 + 2.0 * slab_mu) / 3.0  # K(mu_s) / K(1) (module docstring)
     for k in range(out.size):
         k_ext = extinction[layer, k]
         g = asymmetry[layer, k]
-        b = 0.5 * (1.0 - g)
+        gamma = EDDINGTON * (1.0 - g)
         sun = sun_toa[k] * out[k]  # E_sun T_air
         direct = math.exp(-k_ext * w_sun)
-        diffuse_sun = sun * slab_mu * escape * _slab_source(
-            b, g, k_ext * w_sun * slab_mu, k_ext * w_anti * slab_mu, direct, mu_view)
+        diffuse_sun = sun * slab_mu * beam_source(
+            g, gamma, k_ext * w_sun * slab_mu, k_ext * w_anti * slab_mu, direct,
+            direct * math.exp(-k_ext * w_anti), slab_mu, mu_view)
         d_up, d_down = k_ext * w_up, k_ext * w_down
-        sky = (down[k] * _slab_source(b, g, d_up, d_down, 0.0, mu_view)
-               + up[k] * _slab_source(b, g, d_down, d_up, 0.0, -mu_view))
+        sky = (down[k] * diffuse_source(g, gamma, d_up, d_down, mu_view)
+               + up[k] * diffuse_source(g, gamma, d_down, d_up, -mu_view))
         out[k] = sun * sun_phase[layer, k] * direct + max(diffuse_sun, 0.0) + max(sky, 0.0)
-
-
-@njit(cache=True, inline="always")
-def _slab_source(b, g, lit, far, direct, forward):
-    """Light scattered per unit scattering towards the observer by the diffuse field of a
-    conservative two-stream slab per unit flux entering its lit face (module docstring):
-    (S - direct) / (2 pi) + 3 g forward (N - direct) / (4 pi), with S the sum and N the net
-    of the fluxes at optical depth `lit` (`far` to the other face), `direct` the part of the
-    flux still direct, and `forward` the cosine between the direction the light scatters
-    towards the observer and the one it travels into the slab (the P1 term of a radiance
-    L0 + L1 mu scattered by a phase function of asymmetry g)."""
-    net = 1.0 / (1.0 + b * (lit + far))
-    total = (1.0 + 2.0 * b * far) * net
-    return ((total - direct) / (2.0 * math.pi)
-            + 3.0 * g * forward * (net - direct) / (4.0 * math.pi))
 
 
 @njit(cache=True)

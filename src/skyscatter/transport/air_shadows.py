@@ -10,8 +10,8 @@ and the light the clouds pass on diffusely is put back:
 with E the sun's top-of-atmosphere irradiance, T_air(p) the air's transmittance from p towards
 the sun and T(x, p) from the observer to p, sigma_c and p_c each constituent's scattering
 coefficient and phase function, T_c = exp(-tau) the clouds' direct transmittance towards the
-sun and N = 1 / (1 + b tau mu_s) the net flux of the conservative two-stream slab they form
-(`transport._cloud_kernels`; b tau summed over the layers, b = (1 - g) / 2): below a cloud
+sun and N the net flux of the conservative two-stream slab they form, lit by the sun
+(`transport._two_stream.beam_passed`, gamma tau summed over the layers): below a cloud
 the air is lit by the flux the cloud transmits diffusely, E mu_s (N - T_c), whose radiance
 from above, taken isotropic, it scatters with a mean phase of 1 / (4 pi) over the upper
 hemisphere. Light the clouds reflect sideways onto the air, and the shadows' effect on the

@@ -18,10 +18,11 @@ layer's `FAR_START` and `FAR_END` (distances from the camera) it blends smoothly
 marched transmittance, as the view rays do.
 
 With `diffuse` the light a cloud passes on scattered counts too, as the renderer's
-conservative two-stream slab has it (`transport._cloud_kernels`; the clouds' shadows in the
+conservative two-stream slab has it (`transport._two_stream`; the clouds' shadows in the
 air, `transport.air_shadows`): a water path W towards the sun lets through the share
-N = 1 / (1 + b k_ext W mu_s) of the sunlight on the horizontal, directly or scattered (b = (1 - g)
-/ 2, mu_s the sun's zenith cosine at the point), in place of exp(-k_ext W) in both forms.
+C = (1 + e + 1.5 mu_s (1 - e)) / (2 (1 + gamma k_ext W mu_s)) of the sunlight on the
+horizontal, directly or scattered (e = exp(-k_ext W), gamma = 3 (1 - g) / 4, mu_s the sun's
+zenith cosine at the point), in place of exp(-k_ext W) in both forms.
 """
 
 from __future__ import annotations
@@ -41,9 +42,9 @@ from skyscatter.atmosphere._cloud_sampling import (
 )
 from skyscatter.atmosphere.cloud_config import MAX_PROFILE_NODES
 from skyscatter.atmosphere.cloud_field import CloudField
-from skyscatter.transport import _cloud_kernels
+from skyscatter.transport import _cloud_kernels, _two_stream
 
-__all__ = ["surface_cloud_transmittance", "two_stream_passed"]
+__all__ = ["diffuse_passed", "sunlight_passed", "surface_cloud_transmittance"]
 
 
 def surface_cloud_transmittance(field: CloudField, camera: np.ndarray, points: np.ndarray,
@@ -82,23 +83,31 @@ def surface_cloud_transmittance(field: CloudField, camera: np.ndarray, points: n
     return result
 
 
-def two_stream_passed(field: CloudField, layer: int, paths: np.ndarray,
-                      mu: np.ndarray | float = 1.0) -> np.ndarray:
-    """(..., n_wl): the share 1 / (1 + b k_ext W mu) of a flux that a conservative two-stream
+def sunlight_passed(field: CloudField, layer: int, paths: np.ndarray,
+                    mu_s: np.ndarray) -> np.ndarray:
+    """(..., n_wl): the share of the sunlight on the horizontal that a conservative two-stream
     slab of `layer`'s water lets through, directly or scattered (module docstring), for the
-    water paths W (...) [g m^-2] along a direction of zenith cosine `mu` (...) (1: W vertical)."""
-    b = 0.5 * (1.0 - field.asymmetry[layer])
+    water paths W (...) [g m^-2] towards the sun at zenith cosines `mu_s` (...)."""
     depth = np.asarray(paths)[..., None] * field.mass_extinction_m2_g[layer]
-    return 1.0 / (1.0 + b * depth * np.asarray(mu)[..., None])
+    mu = np.asarray(mu_s, dtype=np.float64)[..., None]
+    gamma = _two_stream.EDDINGTON * (1.0 - field.asymmetry[layer])
+    return _two_stream.beam_passed(gamma * depth * mu, np.exp(-depth), mu)
+
+
+def diffuse_passed(field: CloudField, layer: int, paths: np.ndarray) -> np.ndarray:
+    """(..., n_wl): the share of a diffuse flux that a conservative two-stream slab of
+    `layer`'s vertical water paths W (...) [g m^-2] lets through, 1 / (1 + gamma k_ext W)."""
+    depth = np.asarray(paths)[..., None] * field.mass_extinction_m2_g[layer]
+    return 1.0 / (1.0 + _two_stream.EDDINGTON * (1.0 - field.asymmetry[layer]) * depth)
 
 
 def _passed(field: CloudField, layer: int, paths: np.ndarray,
             mu_s: np.ndarray | None) -> np.ndarray:
     """(n, n_wl): exp(-k_ext W) of `layer` for the water paths W (n,) towards the sun, or with
-    the sun's zenith cosines `mu_s` (n,) the two-stream's share (`two_stream_passed`)."""
+    the sun's zenith cosines `mu_s` (n,) the two-stream's share (`sunlight_passed`)."""
     if mu_s is None:
         return np.exp(-paths[:, None] * field.mass_extinction_m2_g[layer])
-    return two_stream_passed(field, layer, paths, mu_s)
+    return sunlight_passed(field, layer, paths, mu_s)
 
 
 def _column_transmittance(field: CloudField, layer: int, points: np.ndarray,

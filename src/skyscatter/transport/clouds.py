@@ -47,7 +47,7 @@ from skyscatter.transport import _cloud_kernels
 from skyscatter.transport._settle_kernels import settle_mean
 from skyscatter.transport.adaptive_pixels import coarse_spacing, refine
 from skyscatter.transport.air_shadows import SUN_MU, AirShadows, air_shadows
-from skyscatter.transport.cloud_far_field import two_stream_passed
+from skyscatter.transport.cloud_far_field import diffuse_passed
 
 __all__ = ["CloudField", "CloudLighting", "cloud_lighting", "cloud_transmittance",
            "clouds_in_front", "ground_shade", "kernel_arrays"]
@@ -104,10 +104,10 @@ def cloud_lighting(solver, field: CloudField,
 def ground_shade(field: CloudField, origin: np.ndarray | None = None) -> np.ndarray:
     """(n_wl,) the share of the clear sky's light the ground keeps under `field`'s layers,
     averaged over the area that lights a cloud's base from below: per layer
-    1 - f + f sum_k s_k / (1 + b k_ext W_k) over its cloudy columns (a fraction f of the area,
+    1 - f + f sum_k s_k / (1 + gamma k_ext W_k) over its cloudy columns (a fraction f of the area,
     shares s_k of water paths W_k: the far field's column statistics, at the coverage map's
     value below `origin`; a grid layer's own columns), the two-stream's transmittance of a
-    conservative column (module `_cloud_kernels`, b = (1 - g) / 2), layers overlapping at
+    conservative column (`transport._two_stream`, gamma = 3 (1 - g) / 4), layers overlapping at
     random. (A cloud's own shadow falls a base height times tan(sun zenith) away, so under a
     broken field the ground below a cloud is lit about as the area is.)"""
     shade = np.ones(field.wavelengths_nm.size)
@@ -115,14 +115,14 @@ def ground_shade(field: CloudField, origin: np.ndarray | None = None) -> np.ndar
         if config.grid is not None:
             grid = config.grid
             paths = grid.water_g_m3.sum(axis=2) * grid.spacing_m[2]  # (nx, ny) [g m^-2]
-            shade *= np.mean(two_stream_passed(field, layer, paths), axis=(0, 1))
+            shade *= np.mean(diffuse_passed(field, layer, paths), axis=(0, 1))
             continue
         paths = np.empty(COLUMN_BINS)
         factor = 1.0
         if origin is not None:
             factor = coverage_map_factor(field.params, field.profiles, layer, *map(float, origin))
         cover = column_cover(field.profiles, layer, factor, paths)
-        cloudy = np.asarray(COLUMN_SHARES) @ two_stream_passed(field, layer, paths)
+        cloudy = np.asarray(COLUMN_SHARES) @ diffuse_passed(field, layer, paths)
         shade *= 1.0 - cover + cover * cloudy
     return shade
 

@@ -30,7 +30,13 @@ from skyscatter.render.tonemap import (
     OPERATORS,
 )
 from skyscatter.spectrum.colour import _SRGB_LINEAR_LIMIT, xyz_to_rgb
-from skyscatter.transport import _air_shadow_kernels, _cloud_kernels, adaptive_pixels, air_shadows
+from skyscatter.transport import (
+    _air_shadow_kernels,
+    _cloud_kernels,
+    _two_stream,
+    adaptive_pixels,
+    air_shadows,
+)
 from skyscatter.transport.clouds import REFINE_TOLERANCE
 from skyscatter.transport.table_parameterisation import SPREAD_MIN
 from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS
@@ -87,7 +93,7 @@ def _glsl_number(value: float | int) -> str:
 
 def _cloud_lines() -> list[str]:
     """The clouds' part of constants.glsl (atmosphere/_cloud_sampling.py,
-    transport/_cloud_kernels.py, transport/air_shadows.py)."""
+    transport/_cloud_kernels.py, transport/_two_stream.py, transport/air_shadows.py)."""
     lines = [f"#define CLOUD_{name} {index}" for name, index in cloud_columns().items()]
     lines += [f"#define CLOUD_N_PARAMS {_cloud_sampling.N_PARAMS}",
               f"#define CLOUD_PARAM_VEC4S {cloud_param_vec4s()}",
@@ -100,7 +106,8 @@ def _cloud_lines() -> list[str]:
               f"#define MAP_LEVELS {air_shadows.MAP_LEVELS}",
               f"const float MAP_STEP_M = {float(_air_shadow_kernels.MAP_STEP_M)!r};",
               f"const int MAP_MAX_STEPS = {_air_shadow_kernels.MAP_MAX_STEPS};",
-              f"const float REFINE_TOLERANCE = {REFINE_TOLERANCE!r};"]
+              f"const float REFINE_TOLERANCE = {REFINE_TOLERANCE!r};",
+              f"const float EDDINGTON = {_two_stream.EDDINGTON!r};"]
     for name in CLOUD_KERNEL_CONSTANTS:
         value = getattr(_cloud_kernels, name)
         kind = "int" if isinstance(value, int) else "float"

@@ -51,6 +51,7 @@ const float SHADOW_MAX_M = 40000.0;
 const float MAP_STEP_M = 60.0;
 const int MAP_MAX_STEPS = 160;
 const float REFINE_TOLERANCE = 0.05;
+const float EDDINGTON = 0.75;
 const float STEP_M = 80.0;
 const float STEP_GROWTH = 0.006;
 const int COARSE_STEPS = 3;

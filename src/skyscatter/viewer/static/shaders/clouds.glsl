@@ -190,11 +190,24 @@ void cloud_light(float r, float mu_s, out vec3 sun_air, out vec3 sky_down, out v
     ground_up = reflected * transmittance_along(u_bottom_radius, 1.0, r - u_bottom_radius, false);
 }
 
-// twin of _cloud_kernels._slab_source (per channel: b and g are vec3)
-vec3 slab_source(vec3 b, vec3 g, vec3 lit, vec3 far, vec3 direct, float forward) {
-    vec3 net = 1.0 / (1.0 + b * (lit + far));
-    vec3 total = (1.0 + 2.0 * b * far) * net;
-    return (total - direct) / (2.0 * PI) + 3.0 * g * forward * (net - direct) / (4.0 * PI);
+// twin of _two_stream.beam_passed (per channel)
+vec3 beam_passed(vec3 gamma_depth, vec3 through, float mu0) {
+    return (1.0 + through + 1.5 * mu0 * (1.0 - through)) / (2.0 * (1.0 + gamma_depth));
+}
+
+// twin of _two_stream.beam_source (per channel: g and gamma are vec3)
+vec3 beam_source(vec3 g, vec3 gamma, vec3 lit, vec3 far, vec3 direct, vec3 through, float mu0,
+                 float forward) {
+    vec3 net = beam_passed(gamma * (lit + far), through, mu0);
+    vec3 total = 1.0 - net - 2.0 * gamma * net * lit + 1.5 * mu0 * (1.0 - direct);
+    return total / (2.0 * PI) + 3.0 * g * forward * (net - direct) / (4.0 * PI);
+}
+
+// twin of _two_stream.diffuse_source
+vec3 diffuse_source(vec3 g, vec3 gamma, vec3 lit, vec3 far, float forward) {
+    vec3 net = 1.0 / (1.0 + gamma * (lit + far));
+    vec3 total = (1.0 + 2.0 * gamma * far) * net;
+    return total / (2.0 * PI) + 3.0 * g * forward * net / (4.0 * PI);
 }
 
 // twin of _cloud_kernels._light_source: J at radius r from the water paths towards the sun,
@@ -205,18 +218,17 @@ vec3 light_source(int layer, float r, float mu_s, float mu_view, float w_sun, fl
     cloud_light(r, mu_s, sun_air, down, up);
     vec3 k_ext = cloud_optics(layer, 0);
     vec3 g = cloud_optics(layer, 2);
-    vec3 b = 0.5 * (1.0 - g);
+    vec3 gamma = EDDINGTON * (1.0 - g);
     float slab_mu = max(mu_s, 0.0);
-    float escape = (1.0 + 2.0 * slab_mu) / 3.0;  // K(mu_s) / K(1)
     vec3 sun = u_sun_irradiance * sun_air;  // E_sun T_air
     vec3 direct = exp(-k_ext * w_sun);
-    vec3 diffuse_sun = sun * slab_mu * escape * slab_source(
-        b, g, k_ext * w_sun * slab_mu, k_ext * w_anti * slab_mu, direct, mu_view);
+    vec3 diffuse_sun = sun * slab_mu * beam_source(
+        g, gamma, k_ext * w_sun * slab_mu, k_ext * w_anti * slab_mu, direct,
+        direct * exp(-k_ext * w_anti), slab_mu, mu_view);
     vec3 d_up = k_ext * w_up;
     vec3 d_down = k_ext * w_down;
-    vec3 sky = down * slab_source(b, g, d_up, d_down, vec3(0.0), mu_view)
-               + up * u_cloud_ground_shade * slab_source(b, g, d_down, d_up, vec3(0.0),
-                                                         -mu_view);
+    vec3 sky = down * diffuse_source(g, gamma, d_up, d_down, mu_view)
+               + up * u_cloud_ground_shade * diffuse_source(g, gamma, d_down, d_up, -mu_view);
     return sun * sun_phase * direct + max(diffuse_sun, vec3(0.0)) + max(sky, vec3(0.0));
 }
 
@@ -640,16 +652,16 @@ vec3 air_shadow_loss(vec3 v, vec3 sun_dir, float stop, uint index) {
         float r_p = length(p);
         float mu_s_p = dot(p, sun_dir) / r_p;
         vec3 tau = vec3(0.0);
-        vec3 b_tau = vec3(0.0);
+        vec3 gamma_tau = vec3(0.0);
         for (int layer = 0; layer < MAX_CLOUD_LAYERS; ++layer) {
             if (layer >= u_cloud_layers) break;
             vec3 depth = cloud_optics(layer, 0) * map_water(layer, t * v, r_p);
             tau += depth;
-            b_tau += 0.5 * (1.0 - cloud_optics(layer, 2)) * depth;
+            gamma_tau += EDDINGTON * (1.0 - cloud_optics(layer, 2)) * depth;
         }
         if (all(equal(tau, vec3(0.0)))) continue;
         vec3 direct = exp(-tau);
-        vec3 slab = 1.0 / (1.0 + b_tau * max(mu_s_p, 0.0));
+        vec3 slab = beam_passed(gamma_tau * max(mu_s_p, 0.0), direct, max(mu_s_p, 0.0));
         loss += weighted * (1.0 - direct)
                 - plain * max(mu_s_p, 0.0) * max(slab - direct, vec3(0.0)) / (2.0 * PI);
     }
@@ -690,15 +702,16 @@ vec3 clouds_in_front(vec3 v, vec3 sun_dir, vec3 behind, float t_max, uint index)
 
 // twin of cloud_far_field.surface_cloud_transmittance with `diffuse` (its march, at the
 // middle wavelength: here Y): the share of the sunlight on the horizontal that reaches d
-// (relative to the camera) through the clouds, directly or scattered,
-// prod 1 / (1 + b k_ext W mu_s) over the layers
+// (relative to the camera) through the clouds, directly or scattered, the product of each
+// layer's beam_passed
 float cloud_sunlight(vec3 d, vec3 sun_dir) {
     float mu_s = max(dot(normalize(u_camera_position + d), sun_dir), 0.0);
     float passed = 1.0;
     for (int layer = 0; layer < MAX_CLOUD_LAYERS; ++layer) {
         if (layer >= u_cloud_layers) break;
         float depth = cloud_optics(layer, 0).y * layer_water_path(layer, d, sun_dir, 1e30);
-        passed /= 1.0 + 0.5 * (1.0 - cloud_optics(layer, 2).y) * depth * mu_s;
+        float gamma = EDDINGTON * (1.0 - cloud_optics(layer, 2).y);
+        passed *= beam_passed(vec3(gamma * depth * mu_s), vec3(exp(-depth)), mu_s).y;
     }
     return passed;
 }
