@@ -1,4 +1,5 @@
-"""Make the cloud pictures of docs/clouds.md (docs/images/clouds_*.png) with the command line;
+"""Make the cloud pictures of docs/clouds.md (docs/images/clouds_*.png) and docs/engines.md's
+cube map with the command line;
 run from the repo root: python docs/figures/make_cloud_figures.py [NAME ...]"""
 
 from __future__ import annotations
@@ -34,6 +35,8 @@ FIGURES = {
                          "--distance-km", "20000", "--lat", "20", "--lon", "-30",
                          "--sun-elevation", "40", "--sun-azimuth", "100", "--size", "400",
                          "--albedo-map", str(IMAGES / "demo_albedo.png")],
+    "cubemap_cross.png": ["earth", "--camera", "cubemap", "--size", "160", "--sun-elevation", "8",
+                          "--sun-azimuth", "240", "--clouds", "cumulus"],
     "clouds_stratocumulus_moonlit.png": ["earth", "--clouds", "stratocumulus", "--time",
                                          "2024-01-25T23:00+01:00", "--lat", "52.52", "--lon",
                                          "13.40", "--size", "320", "--altitude", "2"],

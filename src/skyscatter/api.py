@@ -71,6 +71,7 @@ from skyscatter.render.camera import (
     FisheyeCamera,
     PerspectiveCamera,
 )
+from skyscatter.render.cube_map import CUBE_LAYOUTS, CubeMapCamera
 from skyscatter.render.exposure import display_rgb8, metered_ev100
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer
 from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOptions
@@ -117,6 +118,7 @@ from skyscatter.viewer.table_service import TableService
 
 __all__ = [
     "COLOUR_RANGE_NM",
+    "CUBE_LAYOUTS",
     "DEFAULT_WAVELENGTH_BINS",
     "EXR_CONTENTS",
     "MAX_FRAMES",
@@ -128,6 +130,7 @@ __all__ = [
     "ValidationSettings",
     "AlbedoMap",
     "Clouds",
+    "CubeMapCamera",
     "EquirectangularCamera",
     "FRAME_NAME",
     "FisheyeCamera",

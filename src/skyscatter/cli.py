@@ -21,6 +21,7 @@ from pathlib import Path
 from skyscatter import __version__, checks
 from skyscatter.api_constants import (  # no solver
     COLOUR_RANGE_NM,
+    CUBE_LAYOUTS,
     DEFAULT_WAVELENGTH_BINS,
     VALIDATION_CASES,
     solver_descriptions,
@@ -30,7 +31,7 @@ from skyscatter.errors import InputError
 
 __all__ = ["main"]
 
-CAMERAS = ("fisheye", "panorama", "perspective", "orbit")
+CAMERAS = ("fisheye", "panorama", "perspective", "orbit", "cubemap")
 
 
 def _checked(bounds: Bounds, value: float, text: str) -> float:
@@ -267,6 +268,8 @@ _CAMERA_HELP = {
     "perspective": "pinhole",
     "orbit": "the planet from space, looking at its centre from --distance-km above --lat/--lon, "
              "north up",
+    "cubemap": "the whole sphere on six --size faces in OpenGL's cube map convention (+X east, "
+               "+Y up, +Z south), laid out by --cube-layout",
 }
 
 
@@ -278,7 +281,8 @@ def _add_camera_arguments(command: argparse.ArgumentParser, cameras: Sequence[st
                          + " (default fisheye)")
     command.add_argument("--size", type=_size, default=size_default, metavar="PIXELS",
                          help="image height in pixels (panorama width = 2 x size; "
-                         f"perspective width from --aspect) (default {size_default})")
+                         "perspective width from --aspect; cubemap: a face's side) "
+                         f"(default {size_default})")
     command.add_argument("--aspect", type=_number(checks.ASPECT), default=16 / 9,
                          help="perspective width / height (default 16/9)")
     orbit = "; orbit: the whole planet" if "orbit" in cameras else ""
@@ -292,6 +296,10 @@ def _add_camera_arguments(command: argparse.ArgumentParser, cameras: Sequence[st
     command.add_argument("--pitch", type=_number(checks.ELEVATION_ANGLE_DEG), default=10.0,
                          metavar="DEG",
                          help="perspective view elevation in degrees (default 10)")
+    if "cubemap" in cameras:
+        command.add_argument("--cube-layout", choices=tuple(CUBE_LAYOUTS), default="cross",
+                             help="cubemap faces: cross (4 x 3: +Y above +Z; -X +Z +X -Z; -Y "
+                             "below) or strip (6 x 1: +X -X +Y -Y +Z -Z) (default cross)")
 
 
 def _add_wavelength_argument(command: argparse.ArgumentParser) -> None:
@@ -855,6 +863,8 @@ def _camera(args: argparse.Namespace):
         return api.FisheyeCamera(args.size)
     if args.camera == "panorama":
         return api.EquirectangularCamera(2 * args.size, args.size, heading_deg=args.heading)
+    if args.camera == "cubemap":
+        return api.CubeMapCamera(args.size, args.cube_layout)
     width = max(1, round(args.size * args.aspect))
     fov = 60.0 if args.fov is None else args.fov
     return api.PerspectiveCamera(width, args.size, fov, heading_deg=args.heading,

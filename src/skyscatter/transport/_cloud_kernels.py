@@ -29,10 +29,7 @@ and J the light each sample scatters per unit scattering:
   sample, which left a broken field's cloud bodies 6-12 % too dark). Against DISORT for a
   conservative slab (HG g = 0.75; tests/transport/test_clouds.py) this gives the reflectance
   and transmittance within a few per cent for the sun up to 40 degrees from the zenith; 3D
-  clouds are judged against the Monte Carlo reference (docs/clouds.md). (Until 2026-11 the
-  model used Bohren's (1987) slab, b = (1 - g) / 2, with the escape function of a thick layer
-  for the sun's angle: it reflected 24-31 % too little with the sun 40 degrees from the
-  zenith, 36-55 % at 60 degrees, and let 16-39 % too much diffuse light through thick slabs.)
+  clouds are judged against the Monte Carlo reference (docs/clouds.md).
 
 A sheet layer (cirrus) is sampled once per ray, in the middle of its chord through the
 shell, with its water paths to the sun and to the shell's faces taken as uniform.
