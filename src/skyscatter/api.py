@@ -72,6 +72,7 @@ from skyscatter.render.camera import (
     PerspectiveCamera,
 )
 from skyscatter.render.cube_map import CUBE_LAYOUTS, CubeMapCamera
+from skyscatter.render.environment_light import environment_light as sky_light
 from skyscatter.render.exposure import display_rgb8, metered_ev100
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer
 from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOptions
@@ -156,6 +157,7 @@ __all__ = [
     "make_observer",
     "render",
     "render_at",
+    "environment_light",
     "save_image",
     "sky_ephemeris",
     "timelapse",
@@ -583,6 +585,26 @@ def _check_image_paths(png_path: str | Path | BinaryIO | None,
             raise InputError(f"cannot write an EXR as {str(exr_path)!r}: name it .exr",
                              key="exr_path", value=str(exr_path), allowed=".exr")
         check_writable_file(exr_path)
+
+
+def environment_light(image: SkyImage, camera: Camera, colour_space: str = "srgb", *,
+                      balance_to_light: bool = False) -> dict:
+    """The sun as a directional light (direction, illuminance [lux], linear RGB, angular
+    radius) and the diffuse irradiance of the rest of the sky as 9 spherical-harmonic
+    coefficients per channel (`render.environment_light`), from an image of the whole sphere
+    rendered by `camera` (a `CubeMapCamera` or an `EquirectangularCamera`), in the EXR's units
+    and `colour_space`; a JSON-ready dict. InputError for a camera that does not see the
+    whole sphere."""
+    checked_instance("image", image, SkyImage, "a SkyImage", " from render or render_at")
+    if not isinstance(camera, (CubeMapCamera, EquirectangularCamera)):
+        raise InputError("the light of a sky needs an image of the whole sphere: render it "
+                         "with a CubeMapCamera or an EquirectangularCamera (--camera cubemap or "
+                         "panorama)", key="camera", value=camera,
+                         allowed="CubeMapCamera, EquirectangularCamera")
+    check_image_options(colour_space=colour_space)
+    directions, _ = camera.directions()
+    return sky_light(image, directions, camera.pixel_solid_angles(), colour_space,
+                     balance_to_light)
 
 
 def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,

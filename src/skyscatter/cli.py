@@ -28,6 +28,7 @@ from skyscatter.api_constants import (  # no solver
 )
 from skyscatter.checks import Bounds
 from skyscatter.errors import InputError
+from skyscatter.output_files import atomic_write, check_writable_file
 
 __all__ = ["main"]
 
@@ -432,6 +433,10 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--exr", type=Path, default=None,
                         help="also write a linear EXR (.exr); it and the display image replace "
                         "old files together, or neither does")
+    render.add_argument("--light", type=Path, default=None, metavar="FILE",
+                        help="also write the sun as a directional light and the rest of the "
+                        "sky's diffuse irradiance as spherical harmonics, in the EXR's units "
+                        "(JSON; --camera cubemap or panorama: docs/engines.md)")
     render.add_argument("--exr-content", choices=("rgb", "luminance", "spectral"),
                         default="rgb", help="what the EXR holds (default rgb)")
     render.set_defaults(run=_render)
@@ -644,6 +649,11 @@ def _render(args: argparse.Namespace) -> None:
         exr_content=args.exr_content, adapt_to_night=args.time is not None)
     api.check_image_options(png_path=image_target, exr_path=args.exr,
                             options=image_options)  # the outputs can be written: before any work
+    if args.light is not None:
+        if args.camera not in ("cubemap", "panorama"):
+            raise InputError("--light needs an image of the whole sphere: add --camera cubemap "
+                             "or --camera panorama", key="light", value=str(args.light))
+        check_writable_file(args.light)
     atmosphere = api.load_atmosphere(args.atmosphere)
     observer = _observer(args) if args.time is not None else None
     summary = None
@@ -688,6 +698,12 @@ def _render(args: argparse.Namespace) -> None:
     ev100 = api.save_image(image, image_target, args.exr, options=image_options)
     written = ["the PNG to standard output" if image_target is not args.output
                else str(args.output)] + ([str(args.exr)] if args.exr else [])
+    if args.light is not None:
+        light = api.environment_light(image, camera, args.colour_space,
+                                      balance_to_light=image_options.balance_to_light)
+        atomic_write(args.light, lambda path: Path(path).write_text(
+            json.dumps(light, indent=1, allow_nan=False) + "\n", encoding="utf-8"))
+        written.append(str(args.light))
     print(f"wrote {', '.join(written)} (EV100 {ev100:.2f})", file=sys.stderr)
     if summary is not None:
         print(summary, file=sys.stderr)

@@ -34,6 +34,7 @@ from skyscatter.transport.solvers import SurfaceSolver
 
 __all__ = [
     "SkyImage",
+    "SunLight",
     "Viewpoint",
     "add_sun_disk",
     "deposit_small_disk",
@@ -62,6 +63,16 @@ def sun_direction(zenith_deg: float, azimuth_deg: float) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class SunLight:
+    """The sun seen from the camera as a directional light."""
+
+    irradiance: np.ndarray  # (n_wl,) direct, normal to the sun, hidden part left out
+    # [W m^-2 nm^-1]
+    direction: np.ndarray  # (3,) unit, ENU, as seen (refracted where the render refracts)
+    angular_radius_rad: float
+
+
+@dataclass(frozen=True)
 class SkyImage:
     """A rendered spectral image and what is needed to turn it into colour."""
 
@@ -72,6 +83,7 @@ class SkyImage:
     wavelengths_nm: np.ndarray  # (n_wl,)
     light_spectrum: np.ndarray  # (n_wl,) the star's irradiance at the top [W m^-2 nm^-1]
     from_space: bool = False  # camera above the atmosphere: meter the starlight, not the frame
+    sun: SunLight | None = None  # the sun as a light at the camera
 
     def xyz(self, balance_to_light: bool = False) -> np.ndarray:
         """CIE 1931 XYZ (h, w, 3), Y = luminance [cd m^-2]; optionally adapted from the
@@ -149,11 +161,12 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     if clouds is not None:
         sun_transmittance = sun_transmittance * cloud_transmittance(clouds, position,
                                                                     world_sun)[0]
-    add_sun_disk(spectral, camera, directions, valid, sun_dir, star=star,
-                 wavelengths_nm=profile.wavelengths_nm, transmittance=sun_transmittance,
-                 horizon_cos_zenith=horizon_cos_zenith(float(np.linalg.norm(position)),
-                                                       profile.bottom_radius_m))
-    return sky_image(spectral, directions, valid, viewpoint, profile)
+    sun = add_sun_disk(spectral, camera, directions, valid, sun_dir, star=star,
+                       wavelengths_nm=profile.wavelengths_nm, transmittance=sun_transmittance,
+                       horizon_cos_zenith=horizon_cos_zenith(float(np.linalg.norm(position)),
+                                                             profile.bottom_radius_m))
+    return sky_image(spectral, directions, valid, viewpoint, profile,
+                     SunLight(sun, sun_dir, star.angular_radius_rad))
 
 
 def camera_image(directions: np.ndarray, valid: np.ndarray, n_wavelengths: int,
@@ -215,7 +228,7 @@ def _check_cloud_solver(solver) -> None:
 
 
 def sky_image(spectral: np.ndarray, directions: np.ndarray, valid: np.ndarray,
-              viewpoint: Viewpoint, profile) -> SkyImage:
+              viewpoint: Viewpoint, profile, sun: SunLight | None = None) -> SkyImage:
     """The SkyImage of a finished spectral image, with the pixels to meter: those looking
     above the horizontal, or, looking down from space, the lit ones."""
     sky = valid & (directions[..., 2] > 0.0)
@@ -224,7 +237,7 @@ def sky_image(spectral: np.ndarray, directions: np.ndarray, valid: np.ndarray,
         sky = lit if np.any(lit) else valid
     from_space = bool(np.linalg.norm(viewpoint.position_m) > profile.top_radius_m)
     return SkyImage(spectral, valid, sky, profile.wavelengths_nm, profile.toa_irradiance,
-                    from_space)
+                    from_space, sun)
 
 
 @lru_cache(maxsize=4)
@@ -272,21 +285,25 @@ def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
                  valid: np.ndarray, sun_dir: np.ndarray, *, star: Star,
                  wavelengths_nm: np.ndarray, transmittance: np.ndarray,
                  occluder: tuple[np.ndarray, float] | None = None,
-                 horizon_cos_zenith: float = -1.0) -> None:
+                 horizon_cos_zenith: float = -1.0) -> np.ndarray:
     """Add the transmitted sun disk to `spectral` (h, w, n_wl) in place. `occluder`
     (direction, angular radius [rad]), e.g. the moon in a solar eclipse, hides the part of
     the disk behind it (a sub-pixel disk is dimmed by `disk_visible_fraction`, limb darkening
     left out there). The planet hides the part below the geometric horizon at local zenith
     cosine `horizon_cos_zenith` (a sub-pixel disk is dimmed by
-    `geometry.disk_fraction_above`)."""
+    `geometry.disk_fraction_above`). Returns the sun's direct spectral irradiance at the camera
+    normal to it (n_wl,) [W m^-2 nm^-1], its hidden part left out, whether or not the camera
+    sees the disk."""
     visible = 1.0 if occluder is None else disk_visible_fraction(
         sun_dir, star.angular_radius_rad, *occluder)
     visible *= disk_fraction_above(float(sun_dir[2]), horizon_cos_zenith,
                                    star.angular_radius_rad)
-    if not np.any(transmittance > 0.0) or visible <= 0.0 or deposit_small_disk(
-            spectral, camera, valid, sun_dir, star.solid_angle_sr,
-            irradiance=lambda: star.irradiance_toa(wavelengths_nm) * transmittance * visible):
-        return
+    irradiance = star.irradiance_toa(wavelengths_nm) * transmittance * visible
+    if not np.any(transmittance > 0.0) or visible <= 0.0:
+        return np.zeros_like(irradiance)
+    if deposit_small_disk(spectral, camera, valid, sun_dir, star.solid_angle_sr,
+                          irradiance=lambda: irradiance):
+        return irradiance
     sin_alpha = np.sin(star.angular_radius_rad)
     cos_angle = np.clip(directions @ sun_dir, -1.0, 1.0)
     inside = valid & (cos_angle > np.cos(star.angular_radius_rad))
@@ -294,7 +311,7 @@ def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
     if occluder is not None:
         inside &= directions @ occluder[0] <= np.cos(occluder[1])
     if not np.any(inside):
-        return
+        return irradiance
     sin_ratio = np.sqrt(1.0 - cos_angle[inside] ** 2) / sin_alpha
     cos_limb = np.sqrt(np.clip(1.0 - sin_ratio**2, 0.0, 1.0))
     spectral[inside] += star.disk_radiance(wavelengths_nm, cos_limb) * transmittance

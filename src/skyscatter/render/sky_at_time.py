@@ -55,6 +55,7 @@ from skyscatter.render.lunar_eclipse import eclipse_factor
 from skyscatter.render.moon import MoonGeometry, add_moon_disk, moon_irradiance
 from skyscatter.render.scene import (
     SkyImage,
+    SunLight,
     Viewpoint,
     add_sun_disk,
     camera_image,
@@ -260,12 +261,12 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     pressure, temperature = _REFRACTION_AIR[sky.body]
     sun_seen = refract(sun_true, pressure, temperature)
     moon_seen = None if moon is None else refract(sky.moon.direction(), pressure, temperature)
-    add_sun_disk(spectral, camera, directions, valid, sun_seen, star=sun_today,
-                 wavelengths_nm=wavelengths,
-                 transmittance=_transmittance(solver, viewpoint, sun_seen[None], ground,
-                                              clouds)[0],
-                 occluder=None if moon is None else (moon_seen,
-                                                     moon.geometry.angular_radius_rad))
+    sun = add_sun_disk(spectral, camera, directions, valid, sun_seen, star=sun_today,
+                       wavelengths_nm=wavelengths,
+                       transmittance=_transmittance(solver, viewpoint, sun_seen[None], ground,
+                                                    clouds)[0],
+                       occluder=None if moon is None else (moon_seen,
+                                                           moon.geometry.angular_radius_rad))
     if moon is not None:
         seen = dataclasses.replace(moon.geometry, moon_direction=moon_seen)
         add_moon_disk(spectral, camera, directions, valid, seen, wavelengths_nm=wavelengths,
@@ -281,7 +282,8 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
                             transmittance_of=lambda rays: _transmittance(
                                 solver, viewpoint, rays, ground, clouds),
                             magnitude_limit=objects.magnitude_limit)
-    return sky_image(spectral, directions, valid, viewpoint, profile)
+    return sky_image(spectral, directions, valid, viewpoint, profile,
+                     SunLight(sun, sun_seen, sun_today.angular_radius_rad))
 
 
 def _sun_lights_the_sky(solver: Solver, sun_true: np.ndarray) -> bool:
