@@ -502,9 +502,11 @@ def _light_source(r, mu_s, mu_view, nu, w_sun, w_anti, w_up, w_down, layer, clou
         gamma = EDDINGTON * (1.0 - g)
         sun = sun_toa[k] * out[k]  # E_sun T_air
         direct = math.exp(-k_ext * w_sun)
+        # the beam's part through the whole slab (below 1e-6 of it: nothing to C)
+        through = direct * math.exp(-k_ext * w_anti) if direct > 1e-6 else 0.0
         diffuse_sun = sun * slab_mu * beam_source(
-            g, gamma, k_ext * w_sun * slab_mu, k_ext * w_anti * slab_mu, direct,
-            direct * math.exp(-k_ext * w_anti), slab_mu, mu_view)
+            g, gamma, k_ext * w_sun * slab_mu, k_ext * w_anti * slab_mu, direct, through,
+            slab_mu, mu_view)
         d_up, d_down = k_ext * w_up, k_ext * w_down
         sky = (down[k] * diffuse_source(g, gamma, d_up, d_down, mu_view)
                + up[k] * diffuse_source(g, gamma, d_down, d_up, -mu_view))

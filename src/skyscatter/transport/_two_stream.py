@@ -40,7 +40,7 @@ __all__ = ["EDDINGTON", "beam_passed", "beam_source", "diffuse_passed", "diffuse
 EDDINGTON = 0.75  # gamma = EDDINGTON (1 - g): Eddington's two-stream coefficient (docstring)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def beam_passed(gamma_depth, through, mu0):
     """C (module docstring): the share of a beam's flux on the horizontal that a slab of
     gamma tau* = `gamma_depth` lets through directly or scattered, `through` = exp(-tau* / mu0)
@@ -48,7 +48,7 @@ def beam_passed(gamma_depth, through, mu0):
     return (1.0 + through + 1.5 * mu0 * (1.0 - through)) / (2.0 * (1.0 + gamma_depth))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def diffuse_passed(gamma_depth):
     """N = 1 / (1 + gamma tau*): the share of a diffuse flux a slab lets through."""
     return 1.0 / (1.0 + gamma_depth)
