@@ -96,7 +96,7 @@ from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
 from skyscatter.render.timelapse import write_frames
 from skyscatter.render.video_io import VideoWriter
-from skyscatter.spectrum.colour import xyz_to_rgb
+from skyscatter.spectrum.colour import rgb_space_chromaticities, xyz_to_rgb
 from skyscatter.spectrum.grid import (
     COLOUR_RANGE_NM,
     DEFAULT_WAVELENGTH_BINS,
@@ -618,8 +618,9 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
     used. Both files are written to temporaries first and replace the old ones together, so a
     failure in either leaves both old files as they were (`output_files.staged_outputs`).
 
-    EXR contents: "rgb" (linear `colour_space`, 1.0 = 1 cd m^-2 of luminance), "luminance"
-    (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
+    EXR contents: "rgb" (linear `colour_space`, 1.0 = 1 cd m^-2 of luminance; the header's
+    standard `chromaticities` name the space's primaries and white, `whiteLuminance` is 1),
+    "luminance" (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
     `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
     views from space from the starlight (incident-light metering: sunlit white is white);
     `adapt_to_night` meters night skies as night (`night_adapted_exposure`: darker than a
@@ -659,9 +660,13 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
             else:
                 data = image.spectral
                 names = tuple(f"radiance_{w:07.2f}nm" for w in image.wavelengths_nm)
-            stage.write(exr_path, exr_writer(data.astype(np.float32), names,
-                                             {"skyscatter_units": EXR_UNITS[exr_content],
-                                              "skyscatter_colour_space": colour_space}))
+            rgb = exr_content == "rgb"
+            stage.write(exr_path, exr_writer(
+                data.astype(np.float32), names,
+                {"skyscatter_units": EXR_UNITS[exr_content],
+                 "skyscatter_colour_space": colour_space},
+                chromaticities=rgb_space_chromaticities(colour_space) if rgb else None,
+                white_luminance=1.0 if exr_content != "spectral" else None))
     if stream is not None:
         write(stream)
         stream.flush()

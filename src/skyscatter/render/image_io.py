@@ -59,7 +59,9 @@ def write_exr(path: str | os.PathLike[str], image: ArrayLike,
 
 
 def exr_writer(image: ArrayLike, channel_names: Sequence[str] | None = None,
-               attributes: Mapping[str, str] | None = None) -> Callable[[str], None]:
+               attributes: Mapping[str, str] | None = None, *,
+               chromaticities: Sequence[float] | None = None,
+               white_luminance: float | None = None) -> Callable[[str], None]:
     """Check a linear image for an OpenEXR file; returns `write(path)`, which writes it there.
 
     Parameters
@@ -72,6 +74,11 @@ def exr_writer(image: ArrayLike, channel_names: Sequence[str] | None = None,
         Default ("Y",), ("R", "G", "B") or ("R", "G", "B", "A") for c = 1, 3, 4.
     attributes : mapping of str to str, optional
         Extra string attributes for the header (e.g. {"units": "cd/m^2"}).
+    chromaticities : sequence of 8 floats, optional
+        CIE xy of the R, G, B primaries and the white (OpenEXR's standard `chromaticities`
+        attribute, which compositors and engines read to know the colour space).
+    white_luminance : float, optional
+        Luminance [cd m⁻²] of RGB = (1, 1, 1) (OpenEXR's `whiteLuminance`).
     """
     arr = np.asarray(image)
     if arr.ndim != 3 or arr.shape[0] < 1 or arr.shape[1] < 1 or arr.shape[2] < 1:
@@ -98,6 +105,10 @@ def exr_writer(image: ArrayLike, channel_names: Sequence[str] | None = None,
             raise InputError(f"EXR attribute {key!r}: {value!r} must map a string that is not a "
                              f"standard header name to a string", key="attributes", value=key)
         header[key] = value
+    if chromaticities is not None:
+        header["chromaticities"] = tuple(float(v) for v in chromaticities)
+    if white_luminance is not None:
+        header["whiteLuminance"] = float(white_luminance)
     channels = {name: np.ascontiguousarray(arr[..., k]) for k, name in enumerate(names)}
     return lambda path: OpenEXR.File(header, channels).write(path)
 

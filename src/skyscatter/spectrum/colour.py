@@ -48,6 +48,7 @@ __all__ = [
     "illuminant_spectrum",
     "normalised_primary_matrix",
     "luminance",
+    "rgb_space_chromaticities",
     "rgb_to_xyz",
     "spectral_to_xyz",
     "white_balance",
@@ -343,12 +344,24 @@ def normalised_primary_matrix(primaries_xy: ArrayLike, white_xy: ArrayLike) -> n
     return p * np.linalg.solve(p, white)
 
 
-@lru_cache(maxsize=16)
-def _xyz_to_rgb_matrix(space: str) -> np.ndarray:
+def _space_primaries(space: str) -> tuple[np.ndarray, np.ndarray]:
+    """(primaries (3, 2), white (2,)) CIE xy of one of `RGB_SPACES` (from colour-science)."""
     _lookup(RGB_SPACES, space, "colour space")
     tables = _tables()
     index = list(tables["rgb_names"]).index(str(space).lower())
-    primaries, white = tables["rgb_primaries_xy"][index], tables["rgb_white_xy"][index]
+    return tables["rgb_primaries_xy"][index], tables["rgb_white_xy"][index]
+
+
+def rgb_space_chromaticities(space: str) -> tuple[float, ...]:
+    """CIE xy of the red, green and blue primaries and the white of one of `RGB_SPACES`,
+    (x_r, y_r, x_g, y_g, x_b, y_b, x_w, y_w): an OpenEXR `chromaticities` attribute."""
+    primaries, white = _space_primaries(space)
+    return tuple(float(v) for v in (*np.ravel(primaries), *white))
+
+
+@lru_cache(maxsize=16)
+def _xyz_to_rgb_matrix(space: str) -> np.ndarray:
+    primaries, white = _space_primaries(space)
     matrix = np.linalg.inv(normalised_primary_matrix(primaries, white))
     d65 = white_point_xyz("D65")
     x, y = white
