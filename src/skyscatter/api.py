@@ -96,7 +96,7 @@ from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
 from skyscatter.render.timelapse import write_frames
 from skyscatter.render.video_io import VideoWriter
-from skyscatter.spectrum.colour import rgb_space_chromaticities, xyz_to_rgb
+from skyscatter.spectrum.colour import into_gamut, rgb_space_chromaticities, xyz_to_rgb
 from skyscatter.spectrum.grid import (
     COLOUR_RANGE_NM,
     DEFAULT_WAVELENGTH_BINS,
@@ -618,8 +618,10 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
     used. Both files are written to temporaries first and replace the old ones together, so a
     failure in either leaves both old files as they were (`output_files.staged_outputs`).
 
-    EXR contents: "rgb" (linear `colour_space`, 1.0 = 1 cd m^-2 of luminance; the header's
-    standard `chromaticities` name the space's primaries and white, `whiteLuminance` is 1),
+    EXR contents: "rgb" (linear `colour_space`, 1.0 = 1 cd m^-2 of luminance, colours outside
+    the space's gamut desaturated into it at constant luminance, `spectrum.colour.into_gamut`,
+    so no channel is negative; the header's standard `chromaticities` name the space's
+    primaries and white, `whiteLuminance` is 1),
     "luminance" (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
     `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
     views from space from the starlight (incident-light metering: sunlit white is white);
@@ -654,7 +656,7 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
                 stage.write(png_path, write)
         if exr_path is not None:
             if exr_content == "rgb":
-                data, names = linear, ("R", "G", "B")
+                data, names = into_gamut(linear, colour_space), ("R", "G", "B")
             elif exr_content == "luminance":
                 data, names = xyz[..., 1:2], ("Y",)
             else:

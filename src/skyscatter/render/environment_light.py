@@ -17,7 +17,8 @@ irradiance E_sun adds E_sun Y_lm(s) to L_lm, which is subtracted (its disk, a qu
 across, is far below the resolution of order 2), and it is given as a directional light: its
 direction, its illuminance E_v = 683 lm/W int E_sun V d(lambda) [lux] and its linear RGB, in
 the units of the image's EXR (1.0 = 1 cd m^-2 of luminance: the RGB of an irradiance is then in
-lux, its G-weighted sum Y the illuminance).
+lux, its luminance the illuminance), colours outside the space's gamut (a setting sun's)
+desaturated into it at constant luminance as in the EXR (`spectrum.colour.into_gamut`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,12 @@ from __future__ import annotations
 import numpy as np
 
 from skyscatter.render.scene import SkyImage
-from skyscatter.spectrum.colour import spectral_to_xyz, white_balance, xyz_to_rgb
+from skyscatter.spectrum.colour import (
+    into_gamut,
+    spectral_to_xyz,
+    white_balance,
+    xyz_to_rgb,
+)
 
 __all__ = ["SH_ORDER_NAMES", "environment_light", "sh_basis", "sh_irradiance"]
 
@@ -61,7 +67,7 @@ def environment_light(image: SkyImage, directions_enu: np.ndarray, solid_angles:
     (module docstring), as a JSON-ready dict, from a `SkyImage` of the whole sphere (a cube map
     or a panorama) with its pixels' directions (h, w, 3) and solid angles (h, w) [sr], in
     `colour_space`, white-balanced to the star's light with `balance_to_light` as its EXR."""
-    rgb = xyz_to_rgb(image.xyz(balance_to_light), colour_space)
+    rgb = into_gamut(xyz_to_rgb(image.xyz(balance_to_light), colour_space), colour_space)
     coefficients = sh_irradiance(np.where(image.valid[..., None], rgb, 0.0), directions_enu,
                                  solid_angles)
     light: dict = {"units": {"sun.illuminance": "lux, on a surface facing the sun",
@@ -73,7 +79,7 @@ def environment_light(image: SkyImage, directions_enu: np.ndarray, solid_angles:
         sun_xyz = spectral_to_xyz(image.sun.irradiance, image.wavelengths_nm)
         if balance_to_light:
             sun_xyz = white_balance(sun_xyz, image.light_spectrum, image.wavelengths_nm)
-        sun_rgb = xyz_to_rgb(sun_xyz, colour_space)
+        sun_rgb = into_gamut(xyz_to_rgb(sun_xyz, colour_space), colour_space)
         s = _ENU_TO_MAP @ np.asarray(image.sun.direction, dtype=np.float64)
         coefficients -= _CONVOLUTION[:, None] * np.outer(sh_basis(s), sun_rgb)
         light["sun"] = {"direction": _rounded(s), "illuminance": _rounded(sun_xyz[1]),

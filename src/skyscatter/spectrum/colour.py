@@ -46,6 +46,7 @@ __all__ = [
     "decode_srgb_transfer",
     "encode_srgb_transfer",
     "illuminant_spectrum",
+    "into_gamut",
     "normalised_primary_matrix",
     "luminance",
     "rgb_space_chromaticities",
@@ -400,6 +401,22 @@ def xyz_to_rgb(xyz: ArrayLike, space: str = "srgb") -> np.ndarray:
     """
     matrix = _xyz_to_rgb_matrix(space)
     return _checked_xyz(xyz, "xyz") @ matrix.T
+
+
+def into_gamut(rgb: ArrayLike, space: str = "srgb") -> np.ndarray:
+    """Linear RGB (..., 3) of `space` with the colours outside its gamut brought inside at
+    constant luminance: rgb' = Y + k (rgb - Y), Y the colour's luminance (the white (1, 1, 1)
+    has luminance 1), k in [0, 1] the largest that leaves no channel below 0 (desaturation
+    towards the white, hue kept). Colours inside, and the luminance of all, are unchanged;
+    a colour of luminance <= 0 becomes black. For light a renderer integrates (image-based
+    lighting): a negative channel, e.g. a setting sun's blue in sRGB, is not light."""
+    rgb = np.asarray(rgb, dtype=np.float64)
+    y = (rgb @ np.linalg.inv(_xyz_to_rgb_matrix(space)).T)[..., 1:2]
+    low = np.min(rgb, axis=-1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = np.clip(y / (y - low), 0.0, 1.0)
+    inside = np.where(y > 0.0, y + k * (rgb - y), 0.0)
+    return np.where(low < 0.0, inside, rgb)
 
 
 def rgb_to_xyz(rgb: ArrayLike, space: str = "srgb") -> np.ndarray:
