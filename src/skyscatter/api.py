@@ -651,7 +651,8 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
                 display_rgb8(linear, image.valid, ev100, options.compensation_ev,
                              options.operator),
                 {"Software": "skyscatter", "EV100": f"{ev100:.3f}", "ColourSpace": colour_space},
-                "PNG" if stream is not None else display_format(png_path))
+                "PNG" if stream is not None else display_format(png_path),
+                colour_space=colour_space)
             if stream is None:
                 stage.write(png_path, write)
         if exr_path is not None:

@@ -28,14 +28,18 @@ from typing import BinaryIO
 import numpy as np
 import OpenEXR
 from numpy.typing import ArrayLike
-from PIL import Image, PngImagePlugin
+from PIL import Image
+from PIL.PngImagePlugin import PngInfo
 
 from skyscatter.errors import InputError
 from skyscatter.output_files import atomic_write
+from skyscatter.render.icc_profile import icc_profile
 
 __all__ = ["DISPLAY_FORMATS", "atomic_write", "display_format", "display_image_writer",
            "exr_writer", "read_exr", "read_exr_attributes", "write_exr", "write_png"]
 
+# The colour spaces whose display images are sRGB (same primaries, white and curve)
+SRGB_TAGGED = ("srgb", "rec709")
 # Display image formats by file suffix (Pillow's format names)
 DISPLAY_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG"}
 JPEG_QUALITY = 95  # with full-resolution chroma: sky gradients without visible blocks
@@ -165,10 +169,13 @@ def display_format(path: str | os.PathLike[str]) -> str:
 
 
 def display_image_writer(rgb8: ArrayLike, text: Mapping[str, str] | None = None,
-                         image_format: str = "PNG") -> Callable[[str | BinaryIO], None]:
-    """Check an 8-bit sRGB image; returns `write(target)`, which writes it to a path or a
-    binary stream as PNG (with `text` as tEXt chunks) or JPEG (quality 95, no chroma
-    subsampling, alpha dropped, `text` as one comment).
+                         image_format: str = "PNG", *,
+                         colour_space: str = "srgb") -> Callable[[str | BinaryIO], None]:
+    """Check an 8-bit image (sRGB-encoded codes of `colour_space`); returns `write(target)`,
+    which writes it to a path or a binary stream as PNG (with `text` as tEXt chunks) or JPEG
+    (quality 95, no chroma subsampling, alpha dropped, `text` as one comment). sRGB and
+    Rec. 709 images are tagged sRGB (a PNG's `sRGB` chunk), the wide gamuts carry an ICC
+    profile of their primaries (`render.icc_profile`), so viewers show their colours.
 
     Parameters
     ----------
@@ -178,25 +185,31 @@ def display_image_writer(rgb8: ArrayLike, text: Mapping[str, str] | None = None,
         Metadata (e.g. {"Software": "skyscatter", "Description": ...}).
     image_format : {"PNG", "JPEG"}
         A value of `DISPLAY_FORMATS` (see `display_format`).
+    colour_space : str
+        The RGB space of the codes (`spectrum.colour.RGB_SPACES`).
     """
     arr = np.asarray(rgb8)
     if arr.dtype != np.uint8 or arr.ndim != 3 or arr.shape[2] not in (3, 4) or 0 in arr.shape:
         raise InputError(f"a PNG image must be uint8 of shape (height, width, 3 or 4), got "
                          f"{arr.dtype} {arr.shape}", key="rgb8", value=(str(arr.dtype), arr.shape))
     picture = Image.fromarray(np.ascontiguousarray(arr))  # uint8 (h, w, 3|4) -> RGB|RGBA
+    profile = {} if colour_space in SRGB_TAGGED else {"icc_profile": icc_profile(colour_space)}
     if image_format == "JPEG":
         comment = "; ".join(f"{key}: {value}" for key, value in (text or {}).items())
         rgb = picture.convert("RGB")
         return lambda target: rgb.save(target, format="JPEG", quality=JPEG_QUALITY,
-                                       subsampling=0, comment=comment)
-    info = PngImagePlugin.PngInfo()
+                                       subsampling=0, comment=comment, **profile)
+    info = PngInfo()
+    if not profile:
+        info.add(b"sRGB", b"\0")  # rendering intent: perceptual
     for key, value in (text or {}).items():
         info.add_text(str(key), str(value))
-    return lambda target: picture.save(target, format="PNG", pnginfo=info)
+    return lambda target: picture.save(target, format="PNG", pnginfo=info, **profile)
 
 
 def write_png(path: str | os.PathLike[str], rgb8: ArrayLike,
-              text: Mapping[str, str] | None = None) -> Path:
-    """Write an 8-bit sRGB image to a PNG file, atomically; parent directories are created.
+              text: Mapping[str, str] | None = None, *, colour_space: str = "srgb") -> Path:
+    """Write an 8-bit image to a PNG file, atomically; parent directories are created.
     The other arguments as `display_image_writer`. Returns the written file."""
-    return atomic_write(path, display_image_writer(rgb8, text, "PNG"))
+    return atomic_write(path, display_image_writer(rgb8, text, "PNG",
+                                                   colour_space=colour_space))

@@ -166,7 +166,7 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
                        horizon_cos_zenith=horizon_cos_zenith(float(np.linalg.norm(position)),
                                                              profile.bottom_radius_m))
     return sky_image(spectral, directions, valid, viewpoint, profile,
-                     SunLight(sun, sun_dir, star.angular_radius_rad))
+                     sun=SunLight(sun, sun_dir, star.angular_radius_rad))
 
 
 def camera_image(directions: np.ndarray, valid: np.ndarray, n_wavelengths: int,
@@ -228,7 +228,7 @@ def _check_cloud_solver(solver) -> None:
 
 
 def sky_image(spectral: np.ndarray, directions: np.ndarray, valid: np.ndarray,
-              viewpoint: Viewpoint, profile, sun: SunLight | None = None) -> SkyImage:
+              viewpoint: Viewpoint, profile, *, sun: SunLight | None = None) -> SkyImage:
     """The SkyImage of a finished spectral image, with the pixels to meter: those looking
     above the horizontal, or, looking down from space, the lit ones."""
     sky = valid & (directions[..., 2] > 0.0)

@@ -283,7 +283,7 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
                                 solver, viewpoint, rays, ground, clouds),
                             magnitude_limit=objects.magnitude_limit)
     return sky_image(spectral, directions, valid, viewpoint, profile,
-                     SunLight(sun, sun_seen, sun_today.angular_radius_rad))
+                     sun=SunLight(sun, sun_seen, sun_today.angular_radius_rad))
 
 
 def _sun_lights_the_sky(solver: Solver, sun_true: np.ndarray) -> bool:

@@ -46,7 +46,7 @@ def write_frames(render_frame: Callable[[Observer], SkyImage], observers: Sequen
         name = f"frame_{index + 1:05d}.png"
         write_png(staged_dir / name, rgb8,
                   text={"Software": "skyscatter", "EV100": f"{ev100:.3f}",
-                        "Time": observer.time_utc.isoformat()})
+                        "Time": observer.time_utc.isoformat()}, colour_space=colour_space)
         video.add(rgb8)
         frames.append(frames_dir / name)
         exposures.append(ev100)
