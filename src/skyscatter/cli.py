@@ -385,9 +385,9 @@ def build_parser() -> argparse.ArgumentParser:
     sun.add_argument("--sun-elevation", type=_number(checks.ELEVATION_ANGLE_DEG), metavar="DEG",
                      help="sun elevation above the horizon in degrees (default 30)")
     sun.add_argument("--time", default=None, metavar="ISO8601",
-                     help="date and time with a time zone, e.g. 2024-06-21T21:30+02:00, or a "
-                     "Mars Sol Date, e.g. 'MSD 51000.5': the sun, moon and stars for "
-                     "--lat/--lon (Earth and Mars presets)")
+                     help="date and time with a time zone, e.g. 2024-06-21T21:30+02:00 or "
+                     "2024-06-21T21:30[Europe/Berlin], or a Mars Sol Date, e.g. 'MSD 51000.5': "
+                     "the sun, moon and stars for --lat/--lon (Earth and Mars presets)")
     render.add_argument("--sun-azimuth", type=_number(checks.ANGLE_DEG), default=180.0,
                         metavar="DEG",
                         help="sun azimuth from north towards east in degrees (default 180)")

@@ -106,3 +106,38 @@ def test_delta_t_is_continuous_at_1972():
     before = terrestrial_minus_universal_s(datetime.datetime(1971, 12, 31, 23, 59, tzinfo=UTC))
     after = terrestrial_minus_universal_s(datetime.datetime(1972, 1, 1, tzinfo=UTC))
     assert abs(after - before) < 0.1
+
+
+# References: Directive 2000/84/EC (EU summer time from the last Sunday of March, 01:00 UTC, to
+# the last Sunday of October, 01:00 UTC; Berlin is UTC+1 in winter, UTC+2 in summer) and the US
+# Energy Policy Act of 2005, sec. 110 (New York: UTC-4 from the second Sunday of March to the
+# first Sunday of November, else UTC-5).
+@pytest.mark.parametrize("text, utc", [
+    ("2024-06-21T21:30[Europe/Berlin]", "2024-06-21T19:30+00:00"),
+    ("2024-01-21T21:30 Europe/Berlin", "2024-01-21T20:30+00:00"),
+    ("2024-03-31T01:59[Europe/Berlin]", "2024-03-31T00:59+00:00"),  # the last minute of winter
+    ("2024-03-31T03:00[Europe/Berlin]", "2024-03-31T01:00+00:00"),  # the first of summer
+    ("2024-07-04T12:00[America/New_York]", "2024-07-04T16:00+00:00"),
+    ("2024-12-25T12:00 America/New_York", "2024-12-25T17:00+00:00"),
+    ("2024-06-21T21:30+02:00[Europe/Berlin]", "2024-06-21T19:30+00:00"),  # RFC 9557, agreeing
+])
+def test_a_time_in_an_iana_zone_takes_the_zones_offset_at_that_date(text, utc):
+    assert parse_time(text) == datetime.datetime.fromisoformat(utc)
+
+
+def test_a_skipped_local_time_takes_the_offset_before_the_change():
+    # 02:30 does not exist in Berlin on 2024-03-31 (01:00 UTC the clocks go from 02:00 to
+    # 03:00); PEP 495's fold = 0 reads it with the winter offset, +01:00.
+    assert parse_time("2024-03-31T02:30[Europe/Berlin]") == datetime.datetime(
+        2024, 3, 31, 1, 30, tzinfo=datetime.UTC)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("2024-06-21T21:30[Europe/Berln]", "not a zone of the IANA time zone database"),
+    ("2024-06-21T21:30[../../etc/passwd]", "not a zone of the IANA time zone database"),
+    ("2024-06-21T21:30+01:00[Europe/Berlin]", "the offset is not Europe/Berlin's"),
+    ("[Europe/Berlin]", "not an ISO 8601 date-time"),
+])
+def test_a_bad_zone_is_refused_with_a_fix(text, message):
+    with pytest.raises(InputError, match=message):
+        parse_time(text)

@@ -1,7 +1,11 @@
 """Time: parsing user times, Julian dates, and the difference TT − UT.
 
 - `parse_time`: ISO 8601 text with a time zone -> an aware `datetime` in UTC. A time without a
-  zone is refused: a sky at "21:30" is a different sky in Berlin and in Sydney.
+  zone is refused: a sky at "21:30" is a different sky in Berlin and in Sydney. The zone is an
+  offset ("+02:00", "Z") or a zone of the IANA time zone database, in brackets as RFC 9557
+  writes it ("2024-06-21T21:30[Europe/Berlin]") or after a space ("2024-06-21T21:30
+  Europe/Berlin"), its offset at that date from the database (`zoneinfo`, with the `tzdata`
+  package where the system has none).
 - `julian_date`: the Julian date (UT) of a UTC instant, Meeus (1998), *Astronomical Algorithms*,
   2nd ed., ch. 7, eq. 7.1.
 - `terrestrial_minus_universal_s`: ΔT = TT − UT [s]. From 1972 on: TAI − UTC from the leap-second
@@ -77,34 +81,71 @@ _LEAP_SECONDS = (
     (datetime.datetime(2017, 1, 1, tzinfo=_UTC), 37.0),
 )
 
-_EXAMPLE = "e.g. 2024-06-21T21:30+02:00 or 2024-06-21T19:30Z"
+_EXAMPLE = "e.g. 2024-06-21T21:30+02:00, 2024-06-21T19:30Z or 2024-06-21T21:30[Europe/Berlin]"
 
 
 def parse_time(text: str) -> datetime.datetime:
     """Parse an ISO 8601 date-time with a time zone; return it as an aware datetime in UTC.
 
     Accepts what `datetime.fromisoformat` (Python 3.11) accepts, including a trailing "Z":
-    "2024-06-21T21:30+02:00", "2024-06-21 19:30:00Z", "2024-06-21T19:30:00.5+00:00".
+    "2024-06-21T21:30+02:00", "2024-06-21 19:30:00Z", "2024-06-21T19:30:00.5+00:00"; or a
+    local date-time followed by an IANA zone, "2024-06-21T21:30[Europe/Berlin]" (RFC 9557) or
+    "2024-06-21T21:30 Europe/Berlin" (with an offset too, "...+02:00[Europe/Berlin]", the
+    two must agree). A local time that a zone's clocks skip or repeat (when
+    daylight saving time starts or ends) is taken with the offset before the change (PEP 495,
+    fold = 0).
 
     Raises
     ------
     InputError
-        The text has no time zone, is not an ISO 8601 date-time, or lies outside the years
-        1-9999 in UTC; the message shows a fix.
+        The text has no time zone, names an unknown zone, is not an ISO 8601 date-time, or lies
+        outside the years 1-9999 in UTC; the message shows a fix.
     """
     if not isinstance(text, str):
         raise InputError(f"--time {text!r} must be text such as 2024-06-21T21:30+02:00",
                          key="time", value=text, allowed="ISO 8601 date-time with a time zone")
+    local, zone = _split_zone(text.strip())
     try:
-        parsed = datetime.datetime.fromisoformat(text.strip())
+        parsed = datetime.datetime.fromisoformat(local)
     except ValueError:
         raise InputError(f"--time {text!r} is not an ISO 8601 date-time; write it as "
                          f"YYYY-MM-DDTHH:MM with a time zone, {_EXAMPLE}", key="time", value=text,
                          allowed="ISO 8601 date-time with a time zone") from None
+    if zone is not None:
+        zoned = parsed.replace(tzinfo=_zone(zone, text))
+        if parsed.tzinfo is not None and parsed.utcoffset() != zoned.utcoffset():
+            raise InputError(f"--time {text!r}: the offset is not {zone}'s at that time "
+                             f"({zoned.isoformat()}); give the zone alone", key="time",
+                             value=text, allowed="an offset that agrees with the zone")
+        parsed = zoned
     if parsed.tzinfo is None or parsed.utcoffset() is None:
         raise InputError(f"--time {text!r} has no time zone; add one, {_EXAMPLE}", key="time",
                          value=text, allowed="ISO 8601 date-time with a time zone")
     return _in_utc(parsed, f"--time {text!r}", "time")
+
+
+def _split_zone(text: str) -> tuple[str, str | None]:
+    """(the date-time, the IANA zone name or None) of "...[Zone]" or "... Zone"."""
+    if text.endswith("]") and "[" in text:
+        local, _, zone = text[:-1].rpartition("[")
+        return local.strip(), zone.strip()
+    head, _, tail = text.rpartition(" ")
+    if head and ("/" in tail or tail in ("UTC", "GMT")):
+        return head.strip(), tail
+    return text, None
+
+
+def _zone(name: str, text: str) -> datetime.tzinfo:
+    """The IANA zone `name`; InputError naming the text when the database has no such zone."""
+    import zoneinfo
+
+    try:
+        return zoneinfo.ZoneInfo(name)
+    except (zoneinfo.ZoneInfoNotFoundError, ValueError, OSError):  # unknown, or not a name
+        raise InputError(f"--time {text!r}: {name!r} is not a zone of the IANA time zone "
+                         "database; write it as Continent/City (Europe/Berlin, America/New_York) "
+                         "or give an offset such as +02:00", key="time", value=text,
+                         allowed="IANA zone names, e.g. Europe/Berlin") from None
 
 
 def _in_utc(time: datetime.datetime, what: str, name: str) -> datetime.datetime:
