@@ -270,7 +270,8 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
            progress: Callable[[int], None] | None = None,
            orbit_latitude_deg: float | None = None, orbit_longitude_deg: float = 0.0,
            ground: Ground | None = None, allow_large: bool = False,
-           clouds: Clouds | None = None, cloud_time_s: float = 0.0) -> SkyImage:
+           clouds: Clouds | None = None, cloud_time_s: float = 0.0,
+           sun_disk: bool = True) -> SkyImage:
     """Render what `camera` sees from `altitude_m` [m] above the ground, with the sun at
     `sun_zenith_deg` and `sun_azimuth_deg` (from north towards east) in the observer's local
     frame. Spectral, on `wavelengths_nm` (default: 16 bins over 360-830 nm). With
@@ -278,7 +279,8 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
     pitch -90 looks at the planet's centre); otherwise above the north pole. `ground` adds an
     albedo map and/or terrain (table solver). `clouds` (`load_clouds`) adds cloud layers as
     the wind has moved them `cloud_time_s` [s] after their initial state (table solver).
-    `options`: `solver_options(atmosphere)` by
+    Without `sun_disk` the sun's disk is left out (its light stays in the image's `sun`, for
+    `environment_light`). `options`: `solver_options(atmosphere)` by
     default (the config's orders, tables cached). InputError, before any work, for a value
     out of range (`checks`) or an image too large (`check_render_cost`; `allow_large`)."""
     _check_atmosphere(atmosphere)
@@ -295,7 +297,7 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
     viewpoint = viewpoint_at(altitude_m, engine.profile.bottom_radius_m, orbit_latitude_deg,
                              orbit_longitude_deg)
     return render_sky(engine, camera, viewpoint, sun, atmosphere.planet.star, progress=progress,
-                      ground=ground,
+                      ground=ground, sun_disk=bool(sun_disk),
                       clouds=_cloud_field(clouds, engine, viewpoint, cloud_time_s, solver,
                                           camera=camera, place=(
                                               (0.0, 0.0) if orbit_latitude_deg is None

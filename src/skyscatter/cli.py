@@ -437,6 +437,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="also write the sun as a directional light and the rest of the "
                         "sky's diffuse irradiance as spherical harmonics, in the EXR's units "
                         "(JSON; --camera cubemap or panorama: docs/engines.md)")
+    render.add_argument("--no-sun-disk", action="store_true",
+                        help="leave the sun's disk out of the image (with --light the sun is "
+                        "then only the directional light)")
     render.add_argument("--exr-content", choices=("rgb", "luminance", "spectral"),
                         default="rgb", help="what the EXR holds (default rgb)")
     render.set_defaults(run=_render)
@@ -694,7 +697,7 @@ def _render(args: argparse.Namespace) -> None:
                                orbit_latitude_deg=latitude if orbit else None,
                                orbit_longitude_deg=longitude, ground=ground,
                                allow_large=args.allow_large, clouds=clouds,
-                               cloud_time_s=args.cloud_time)
+                               cloud_time_s=args.cloud_time, sun_disk=not args.no_sun_disk)
     ev100 = api.save_image(image, image_target, args.exr, options=image_options)
     written = ["the PNG to standard output" if image_target is not args.output
                else str(args.output)] + ([str(args.exr)] if args.exr else [])
@@ -741,7 +744,7 @@ def _sky_objects(args: argparse.Namespace):
     return api.SkyObjects(stars=not args.no_stars, moon=not args.no_moon,
                           milky_way=args.milky_way, airglow=not args.no_airglow,
                           magnitude_limit=args.magnitude_limit,
-                          scintillation=twinkle)
+                          scintillation=twinkle, sun_disk=not getattr(args, "no_sun_disk", False))
 
 
 def _sky_summary(sky) -> str:

@@ -12,9 +12,10 @@ irradiance environment maps", SIGGRAPH, doi:10.1145/383259.383317, eqs. 3, 7-8):
 with Y_00 = 0.282095; Y_1-1, Y_10, Y_11 = 0.488603 (y, z, x); Y_2-2, Y_2-1, Y_21 = 1.092548
 (x y, y z, x z); Y_20 = 0.315392 (3 z^2 - 1); Y_22 = 0.546274 (x^2 - y^2), in that order
 (l, then m from -l to l). The directions are those of the cube map (`render.cube_map`): x east,
-y up, z south. The sun's disk is taken out as the delta function it nearly is: its direct
-irradiance E_sun adds E_sun Y_lm(s) to L_lm, which is subtracted (its disk, a quarter of a degree
-across, is far below the resolution of order 2), and it is given as a directional light: its
+y up, z south. The sun's disk, where the image holds it, is taken out as the delta function it
+nearly is: its direct irradiance E_sun adds E_sun Y_lm(s) to L_lm, which is subtracted (its disk,
+a quarter of a degree across, is far below the resolution of order 2); the sun is given as a
+directional light: its
 direction, its illuminance E_v = 683 lm/W int E_sun V d(lambda) [lux] and its linear RGB, in
 the units of the image's EXR (1.0 = 1 cd m^-2 of luminance: the RGB of an irradiance is then in
 lux, its luminance the illuminance), colours outside the space's gamut (a setting sun's)
@@ -81,7 +82,8 @@ def environment_light(image: SkyImage, directions_enu: np.ndarray, solid_angles:
             sun_xyz = white_balance(sun_xyz, image.light_spectrum, image.wavelengths_nm)
         sun_rgb = into_gamut(xyz_to_rgb(sun_xyz, colour_space), colour_space)
         s = _ENU_TO_MAP @ np.asarray(image.sun.direction, dtype=np.float64)
-        coefficients -= _CONVOLUTION[:, None] * np.outer(sh_basis(s), sun_rgb)
+        if image.sun.in_image:
+            coefficients -= _CONVOLUTION[:, None] * np.outer(sh_basis(s), sun_rgb)
         light["sun"] = {"direction": _rounded(s), "illuminance": _rounded(sun_xyz[1]),
                         "rgb": _rounded(sun_rgb),
                         "angular_radius_deg": _rounded(np.degrees(image.sun.angular_radius_rad))}

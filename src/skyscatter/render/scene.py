@@ -70,6 +70,7 @@ class SunLight:
     # [W m^-2 nm^-1]
     direction: np.ndarray  # (3,) unit, ENU, as seen (refracted where the render refracts)
     angular_radius_rad: float
+    in_image: bool = True  # its disk is drawn in the image
 
 
 @dataclass(frozen=True)
@@ -138,12 +139,14 @@ def orbit_viewpoint(altitude_m: float, latitude_deg: float, longitude_deg: float
 
 def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray, star: Star, *,
                progress: Callable[[int], None] | None = None,
-               ground: Ground | None = None, clouds: CloudField | None = None) -> SkyImage:
+               ground: Ground | None = None, clouds: CloudField | None = None,
+               sun_disk: bool = True) -> SkyImage:
     """Spectral image seen by `camera` from `viewpoint` with the sun along `sun_dir` (both in
     the viewpoint's local frame). `solver` answers `sky_radiance` and `transmittance`; with
     `ground` (an albedo map and/or terrain) the rays that meet it are shaded by
     `surfaces.surface_radiance`, with `clouds` the clouds are put in front
-    (`transport.clouds.clouds_in_front`; both table solver only)."""
+    (`transport.clouds.clouds_in_front`; both table solver only); without `sun_disk` the sun's
+    disk is left out of the image (the image's `sun` still holds its light)."""
     profile = solver.profile
     directions, valid = camera.directions()
     world_sun = viewpoint.direction_to_world(sun_dir)
@@ -164,9 +167,10 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
     sun = add_sun_disk(spectral, camera, directions, valid, sun_dir, star=star,
                        wavelengths_nm=profile.wavelengths_nm, transmittance=sun_transmittance,
                        horizon_cos_zenith=horizon_cos_zenith(float(np.linalg.norm(position)),
-                                                             profile.bottom_radius_m))
+                                                             profile.bottom_radius_m),
+                       draw=sun_disk)
     return sky_image(spectral, directions, valid, viewpoint, profile,
-                     sun=SunLight(sun, sun_dir, star.angular_radius_rad))
+                     sun=SunLight(sun, sun_dir, star.angular_radius_rad, sun_disk))
 
 
 def camera_image(directions: np.ndarray, valid: np.ndarray, n_wavelengths: int,
@@ -285,7 +289,7 @@ def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
                  valid: np.ndarray, sun_dir: np.ndarray, *, star: Star,
                  wavelengths_nm: np.ndarray, transmittance: np.ndarray,
                  occluder: tuple[np.ndarray, float] | None = None,
-                 horizon_cos_zenith: float = -1.0) -> np.ndarray:
+                 horizon_cos_zenith: float = -1.0, draw: bool = True) -> np.ndarray:
     """Add the transmitted sun disk to `spectral` (h, w, n_wl) in place. `occluder`
     (direction, angular radius [rad]), e.g. the moon in a solar eclipse, hides the part of
     the disk behind it (a sub-pixel disk is dimmed by `disk_visible_fraction`, limb darkening
@@ -293,7 +297,7 @@ def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
     cosine `horizon_cos_zenith` (a sub-pixel disk is dimmed by
     `geometry.disk_fraction_above`). Returns the sun's direct spectral irradiance at the camera
     normal to it (n_wl,) [W m^-2 nm^-1], its hidden part left out, whether or not the camera
-    sees the disk."""
+    sees the disk; without `draw` only that, the image untouched."""
     visible = 1.0 if occluder is None else disk_visible_fraction(
         sun_dir, star.angular_radius_rad, *occluder)
     visible *= disk_fraction_above(float(sun_dir[2]), horizon_cos_zenith,
@@ -301,6 +305,8 @@ def add_sun_disk(spectral: np.ndarray, camera: Camera, directions: np.ndarray,
     irradiance = star.irradiance_toa(wavelengths_nm) * transmittance * visible
     if not np.any(transmittance > 0.0) or visible <= 0.0:
         return np.zeros_like(irradiance)
+    if not draw:
+        return irradiance
     if deposit_small_disk(spectral, camera, valid, sun_dir, star.solid_angle_sr,
                           irradiance=lambda: irradiance):
         return irradiance

@@ -117,6 +117,7 @@ class SkyObjects:
     airglow          the night glow of the upper atmosphere (Earth; `render.airglow`)
     milky_way        the integrated light of the stars fainter than the catalogue
     scintillation    a random generator: each star's brightness twinkles (one draw per frame)
+    sun_disk         the sun's disk (without it the image's `sun` still holds its light)
     """
 
     stars: bool = True
@@ -125,6 +126,7 @@ class SkyObjects:
     airglow: bool = True
     magnitude_limit: float | None = None
     scintillation: np.random.Generator | None = None
+    sun_disk: bool = True
 
     def __post_init__(self) -> None:
         limit = self.magnitude_limit
@@ -266,7 +268,8 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
                        transmittance=_transmittance(solver, viewpoint, sun_seen[None], ground,
                                                     clouds)[0],
                        occluder=None if moon is None else (moon_seen,
-                                                           moon.geometry.angular_radius_rad))
+                                                           moon.geometry.angular_radius_rad),
+                       draw=objects.sun_disk)
     if moon is not None:
         seen = dataclasses.replace(moon.geometry, moon_direction=moon_seen)
         add_moon_disk(spectral, camera, directions, valid, seen, wavelengths_nm=wavelengths,
@@ -283,7 +286,7 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
                                 solver, viewpoint, rays, ground, clouds),
                             magnitude_limit=objects.magnitude_limit)
     return sky_image(spectral, directions, valid, viewpoint, profile,
-                     sun=SunLight(sun, sun_seen, sun_today.angular_radius_rad))
+                     sun=SunLight(sun, sun_seen, sun_today.angular_radius_rad, objects.sun_disk))
 
 
 def _sun_lights_the_sky(solver: Solver, sun_true: np.ndarray) -> bool:
