@@ -76,6 +76,7 @@ from skyscatter.render.environment_light import environment_light as sky_light
 from skyscatter.render.exposure import display_rgb8, metered_ev100
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer
 from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOptions
+from skyscatter.render.radiance_hdr import hdr_writer
 from skyscatter.render.scene import (
     SkyImage,
     Viewpoint,
@@ -569,23 +570,29 @@ def check_image_options(operator: str = "aces", colour_space: str = "srgb",
     """Raise InputError for an unknown tone-mapping operator, colour space or EXR content
     (`ImageOptions`; given `options`, checked when it was made, the first three arguments are
     not used), and for output paths that cannot be written (a suffix other than
-    .png/.jpg/.jpeg for the display image or .exr for the EXR, a directory, a read-only file
-    or folder; see `output_files.check_writable_file`), so that a caller can reject them
-    before rendering; `save_image` makes the same checks."""
+    .png/.jpg/.jpeg for the display image or .exr/.hdr for the linear image, a .hdr of other
+    than RGB, a directory, a read-only file or folder; see `output_files.check_writable_file`),
+    so that a caller can reject them before rendering; `save_image` makes the same checks."""
     if options is None:
-        ImageOptions(operator=operator, colour_space=colour_space, exr_content=exr_content)
-    _check_image_paths(png_path, exr_path)
+        options = ImageOptions(operator=operator, colour_space=colour_space,
+                               exr_content=exr_content)
+    _check_image_paths(png_path, exr_path, options.exr_content)
 
 
 def _check_image_paths(png_path: str | Path | BinaryIO | None,
-                       exr_path: str | Path | None) -> None:
+                       exr_path: str | Path | None, exr_content: str) -> None:
     if png_path is not None and not hasattr(png_path, "write"):
         display_format(png_path)
         check_writable_file(png_path)
     if exr_path is not None:
-        if Path(exr_path).suffix.lower() != ".exr":
-            raise InputError(f"cannot write an EXR as {str(exr_path)!r}: name it .exr",
-                             key="exr_path", value=str(exr_path), allowed=".exr")
+        if Path(exr_path).suffix.lower() not in (".exr", ".hdr"):
+            raise InputError(f"cannot write a linear image as {str(exr_path)!r}: name it .exr "
+                             "(OpenEXR) or .hdr (Radiance)", key="exr_path",
+                             value=str(exr_path), allowed=".exr, .hdr")
+        if Path(exr_path).suffix.lower() == ".hdr" and exr_content != "rgb":
+            raise InputError(f"a Radiance .hdr holds RGB, not {exr_content}: name the file "
+                             ".exr for that", key="exr_content", value=exr_content,
+                             allowed="rgb")
         check_writable_file(exr_path)
 
 
@@ -639,7 +646,7 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
                                exr_content=exr_content, adapt_to_night=adapt_to_night)
     else:
         checked_instance("options", options, ImageOptions, "an ImageOptions")
-    _check_image_paths(png_path, exr_path)
+    _check_image_paths(png_path, exr_path, options.exr_content)
     colour_space, exr_content = options.colour_space, options.exr_content
     xyz = image.xyz(options.balance_to_light)
     ev100 = options.ev100
@@ -657,7 +664,10 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
                 colour_space=colour_space)
             if stream is None:
                 stage.write(png_path, write)
-        if exr_path is not None:
+        if exr_path is not None and Path(exr_path).suffix.lower() == ".hdr":
+            stage.write(exr_path, hdr_writer(into_gamut(linear, colour_space),
+                                             rgb_space_chromaticities(colour_space)))
+        elif exr_path is not None:
             if exr_content == "rgb":
                 data, names = into_gamut(linear, colour_space), ("R", "G", "B")
             elif exr_content == "luminance":

@@ -431,8 +431,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="display image: .png, .jpg or .jpeg, or - for a PNG on standard "
                         "output (default sky.png; missing folders are made)")
     render.add_argument("--exr", type=Path, default=None,
-                        help="also write a linear EXR (.exr); it and the display image replace "
-                        "old files together, or neither does")
+                        help="also write a linear image: OpenEXR (.exr) or Radiance RGBE (.hdr, "
+                        "RGB only); it and the display image replace old files together, or "
+                        "neither does")
     render.add_argument("--light", type=Path, default=None, metavar="FILE",
                         help="also write the sun as a directional light and the rest of the "
                         "sky's diffuse irradiance as spherical harmonics, in the EXR's units "
