@@ -76,6 +76,7 @@ from skyscatter.render.environment_light import environment_light as sky_light
 from skyscatter.render.exposure import display_rgb8, metered_ev100
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer
 from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOptions
+from skyscatter.render.octahedral import OctahedralCamera
 from skyscatter.render.radiance_hdr import hdr_writer
 from skyscatter.render.scene import (
     SkyImage,
@@ -140,6 +141,7 @@ __all__ = [
     "Heightfield",
     "ImageOptions",
     "Observer",
+    "OctahedralCamera",
     "PerspectiveCamera",
     "SkyImage",
     "SkyObjects",
@@ -601,15 +603,17 @@ def environment_light(image: SkyImage, camera: Camera, colour_space: str = "srgb
     """The sun as a directional light (direction, illuminance [lux], linear RGB, angular
     radius) and the diffuse irradiance of the rest of the sky as 9 spherical-harmonic
     coefficients per channel (`render.environment_light`), from an image of the whole sphere
-    rendered by `camera` (a `CubeMapCamera` or an `EquirectangularCamera`), in the EXR's units
+    rendered by `camera` (a `CubeMapCamera`, `OctahedralCamera` or `EquirectangularCamera`),
+    in the EXR's units
     and `colour_space`; a JSON-ready dict. InputError for a camera that does not see the
     whole sphere."""
     checked_instance("image", image, SkyImage, "a SkyImage", " from render or render_at")
-    if not isinstance(camera, (CubeMapCamera, EquirectangularCamera)):
+    if not isinstance(camera, (CubeMapCamera, OctahedralCamera, EquirectangularCamera)):
         raise InputError("the light of a sky needs an image of the whole sphere: render it "
-                         "with a CubeMapCamera or an EquirectangularCamera (--camera cubemap or "
-                         "panorama)", key="camera", value=camera,
-                         allowed="CubeMapCamera, EquirectangularCamera")
+                         "with a CubeMapCamera, OctahedralCamera or EquirectangularCamera "
+                         "(--camera cubemap, octahedral or panorama)", key="camera",
+                         value=camera,
+                         allowed="CubeMapCamera, OctahedralCamera, EquirectangularCamera")
     check_image_options(colour_space=colour_space)
     directions, _ = camera.directions()
     return sky_light(image, directions, camera.pixel_solid_angles(), colour_space,

@@ -32,7 +32,7 @@ from skyscatter.output_files import atomic_write, check_writable_file
 
 __all__ = ["main"]
 
-CAMERAS = ("fisheye", "panorama", "perspective", "orbit", "cubemap")
+CAMERAS = ("fisheye", "panorama", "perspective", "orbit", "cubemap", "octahedral")
 
 
 def _checked(bounds: Bounds, value: float, text: str) -> float:
@@ -271,6 +271,8 @@ _CAMERA_HELP = {
              "north up",
     "cubemap": "the whole sphere on six --size faces in OpenGL's cube map convention (+X east, "
                "+Y up, +Z south), laid out by --cube-layout",
+    "octahedral": "the whole sphere on one --size square as light probes store it: the zenith "
+                  "at the centre, the horizon on the inner diamond, the nadir at the corners",
 }
 
 
@@ -437,7 +439,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--light", type=Path, default=None, metavar="FILE",
                         help="also write the sun as a directional light and the rest of the "
                         "sky's diffuse irradiance as spherical harmonics, in the EXR's units "
-                        "(JSON; --camera cubemap or panorama: docs/engines.md)")
+                        "(JSON; --camera cubemap, octahedral or panorama: docs/engines.md)")
     render.add_argument("--no-sun-disk", action="store_true",
                         help="leave the sun's disk out of the image (with --light the sun is "
                         "then only the directional light)")
@@ -654,9 +656,10 @@ def _render(args: argparse.Namespace) -> None:
     api.check_image_options(png_path=image_target, exr_path=args.exr,
                             options=image_options)  # the outputs can be written: before any work
     if args.light is not None:
-        if args.camera not in ("cubemap", "panorama"):
-            raise InputError("--light needs an image of the whole sphere: add --camera cubemap "
-                             "or --camera panorama", key="light", value=str(args.light))
+        if args.camera not in ("cubemap", "octahedral", "panorama"):
+            raise InputError("--light needs an image of the whole sphere: add --camera cubemap, "
+                             "--camera octahedral or --camera panorama", key="light",
+                             value=str(args.light))
         check_writable_file(args.light)
     atmosphere = api.load_atmosphere(args.atmosphere)
     observer = _observer(args) if args.time is not None else None
@@ -885,6 +888,8 @@ def _camera(args: argparse.Namespace):
         return api.EquirectangularCamera(2 * args.size, args.size, heading_deg=args.heading)
     if args.camera == "cubemap":
         return api.CubeMapCamera(args.size, args.cube_layout)
+    if args.camera == "octahedral":
+        return api.OctahedralCamera(args.size)
     width = max(1, round(args.size * args.aspect))
     fov = 60.0 if args.fov is None else args.fov
     return api.PerspectiveCamera(width, args.size, fov, heading_deg=args.heading,
