@@ -181,6 +181,12 @@ def test_solver_help_lists_every_registered_solver(capsys, command):
     (["radiance", "earth", "--sun-zenith", "30", "--solver", "lutt"],
      "unknown solver 'lutt'; available: lut, single, montecarlo"),
     (["render", "earth", "--camera", "orthographic"], "invalid choice: 'orthographic'"),
+    (["rendr", "earth"], "did you mean 'render'?"),
+    (["render", "earth", "--camera", "cubmap"], "did you mean 'cubemap'?"),
+    (["render", "earth", "--sun-elevaton", "5"],
+     "did you mean --sun-elevation for --sun-elevaton?"),
+    (["render", "earth", "--time", "2024-06-21T21:30[Europe/Berln]", "--lat", "52", "--lon",
+      "13"], "not a zone of the IANA time zone database"),
     (["render", "earth", "--sun-zenith", "30", "--sun-elevation", "60"], "not allowed with"),
     (["render", "earth", "--time", "2024-06-21T21:30", "--lat", "52", "--lon", "13"],
      "has no time zone"),
@@ -572,3 +578,9 @@ def test_image_option_help_names_every_tone_curve_and_colour_space():
     for name in RGB_SPACES:
         assert name in render["--colour-space"].help
 
+
+
+def test_skyscatter_alone_prints_its_help(capsys):
+    assert main([]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: skyscatter") and "render" in out

@@ -11,12 +11,15 @@ from __future__ import annotations
 
 import argparse
 import csv
+import difflib
 import json
 import os
+import re
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from typing import NoReturn
 
 from skyscatter import __version__, checks
 from skyscatter.api_constants import (  # no solver
@@ -347,7 +350,11 @@ def _add_sky_object_arguments(command: argparse.ArgumentParser) -> None:
 
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose --solver help lists the registered solvers
-    (`api_constants.solver_descriptions`), read only when a help text is shown."""
+    (`api_constants.solver_descriptions`), read only when a help text is shown, and whose
+    errors suggest the nearest command, choice or option for a mistyped one."""
+
+    def error(self, message: str) -> NoReturn:
+        super().error(message + _did_you_mean(message, self))
 
     def format_help(self) -> str:
         for action in self._actions:
@@ -356,6 +363,29 @@ class _Parser(argparse.ArgumentParser):
                     f"{name}{' (default)' if name == action.default else ''}: {description}"
                     for name, description in solver_descriptions().items())
         return super().format_help()
+
+
+def _did_you_mean(message: str, parser: argparse.ArgumentParser) -> str:
+    """"; did you mean ...?" for argparse's `message` about an invalid choice or unrecognized
+    options, from the choices it lists or the options of `parser` and its commands; or ""."""
+    invalid = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+    if invalid:
+        choices = [choice.strip("'") for choice in invalid.group(2).split(", ")]
+        close = difflib.get_close_matches(invalid.group(1), choices, n=1)
+        return f"; did you mean {close[0]!r}?" if close else ""
+    if "unrecognized arguments:" not in message:
+        return ""
+    options = {option for action in parser._actions for option in action.option_strings}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            options.update(option for command in action.choices.values()
+                           for sub in command._actions for option in sub.option_strings)
+    hints = []
+    for token in message.split("unrecognized arguments:", 1)[1].split():
+        close = difflib.get_close_matches(token.split("=", 1)[0], sorted(options), n=1)
+        if token.startswith("--") and close:
+            hints.append(f"{close[0]} for {token}")
+    return f"; did you mean {', '.join(hints)}?" if hints else ""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -1048,7 +1078,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from skyscatter.errors import SkyscatterError
     from skyscatter.output_files import Terminated, sigterm_as_interrupt
 
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    if not (sys.argv[1:] if argv is None else argv):
+        parser.print_help()  # `skyscatter` alone: what it can do
+        return 0
+    args = parser.parse_args(argv)
     first_run = False
     if args.command in COMPILING_COMMANDS:
         from skyscatter import compile_ahead
