@@ -98,6 +98,28 @@ class SkyImage:
         """Linear RGB (h, w, 3) in `space`, scaled so that Y = 1 is 1 cd m^-2."""
         return xyz_to_rgb(self.xyz(balance_to_light), space)
 
+    def __repr__(self) -> str:
+        height, width = self.valid.shape
+        wavelengths = self.wavelengths_nm
+        where = ", from space" if self.from_space else ""
+        return (f"SkyImage({width} x {height} pixels, {wavelengths.size} wavelengths "
+                f"{wavelengths.min():.0f}-{wavelengths.max():.0f} nm{where})")
+
+    def _repr_png_(self) -> bytes:
+        """The image as `api.save_image` writes its PNG by default (metered exposure, the ACES
+        curve, sRGB): what a Jupyter notebook shows."""
+        from io import BytesIO
+
+        from skyscatter.render.exposure import display_rgb8, metered_ev100
+        from skyscatter.render.image_io import display_image_writer
+        from skyscatter.render.image_options import ImageOptions
+
+        options, xyz, buffer = ImageOptions(), self.xyz(), BytesIO()
+        rgb8 = display_rgb8(xyz_to_rgb(xyz, options.colour_space), self.valid,
+                            metered_ev100(self, xyz), options.compensation_ev, options.operator)
+        display_image_writer(rgb8)(buffer)
+        return buffer.getvalue()
+
 
 @dataclass(frozen=True)
 class Viewpoint:
