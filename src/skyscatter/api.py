@@ -110,7 +110,13 @@ from skyscatter.spectrum.grid import (
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.single_scattering import observer_position
-from skyscatter.transport.solvers import NoisySolver, Solver, SolverOptions, make_solver
+from skyscatter.transport.solvers import (
+    NoisySolver,
+    Solver,
+    SolverOptions,
+    SurfaceSolver,
+    make_solver,
+)
 from skyscatter.validate.report import ValidationSettings
 from skyscatter.validate.suite import CASES as VALIDATION_CASES
 from skyscatter.validate.suite import run_suite as run_validation
@@ -161,6 +167,7 @@ __all__ = [
     "render",
     "render_at",
     "environment_light",
+    "irradiance_rows",
     "save_image",
     "sky_ephemeris",
     "timelapse",
@@ -740,6 +747,42 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                 if error is not None:
                     row["standard_error"] = float(error[i, j, k])
                 rows.append(row)
+    return rows
+
+
+def irradiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
+                    wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
+                    solver: str = "lut", options: SolverOptions | None = None
+                    ) -> list[dict[str, float]]:
+    """Spectral irradiance at the observer for each sun zenith angle and wavelength, one dict
+    per row with the keys sun_zenith_deg, wavelength_nm, direct_normal (the sun's direct light
+    on a surface facing it, its hidden part left out), diffuse_horizontal (the sky's light on a
+    horizontal surface), global_horizontal (their sum on the horizontal: direct_normal cos
+    (sun zenith) + diffuse_horizontal), each [W m^-2 nm^-1], and toa_irradiance
+    [W m^-2 nm^-1]. Monochromatic wavelengths as `sky_radiance_rows`. InputError, before any
+    work, for an empty list, a value out of range, or a solver that does not light surfaces
+    (the Monte Carlo's)."""
+    _check_atmosphere(atmosphere)
+    sun_zeniths_deg = _angle_list("sun_zeniths_deg", sun_zeniths_deg, ZENITH_DEG)
+    ALTITUDE_M.check("altitude_m", altitude_m)
+    wavelengths = _checked_wavelength_list(wavelengths_nm, True)
+    engine = load_solver(atmosphere, wavelengths, solver, options, monochromatic=True)
+    if not isinstance(engine, SurfaceSolver):
+        raise InputError(f"the {solver!r} solver does not give irradiance; use lut or single",
+                         key="solver", value=solver, allowed="lut, single")
+    profile = engine.profile
+    position = observer_position(altitude_m, profile.bottom_radius_m)
+    rows = []
+    for sun_zenith in sun_zeniths_deg:
+        mu = float(np.cos(np.radians(sun_zenith)))
+        direct, diffuse = engine.ground_irradiance(position, sun_direction(sun_zenith, 0.0))
+        normal = direct / mu if mu > 0.0 else np.zeros_like(direct)
+        for k, wavelength in enumerate(profile.wavelengths_nm):
+            rows.append({"sun_zenith_deg": float(sun_zenith), "wavelength_nm": float(wavelength),
+                         "direct_normal": float(normal[k]),
+                         "diffuse_horizontal": float(diffuse[k]),
+                         "global_horizontal": float(direct[k] + diffuse[k]),
+                         "toa_irradiance": float(profile.toa_irradiance[k])})
     return rows
 
 

@@ -544,6 +544,28 @@ def build_parser() -> argparse.ArgumentParser:
                           help="output format (default csv)")
     radiance.set_defaults(run=_radiance)
 
+    irradiance = commands.add_parser(
+        "irradiance", help="print spectral irradiance (direct, diffuse, global) as CSV or JSON",
+        description="Print the spectral irradiance [W m^-2 nm^-1] at the observer: the sun's "
+        "direct light on a surface facing it (direct_normal), the sky's on a horizontal "
+        "surface (diffuse_horizontal) and their sum on the horizontal (global_horizontal), "
+        "for each sun zenith angle and wavelength.")
+    _add_atmosphere_argument(irradiance)
+    irradiance_sun = irradiance.add_mutually_exclusive_group(required=True)
+    irradiance_sun.add_argument("--sun-zenith", type=_number_list(checks.ZENITH_DEG),
+                                metavar="DEG,...", help="sun zenith angles in degrees")
+    irradiance_sun.add_argument("--time", default=None, metavar="ISO8601",
+                                help="date and time with a time zone: the sun's zenith angle "
+                                "there and then for --lat/--lon (Earth and Mars presets)")
+    irradiance.add_argument("--wavelengths", type=_wavelength_list(monochromatic=True),
+                            default=[440.0, 550.0, 680.0],
+                            metavar="NM,...", help="wavelengths in nm (default 440,550,680)")
+    _add_place_arguments(irradiance)
+    _add_solver_arguments(irradiance, 512)
+    irradiance.add_argument("--format", choices=("csv", "json"), default="csv",
+                            help="output format (default csv)")
+    irradiance.set_defaults(run=_irradiance)
+
     precompute = commands.add_parser(
         "precompute", help="precompute the scattering tables of an atmosphere into the cache",
         description="Precompute the tables (transmittance, single and multiple scattering, "
@@ -939,7 +961,26 @@ def _radiance(args: argparse.Namespace) -> None:
                                      args.view_azimuth, args.wavelengths,
                                      altitude_m=args.altitude, solver=args.solver,
                                      options=options, allow_large=args.allow_large)
-    if args.format == "json":
+    _print_rows(rows, args.format)
+
+
+def _irradiance(args: argparse.Namespace) -> None:
+    from skyscatter import api
+    atmosphere = api.load_atmosphere(args.atmosphere)
+    sun_zenith = args.sun_zenith
+    if args.time is not None:
+        sky = api.sky_ephemeris(atmosphere, _observer(args))
+        print(_sky_summary(sky), file=sys.stderr)
+        sun_zenith = [sky.sun_zenith_deg]
+    with _solver_options(args, atmosphere) as options:
+        rows = api.irradiance_rows(atmosphere, sun_zenith, args.wavelengths,
+                                   altitude_m=args.altitude, solver=args.solver, options=options)
+    _print_rows(rows, args.format)
+
+
+def _print_rows(rows: list[dict[str, float]], output_format: str) -> None:
+    """Rows of numbers to standard output as strict JSON (an array of objects) or CSV."""
+    if output_format == "json":
         json.dump(rows, sys.stdout, indent=1, allow_nan=False)  # strict JSON: jq, JSON.parse
         sys.stdout.write("\n")
     else:
@@ -1069,8 +1110,8 @@ def _validate(args: argparse.Namespace) -> int:
 
 
 # the commands whose first run compiles kernels (`compile_ahead`)
-COMPILING_COMMANDS = frozenset({"render", "timelapse", "radiance", "precompute", "view",
-                                "validate"})
+COMPILING_COMMANDS = frozenset({"render", "timelapse", "radiance", "irradiance", "precompute",
+                                "view", "validate"})
 
 
 def main(argv: Sequence[str] | None = None) -> int:
