@@ -388,6 +388,27 @@ def _did_you_mean(message: str, parser: argparse.ArgumentParser) -> str:
     return f"; did you mean {', '.join(hints)}?" if hints else ""
 
 
+def _add_sun_zeniths_argument(command: argparse.ArgumentParser) -> None:
+    """--sun-zenith (a list) or --time: where the sun stands for a table of numbers."""
+    sun = command.add_mutually_exclusive_group(required=True)
+    sun.add_argument("--sun-zenith", type=_number_list(checks.ZENITH_DEG), metavar="DEG,...",
+                     help="sun zenith angles in degrees")
+    sun.add_argument("--time", default=None, metavar="ISO8601",
+                     help="date and time with a time zone: the sun's zenith angle there and "
+                     "then for --lat/--lon (Earth and Mars presets)")
+
+
+def _add_rows_arguments(command: argparse.ArgumentParser) -> None:
+    """--wavelengths, the place, the solver and --format of a command printing rows."""
+    command.add_argument("--wavelengths", type=_wavelength_list(monochromatic=True),
+                         default=[440.0, 550.0, 680.0],
+                         metavar="NM,...", help="wavelengths in nm (default 440,550,680)")
+    _add_place_arguments(command)
+    _add_solver_arguments(command, 512)
+    command.add_argument("--format", choices=("csv", "json"), default="csv",
+                         help="output format (default csv)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="skyscatter", description="Physically based skies of Earth, Mars and other "
@@ -522,26 +543,14 @@ def build_parser() -> argparse.ArgumentParser:
         "itself not included) for every combination of the lists. View zenith 0 looks straight "
         "up; relative azimuth 0 looks towards the sun.")
     _add_atmosphere_argument(radiance)
-    radiance_sun = radiance.add_mutually_exclusive_group(required=True)
-    radiance_sun.add_argument("--sun-zenith", type=_number_list(checks.ZENITH_DEG),
-                              metavar="DEG,...",
-                              help="sun zenith angles in degrees")
-    radiance_sun.add_argument("--time", default=None, metavar="ISO8601",
-                              help="date and time with a time zone: the sun's zenith angle "
-                              "there and then for --lat/--lon (Earth and Mars presets)")
+    _add_sun_zeniths_argument(radiance)
     radiance.add_argument("--view-zenith", type=_number_list(checks.ZENITH_DEG), default=[0.0],
                           metavar="DEG,...",
                           help="view zenith angles in degrees (default 0)")
     radiance.add_argument("--view-azimuth", type=_number_list(checks.ANGLE_DEG), default=[0.0],
                           metavar="DEG,...", help="view azimuths relative to the sun in "
                           "degrees (default 0)")
-    radiance.add_argument("--wavelengths", type=_wavelength_list(monochromatic=True),
-                          default=[440.0, 550.0, 680.0],
-                          metavar="NM,...", help="wavelengths in nm (default 440,550,680)")
-    _add_place_arguments(radiance)
-    _add_solver_arguments(radiance, 512)
-    radiance.add_argument("--format", choices=("csv", "json"), default="csv",
-                          help="output format (default csv)")
+    _add_rows_arguments(radiance)
     radiance.set_defaults(run=_radiance)
 
     irradiance = commands.add_parser(
@@ -551,19 +560,8 @@ def build_parser() -> argparse.ArgumentParser:
         "surface (diffuse_horizontal) and their sum on the horizontal (global_horizontal), "
         "for each sun zenith angle and wavelength.")
     _add_atmosphere_argument(irradiance)
-    irradiance_sun = irradiance.add_mutually_exclusive_group(required=True)
-    irradiance_sun.add_argument("--sun-zenith", type=_number_list(checks.ZENITH_DEG),
-                                metavar="DEG,...", help="sun zenith angles in degrees")
-    irradiance_sun.add_argument("--time", default=None, metavar="ISO8601",
-                                help="date and time with a time zone: the sun's zenith angle "
-                                "there and then for --lat/--lon (Earth and Mars presets)")
-    irradiance.add_argument("--wavelengths", type=_wavelength_list(monochromatic=True),
-                            default=[440.0, 550.0, 680.0],
-                            metavar="NM,...", help="wavelengths in nm (default 440,550,680)")
-    _add_place_arguments(irradiance)
-    _add_solver_arguments(irradiance, 512)
-    irradiance.add_argument("--format", choices=("csv", "json"), default="csv",
-                            help="output format (default csv)")
+    _add_sun_zeniths_argument(irradiance)
+    _add_rows_arguments(irradiance)
     irradiance.set_defaults(run=_irradiance)
 
     precompute = commands.add_parser(
@@ -948,14 +946,20 @@ def _camera(args: argparse.Namespace):
                                  pitch_deg=args.pitch)
 
 
+def _sun_zeniths(args: argparse.Namespace, atmosphere) -> list[float]:
+    """--sun-zenith, or the sun's zenith angle at --time for --lat/--lon (said on stderr)."""
+    from skyscatter import api
+    if args.time is None:
+        return args.sun_zenith
+    sky = api.sky_ephemeris(atmosphere, _observer(args))
+    print(_sky_summary(sky), file=sys.stderr)
+    return [sky.sun_zenith_deg]
+
+
 def _radiance(args: argparse.Namespace) -> None:
     from skyscatter import api
     atmosphere = api.load_atmosphere(args.atmosphere)
-    sun_zenith = args.sun_zenith
-    if args.time is not None:
-        sky = api.sky_ephemeris(atmosphere, _observer(args))
-        print(_sky_summary(sky), file=sys.stderr)
-        sun_zenith = [sky.sun_zenith_deg]
+    sun_zenith = _sun_zeniths(args, atmosphere)
     with _solver_options(args, atmosphere) as options:
         rows = api.sky_radiance_rows(atmosphere, sun_zenith, args.view_zenith,
                                      args.view_azimuth, args.wavelengths,
@@ -967,11 +971,7 @@ def _radiance(args: argparse.Namespace) -> None:
 def _irradiance(args: argparse.Namespace) -> None:
     from skyscatter import api
     atmosphere = api.load_atmosphere(args.atmosphere)
-    sun_zenith = args.sun_zenith
-    if args.time is not None:
-        sky = api.sky_ephemeris(atmosphere, _observer(args))
-        print(_sky_summary(sky), file=sys.stderr)
-        sun_zenith = [sky.sun_zenith_deg]
+    sun_zenith = _sun_zeniths(args, atmosphere)
     with _solver_options(args, atmosphere) as options:
         rows = api.irradiance_rows(atmosphere, sun_zenith, args.wavelengths,
                                    altitude_m=args.altitude, solver=args.solver, options=options)
