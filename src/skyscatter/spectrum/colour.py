@@ -411,7 +411,7 @@ def into_gamut(rgb: ArrayLike, space: str = "srgb") -> np.ndarray:
     a colour of luminance <= 0 becomes black. For light a renderer integrates (image-based
     lighting): a negative channel, e.g. a setting sun's blue in sRGB, is not light."""
     rgb = np.asarray(rgb, dtype=np.float64)
-    y = (rgb @ np.linalg.inv(_xyz_to_rgb_matrix(space)).T)[..., 1:2]
+    y = rgb_to_xyz(rgb, space)[..., 1:2]
     low = np.min(rgb, axis=-1, keepdims=True)
     with np.errstate(divide="ignore", invalid="ignore"):
         k = np.clip(y / (y - low), 0.0, 1.0)

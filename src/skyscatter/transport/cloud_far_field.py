@@ -98,7 +98,8 @@ def diffuse_passed(field: CloudField, layer: int, paths: np.ndarray) -> np.ndarr
     """(..., n_wl): the share of a diffuse flux that a conservative two-stream slab of
     `layer`'s vertical water paths W (...) [g m^-2] lets through, 1 / (1 + gamma k_ext W)."""
     depth = np.asarray(paths)[..., None] * field.mass_extinction_m2_g[layer]
-    return 1.0 / (1.0 + _two_stream.EDDINGTON * (1.0 - field.asymmetry[layer]) * depth)
+    return _two_stream.diffuse_passed(_two_stream.EDDINGTON * (1.0 - field.asymmetry[layer])
+                                      * depth)
 
 
 def _passed(field: CloudField, layer: int, paths: np.ndarray,
