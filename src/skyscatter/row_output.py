@@ -31,8 +31,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["METADATA_PLACES", "SIGNIFICANT_DIGITS", "rows_csv", "rows_json", "sidecar_path",
-           "tidy"]
+__all__ = ["METADATA_PLACES", "SIGNIFICANT_DIGITS", "metadata_json", "rows_csv", "rows_json",
+           "sidecar_path", "tidy"]
 
 SIGNIFICANT_DIGITS = 10
 METADATA_PLACES = ("envelope", "comments", "sidecar")
@@ -57,6 +57,11 @@ def rows_json(rows: Sequence[Mapping[str, float]], metadata: Mapping | None = No
     if metadata is not None:
         document = {"metadata": tidy(dict(metadata)), "rows": document}
     return json.dumps(document, indent=1, allow_nan=False) + "\n"  # strict JSON: jq, JSON.parse
+
+
+def metadata_json(metadata: Mapping) -> str:
+    """The metadata alone as JSON (a sidecar file's text); ends with a newline."""
+    return json.dumps(tidy(dict(metadata)), indent=1, allow_nan=False) + "\n"
 
 
 def rows_csv(rows: Sequence[Mapping[str, float]], metadata: Mapping | None = None) -> str:
