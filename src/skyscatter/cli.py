@@ -412,8 +412,8 @@ def _add_rows_arguments(command: argparse.ArgumentParser) -> None:
     _add_place_arguments(command)
     _add_solver_arguments(command, 512)
     command.add_argument("--format", choices=("csv", "json"), default=None,
-                         help="output format (default csv; with -o the file's suffix .csv or "
-                         ".json decides)")
+                         help="output format (default: -o's suffix .csv or .json, json for "
+                         "--metadata envelope, else csv)")
     command.add_argument("-o", "--output", type=Path, default=None, metavar="FILE",
                          help="write the rows to FILE (.csv, .json, or .nc: a NetCDF dataset "
                          "with units and metadata, needs the [science] extra) instead of "
