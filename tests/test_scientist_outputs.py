@@ -162,9 +162,11 @@ def test_sidecar_writes_the_rows_and_their_metadata_beside_them(capsys, tmp_path
     (["--metadata", "envelope", "--format", "csv"], "--metadata envelope is for JSON"),
     (["-o", "x.json", "--format", "csv"], "name the file .csv or leave --format out"),
     (["-o", "x.nc", "--metadata", "sidecar"], "carries the metadata as its attributes"),
-    (["--time", "2024-06-21T12:00Z", "--lat", "0", "--lon", "0", "--sun-azimuth", "10"],
+    (["--time", "2024-06-21T12:00Z", "--lat", "0", "--lon", "0", "--sun-azimuth", "10",
+      "--tilt", "10"],
      "--sun-azimuth and --time both place the sun"),
     (["--tilt", "200"], "200"),
+    (["--plane-azimuth", "90"], "--plane-azimuth is for the plane of --tilt"),
 ])
 def test_contradicting_output_options_get_one_line_before_any_work(capsys, extra, message):
     argv = [*IRRADIANCE, *extra]

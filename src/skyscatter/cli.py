@@ -589,7 +589,7 @@ def build_parser() -> argparse.ArgumentParser:
                             "sky's computed radiance distribution, plane_ground_reflected from "
                             "the config's ground albedo, plane_global; with "
                             "direct_transmittance)")
-    irradiance.add_argument("--plane-azimuth", type=_number(checks.ANGLE_DEG), default=180.0,
+    irradiance.add_argument("--plane-azimuth", type=_number(checks.ANGLE_DEG), default=None,
                             metavar="DEG", help="the compass direction the tilted plane faces, "
                             "from north towards east (default 180: south)")
     irradiance.add_argument("--sun-azimuth", type=_number(checks.ANGLE_DEG), default=None,
@@ -1017,13 +1017,18 @@ def _irradiance(args: argparse.Namespace) -> None:
     if args.time is not None and args.sun_azimuth is not None:
         raise InputError("--sun-azimuth and --time both place the sun: give one",
                          key="sun_azimuth", value=args.sun_azimuth)
+    for name in ("plane_azimuth", "sun_azimuth"):
+        if args.tilt is None and getattr(args, name) is not None:
+            raise InputError(f"--{name.replace('_', '-')} is for the plane of --tilt: give "
+                             "--tilt DEG too", key=name, value=getattr(args, name))
     atmosphere = api.load_atmosphere(args.atmosphere)
     sun_zenith = _sun_zeniths(args, atmosphere)
     sun_azimuth = 180.0 if args.sun_azimuth is None else args.sun_azimuth
     if args.time is not None:
         sun_azimuth = api.sky_ephemeris(atmosphere, _observer(args)).sun.azimuth_deg
     plane = {} if args.tilt is None else {"tilt_deg": args.tilt,
-                                          "plane_azimuth_deg": args.plane_azimuth,
+                                          "plane_azimuth_deg": 180.0 if args.plane_azimuth
+                                          is None else args.plane_azimuth,
                                           "sun_azimuth_deg": sun_azimuth}
     with _solver_options(args, atmosphere) as options:
         if output_format == "netcdf":
