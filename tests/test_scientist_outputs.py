@@ -215,6 +215,24 @@ def test_an_isotropic_sky_gives_the_view_factor_of_the_plane(tilt):
         0.3 * global_horizontal * (1 - math.cos(beta)) / 2, rel=1e-12, abs=1e-15)
 
 
+@pytest.mark.parametrize(("tilt", "azimuth"), [(35.0, 200.0), (90.0, 90.0), (60.0, 0.0)])
+def test_an_isotropic_sky_gives_pvlibs_isotropic_plane_of_array(tilt, azimuth):
+    # pvlib 0.16.1 get_total_irradiance(model="isotropic") fed the test sky's own DNI, DHI
+    # and GHI and its ground albedo: beam, sky and ground on the plane by pvlib's code.
+    # Tolerance 2e-4 of the total: the sky part's quadrature (at most 4.1e-4 of it, above).
+    pvlib = pytest.importorskip("pvlib")
+    sky = _TestSky(a=0.05, b=0.0)
+    result = plane_irradiance(sky, sun_direction(40.0, 180.0), plane_normal(tilt, azimuth))
+    mu = math.cos(math.radians(40.0))
+    reference = pvlib.irradiance.get_total_irradiance(
+        tilt, azimuth, 40.0, 180.0, sky.direct[0], sky.direct[0] * mu + sky.diffuse[0],
+        sky.diffuse[0], albedo=0.3, model="isotropic")
+    assert result.beam[0] == pytest.approx(float(reference["poa_direct"]), rel=1e-12)
+    assert result.ground_reflected[0] == pytest.approx(
+        float(reference["poa_ground_diffuse"]), rel=1e-12)
+    assert result.total[0] == pytest.approx(float(reference["poa_global"]), rel=2e-4)
+
+
 def test_a_zenith_bright_sky_on_a_vertical_plane_matches_its_closed_form():
     # L = a + b mu on a vertical plane: int_0^1 int_{-pi/2}^{pi/2} (a + b mu) sqrt(1 - mu^2)
     # cos(phi) dphi dmu = a pi / 2 + 2 b / 3, over the horizontal's pi a + 2 pi b / 3.
