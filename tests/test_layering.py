@@ -50,7 +50,10 @@ TOP_LEVEL = {
     "disk_cache": "base",
     "output_files": "base",
     "jit_cache": "base",
+    "row_output": "base",  # rows of numbers as JSON/CSV text, with their metadata
     "api": "api",
+    "output_metadata": "api",  # units, solver, version of a table of results
+    "datasets": "api",  # tables of results as xarray Datasets / NetCDF
     "api_constants": "api",  # the API's constants that the CLI's help names, cheap to import
     "cli": "cli",
     "cli_progress": "cli",

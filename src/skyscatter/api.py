@@ -54,8 +54,10 @@ from skyscatter.checks import (
     checked_integer,
     checked_number,
 )
+from skyscatter.datasets import import_xarray, rows_dataset, write_netcdf
 from skyscatter.errors import InputError
 from skyscatter.output_files import check_writable_file, check_writable_folder, staged_outputs
+from skyscatter.output_metadata import output_metadata
 from skyscatter.render.albedo_map import AlbedoMap
 from skyscatter.render.budget import (
     BYTES_PER_ROW,
@@ -109,6 +111,7 @@ from skyscatter.spectrum.grid import (
 )
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.geometry import local_frame_directions
+from skyscatter.transport.plane_irradiance import plane_irradiance, plane_normal
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import (
     NoisySolver,
@@ -167,7 +170,11 @@ __all__ = [
     "render",
     "render_at",
     "environment_light",
+    "irradiance_dataset",
     "irradiance_rows",
+    "output_metadata",
+    "radiance_dataset",
+    "write_netcdf",
     "save_image",
     "sky_ephemeris",
     "timelapse",
@@ -752,19 +759,34 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
 
 def irradiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                     wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
-                    solver: str = "lut", options: SolverOptions | None = None
+                    solver: str = "lut", options: SolverOptions | None = None,
+                    transmittance: bool = False, tilt_deg: float | None = None,
+                    plane_azimuth_deg: float = 180.0, sun_azimuth_deg: float = 180.0
                     ) -> list[dict[str, float]]:
     """Spectral irradiance at the observer for each sun zenith angle and wavelength, one dict
     per row with the keys sun_zenith_deg, wavelength_nm, direct_normal (the sun's direct light
     on a surface facing it, its hidden part left out), diffuse_horizontal (the sky's light on a
     horizontal surface), global_horizontal (their sum on the horizontal: direct_normal cos
     (sun zenith) + diffuse_horizontal), each [W m^-2 nm^-1], and toa_irradiance
-    [W m^-2 nm^-1]. Monochromatic wavelengths as `sky_radiance_rows`. InputError, before any
-    work, for an empty list, a value out of range, or a solver that does not light surfaces
-    (the Monte Carlo's)."""
+    [W m^-2 nm^-1]. Monochromatic wavelengths as `sky_radiance_rows`. `transmittance` adds
+    direct_transmittance [-] (direct_normal / toa_irradiance). `tilt_deg` adds a plane tilted
+    that far from the horizontal, facing `plane_azimuth_deg` (from north towards east; the
+    sun at `sun_azimuth_deg`): direct_transmittance, sun_azimuth_deg, tilt_deg,
+    plane_azimuth_deg, then plane_direct, plane_sky_diffuse (from the solver's sky radiance
+    distribution), plane_ground_reflected and plane_global [W m^-2 nm^-1]
+    (`transport.plane_irradiance`). InputError, before any work, for an empty list, a value
+    out of range, or a solver that does not light surfaces (the Monte Carlo's)."""
     _check_atmosphere(atmosphere)
     sun_zeniths_deg = _angle_list("sun_zeniths_deg", sun_zeniths_deg, ZENITH_DEG)
     ALTITUDE_M.check("altitude_m", altitude_m)
+    ANGLE_DEG.check("sun_azimuth_deg", sun_azimuth_deg)
+    normal = None
+    if tilt_deg is not None:
+        # in the sun's frame (sun at azimuth 0), where the horizontal values are computed:
+        # the planet's atmosphere is the same in every azimuth
+        normal = plane_normal(ZENITH_DEG.check("tilt_deg", tilt_deg),
+                              ANGLE_DEG.check("plane_azimuth_deg", plane_azimuth_deg)
+                              - sun_azimuth_deg)
     wavelengths = _checked_wavelength_list(wavelengths_nm, True)
     engine = load_solver(atmosphere, wavelengths, solver, options, monochromatic=True)
     if not isinstance(engine, SurfaceSolver):
@@ -775,15 +797,77 @@ def irradiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     rows = []
     for sun_zenith in sun_zeniths_deg:
         mu = float(np.cos(np.radians(sun_zenith)))
-        direct, diffuse = engine.ground_irradiance(position, sun_direction(sun_zenith, 0.0))
-        normal = direct / mu if mu > 0.0 else np.zeros_like(direct)
+        sun = sun_direction(sun_zenith, 0.0)
+        direct, diffuse = engine.ground_irradiance(position, sun)
+        direct_normal = direct / mu if mu > 0.0 else np.zeros_like(direct)
+        plane = None if normal is None else plane_irradiance(engine, sun, normal, altitude_m)
         for k, wavelength in enumerate(profile.wavelengths_nm):
-            rows.append({"sun_zenith_deg": float(sun_zenith), "wavelength_nm": float(wavelength),
-                         "direct_normal": float(normal[k]),
-                         "diffuse_horizontal": float(diffuse[k]),
-                         "global_horizontal": float(direct[k] + diffuse[k]),
-                         "toa_irradiance": float(profile.toa_irradiance[k])})
+            row = {"sun_zenith_deg": float(sun_zenith), "wavelength_nm": float(wavelength),
+                   "direct_normal": float(direct_normal[k]),
+                   "diffuse_horizontal": float(diffuse[k]),
+                   "global_horizontal": float(direct[k] + diffuse[k]),
+                   "toa_irradiance": float(profile.toa_irradiance[k])}
+            if transmittance or plane is not None:
+                row["direct_transmittance"] = float(direct_normal[k] / profile.toa_irradiance[k])
+            if plane is not None:
+                row.update({"sun_azimuth_deg": float(sun_azimuth_deg),
+                            "tilt_deg": float(tilt_deg),
+                            "plane_azimuth_deg": float(plane_azimuth_deg),
+                            "plane_direct": float(plane.beam[k]),
+                            "plane_sky_diffuse": float(plane.sky_diffuse[k]),
+                            "plane_ground_reflected": float(plane.ground_reflected[k]),
+                            "plane_global": float(plane.total[k])})
+            rows.append(row)
     return rows
+
+
+def radiance_dataset(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
+                     view_zeniths_deg: Sequence[float], azimuths_deg: Sequence[float],
+                     wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
+                     solver: str = "lut", options: SolverOptions | None = None,
+                     allow_large: bool = False):
+    """`sky_radiance_rows` as an `xarray.Dataset` (`datasets.rows_dataset`): radiance (and
+    standard_error) over (sun_zenith, view_zenith, azimuth relative to the sun, wavelength),
+    toa_irradiance over wavelength, with CF `units`/`long_name` and the run's
+    `output_metadata` as global attributes; `write_netcdf` saves it. InputError as
+    `sky_radiance_rows`, and naming the `[science]` extra when xarray is missing."""
+    import_xarray()  # before any work
+    rows = sky_radiance_rows(atmosphere, sun_zeniths_deg, view_zeniths_deg, azimuths_deg,
+                             wavelengths_nm, altitude_m=altitude_m, solver=solver,
+                             options=options, allow_large=allow_large)
+    inputs = (sun_zeniths_deg, view_zeniths_deg, azimuths_deg, wavelengths_nm)
+    geometry = {"altitude_m": float(altitude_m)}
+    metadata = output_metadata(atmosphere, list(rows[0]), wavelengths_nm, solver=solver,
+                               options=options, geometry=geometry)
+    return rows_dataset(rows, {"sun_zenith_deg": "sun_zenith", "view_zenith_deg": "view_zenith",
+                               "relative_azimuth_deg": "azimuth", "wavelength_nm": "wavelength"},
+                        [np.size(values) for values in inputs], metadata,
+                        reduced={"toa_irradiance": ("wavelength",)})
+
+
+def irradiance_dataset(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
+                       wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
+                       solver: str = "lut", options: SolverOptions | None = None,
+                       tilt_deg: float | None = None, plane_azimuth_deg: float = 180.0,
+                       sun_azimuth_deg: float = 180.0):
+    """`irradiance_rows` (with direct_transmittance, and the plane's columns for `tilt_deg`) as
+    an `xarray.Dataset` over (sun_zenith, wavelength); toa_irradiance over wavelength, the
+    plane's angles scalar coordinates; attributes as `radiance_dataset`."""
+    import_xarray()
+    rows = irradiance_rows(atmosphere, sun_zeniths_deg, wavelengths_nm, altitude_m=altitude_m,
+                           solver=solver, options=options, transmittance=True,
+                           tilt_deg=tilt_deg, plane_azimuth_deg=plane_azimuth_deg,
+                           sun_azimuth_deg=sun_azimuth_deg)
+    geometry = {"altitude_m": float(altitude_m)}
+    metadata = output_metadata(atmosphere, list(rows[0]), wavelengths_nm, solver=solver,
+                               options=options, geometry=geometry)
+    return rows_dataset(rows, {"sun_zenith_deg": "sun_zenith", "wavelength_nm": "wavelength"},
+                        [np.size(sun_zeniths_deg), np.size(wavelengths_nm)], metadata,
+                        reduced={"toa_irradiance": ("wavelength",), "sun_azimuth_deg": (),
+                                 "tilt_deg": (), "plane_azimuth_deg": ()}
+                        ).rename({name: name.removesuffix("_deg") for name in
+                                  ("sun_azimuth_deg", "tilt_deg", "plane_azimuth_deg")
+                                  if name in rows[0]})
 
 
 def _angle_list(name: str, values: Sequence[float], bounds: Bounds) -> np.ndarray:

@@ -10,7 +10,6 @@ its limit. Progress bars appear only on a terminal.
 from __future__ import annotations
 
 import argparse
-import csv
 import difflib
 import json
 import os
@@ -31,7 +30,14 @@ from skyscatter.api_constants import (  # no solver
 )
 from skyscatter.checks import Bounds
 from skyscatter.errors import InputError
-from skyscatter.output_files import atomic_write, check_writable_file
+from skyscatter.output_files import atomic_write, check_writable_file, staged_outputs
+from skyscatter.row_output import (
+    METADATA_PLACES,
+    metadata_json,
+    rows_csv,
+    rows_json,
+    sidecar_path,
+)
 
 __all__ = ["main"]
 
@@ -405,8 +411,20 @@ def _add_rows_arguments(command: argparse.ArgumentParser) -> None:
                          metavar="NM,...", help="wavelengths in nm (default 440,550,680)")
     _add_place_arguments(command)
     _add_solver_arguments(command, 512)
-    command.add_argument("--format", choices=("csv", "json"), default="csv",
-                         help="output format (default csv)")
+    command.add_argument("--format", choices=("csv", "json"), default=None,
+                         help="output format (default: -o's suffix .csv or .json, json for "
+                         "--metadata envelope, else csv)")
+    command.add_argument("-o", "--output", type=Path, default=None, metavar="FILE",
+                         help="write the rows to FILE (.csv, .json, or .nc: a NetCDF dataset "
+                         "with units and metadata, needs the [science] extra) instead of "
+                         "standard output")
+    command.add_argument("--metadata", choices=METADATA_PLACES, default=None,
+                         help="also give the run's metadata (units of every column, "
+                         "atmosphere and its SHA-256, solver and its options, wavelengths, "
+                         "version, time): 'envelope' (JSON) wraps the rows as {\"metadata\": ..., "
+                         "\"rows\": [...]}, 'comments' (CSV) puts '# key: value' lines before "
+                         "the header, 'sidecar' writes FILE.meta.json beside -o FILE. Without "
+                         "it the output is the plain rows")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -562,6 +580,21 @@ def build_parser() -> argparse.ArgumentParser:
     _add_atmosphere_argument(irradiance)
     _add_sun_zeniths_argument(irradiance)
     _add_rows_arguments(irradiance)
+    irradiance.add_argument("--transmittance", action="store_true",
+                            help="add the column direct_transmittance [-]: the direct beam's "
+                            "transmittance, direct_normal / toa_irradiance")
+    irradiance.add_argument("--tilt", type=_number(checks.ZENITH_DEG), default=None,
+                            metavar="DEG", help="also the irradiance on a plane tilted DEG "
+                            "from the horizontal (plane_direct, plane_sky_diffuse from the "
+                            "sky's computed radiance distribution, plane_ground_reflected from "
+                            "the config's ground albedo, plane_global; with "
+                            "direct_transmittance)")
+    irradiance.add_argument("--plane-azimuth", type=_number(checks.ANGLE_DEG), default=None,
+                            metavar="DEG", help="the compass direction the tilted plane faces, "
+                            "from north towards east (default 180: south)")
+    irradiance.add_argument("--sun-azimuth", type=_number(checks.ANGLE_DEG), default=None,
+                            metavar="DEG", help="the sun's azimuth from north towards east, "
+                            "for --tilt (default 180; with --time the sun's own)")
     irradiance.set_defaults(run=_irradiance)
 
     precompute = commands.add_parser(
@@ -958,35 +991,115 @@ def _sun_zeniths(args: argparse.Namespace, atmosphere) -> list[float]:
 
 def _radiance(args: argparse.Namespace) -> None:
     from skyscatter import api
+    output_format = _rows_format(args)
     atmosphere = api.load_atmosphere(args.atmosphere)
     sun_zenith = _sun_zeniths(args, atmosphere)
     with _solver_options(args, atmosphere) as options:
+        if output_format == "netcdf":
+            api.write_netcdf(api.radiance_dataset(
+                atmosphere, sun_zenith, args.view_zenith, args.view_azimuth, args.wavelengths,
+                altitude_m=args.altitude, solver=args.solver, options=options,
+                allow_large=args.allow_large), args.output)
+            return
         rows = api.sky_radiance_rows(atmosphere, sun_zenith, args.view_zenith,
                                      args.view_azimuth, args.wavelengths,
                                      altitude_m=args.altitude, solver=args.solver,
                                      options=options, allow_large=args.allow_large)
-    _print_rows(rows, args.format)
+        geometry = {"view_zeniths_deg": args.view_zenith,
+                    "relative_azimuths_deg": args.view_azimuth}
+        _write_rows(args, output_format, rows, _rows_metadata(args, atmosphere, rows, options,
+                                                              sun_zenith, geometry))
 
 
 def _irradiance(args: argparse.Namespace) -> None:
     from skyscatter import api
+    output_format = _rows_format(args)
+    if args.time is not None and args.sun_azimuth is not None:
+        raise InputError("--sun-azimuth and --time both place the sun: give one",
+                         key="sun_azimuth", value=args.sun_azimuth)
+    for name in ("plane_azimuth", "sun_azimuth"):
+        if args.tilt is None and getattr(args, name) is not None:
+            raise InputError(f"--{name.replace('_', '-')} is for the plane of --tilt: give "
+                             "--tilt DEG too", key=name, value=getattr(args, name))
     atmosphere = api.load_atmosphere(args.atmosphere)
     sun_zenith = _sun_zeniths(args, atmosphere)
+    sun_azimuth = 180.0 if args.sun_azimuth is None else args.sun_azimuth
+    if args.time is not None:
+        sun_azimuth = api.sky_ephemeris(atmosphere, _observer(args)).sun.azimuth_deg
+    plane = {} if args.tilt is None else {"tilt_deg": args.tilt,
+                                          "plane_azimuth_deg": 180.0 if args.plane_azimuth
+                                          is None else args.plane_azimuth,
+                                          "sun_azimuth_deg": sun_azimuth}
     with _solver_options(args, atmosphere) as options:
+        if output_format == "netcdf":
+            api.write_netcdf(api.irradiance_dataset(
+                atmosphere, sun_zenith, args.wavelengths, altitude_m=args.altitude,
+                solver=args.solver, options=options, **plane), args.output)
+            return
         rows = api.irradiance_rows(atmosphere, sun_zenith, args.wavelengths,
-                                   altitude_m=args.altitude, solver=args.solver, options=options)
-    _print_rows(rows, args.format)
+                                   altitude_m=args.altitude, solver=args.solver, options=options,
+                                   transmittance=args.transmittance, **plane)
+        _write_rows(args, output_format, rows,
+                    _rows_metadata(args, atmosphere, rows, options, sun_zenith, plane))
 
 
-def _print_rows(rows: list[dict[str, float]], output_format: str) -> None:
-    """Rows of numbers to standard output as strict JSON (an array of objects) or CSV."""
-    if output_format == "json":
-        json.dump(rows, sys.stdout, indent=1, allow_nan=False)  # strict JSON: jq, JSON.parse
-        sys.stdout.write("\n")
-    else:
-        writer = csv.DictWriter(sys.stdout, fieldnames=list(rows[0]), lineterminator="\n")
-        writer.writeheader()
-        writer.writerows({key: f"{value:.10g}" for key, value in row.items()} for row in rows)
+def _rows_format(args: argparse.Namespace) -> str:
+    """"csv", "json" or "netcdf" from --format and -o's suffix; InputError, before any work,
+    for a suffix that contradicts --format, --metadata where it has no place, or an -o that
+    cannot be written."""
+    suffix = "" if args.output is None else args.output.suffix.lower()
+    by_suffix = {".csv": "csv", ".json": "json", ".nc": "netcdf"}.get(suffix)
+    place = args.metadata
+    needs = {"envelope": "json", "comments": "csv"}.get(place)
+    output_format = args.format or by_suffix or needs or "csv"
+    if by_suffix is not None and by_suffix != output_format:
+        raise InputError(f"-o {args.output} is {by_suffix}, but --format is {args.format}: name "
+                         f"the file .{args.format} or leave --format out", key="output",
+                         value=str(args.output))
+    if output_format == "netcdf" and place is not None:
+        raise InputError("a NetCDF file (.nc) carries the metadata as its attributes: leave "
+                         "--metadata out", key="metadata", value=place)
+    if needs is not None and output_format != needs:
+        raise InputError(f"--metadata {place} is for {needs.upper()} output (--format "
+                         f"{needs}); for {output_format.upper()} use "
+                         f"{'comments' if needs == 'json' else 'envelope'} or sidecar",
+                         key="metadata", value=place)
+    if place == "sidecar" and args.output is None:
+        raise InputError("--metadata sidecar writes FILE.meta.json beside -o FILE: give -o",
+                         key="metadata", value=place)
+    if args.output is not None:
+        check_writable_file(args.output)
+        if place == "sidecar":
+            check_writable_file(sidecar_path(args.output))
+    return output_format
+
+
+def _rows_metadata(args: argparse.Namespace, atmosphere, rows: list[dict[str, float]],
+                   options, sun_zeniths: list[float], geometry: dict) -> dict | None:
+    """The run's `api.output_metadata` when --metadata asks for it, else None."""
+    from skyscatter import api
+    if args.metadata is None:
+        return None
+    place = {"altitude_m": args.altitude, "sun_zeniths_deg": sun_zeniths}
+    if args.time is not None:
+        place.update(time=args.time, latitude_deg=args.lat, longitude_deg=args.lon)
+    return api.output_metadata(atmosphere, list(rows[0]), args.wavelengths, solver=args.solver,
+                               options=options, geometry={**place, **geometry})
+
+
+def _write_rows(args: argparse.Namespace, output_format: str, rows: list[dict[str, float]],
+                metadata: dict | None) -> None:
+    """The rows to -o or standard output (`row_output`), the metadata where --metadata says."""
+    inline = None if args.metadata == "sidecar" else metadata
+    text = rows_json(rows, inline) if output_format == "json" else rows_csv(rows, inline)
+    if args.output is None:
+        sys.stdout.write(text)
+        return
+    with staged_outputs() as stage:
+        stage.write(args.output, lambda path: Path(path).write_text(text, encoding="utf-8"))
+        if args.metadata == "sidecar":
+            stage.write(sidecar_path(args.output), lambda path: Path(path).write_text(
+                metadata_json(metadata), encoding="utf-8"))
 
 
 def _precompute(args: argparse.Namespace) -> None:

@@ -1,0 +1,107 @@
+"""Tables of results as labelled arrays: `xarray.Dataset`s that can be written to NetCDF.
+
+`rows_dataset` turns rows (`sky_radiance_rows`, `irradiance_rows`: one dict per combination of
+the inputs, in the order of `itertools.product`) into a Dataset whose dimensions are the
+inputs (sun_zenith, view_zenith, azimuth, wavelength) and whose data variables are the other
+columns, each with the `units` and `long_name` attributes of the CF conventions (CF-1.8,
+https://cfconventions.org/; units in UDUNITS spelling, `output_metadata.COLUMNS`). The
+global attributes are the run's metadata (`output_metadata`), nested keys joined with "_"
+(NetCDF attributes are flat: text, numbers or lists of numbers).
+
+`write_netcdf` writes one with scipy's NetCDF-3 writer (`engine="scipy"`, no netCDF4 library
+needed), to a temporary renamed when complete (`output_files`).
+
+xarray is an optional dependency (`pip install "skyscatter[science]"`), imported only here and
+only when a Dataset is made.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skyscatter.errors import InputError
+from skyscatter.output_files import atomic_write
+from skyscatter.output_metadata import COLUMNS
+
+__all__ = ["import_xarray", "rows_dataset", "write_netcdf"]
+
+EXTRA = 'pip install "skyscatter[science]"'
+
+
+def import_xarray():
+    """The xarray module; InputError naming the extra that installs it when it is missing."""
+    try:
+        import xarray
+    except ImportError:
+        raise InputError(f"datasets and NetCDF files need xarray: {EXTRA} (or pip install "
+                         "xarray)", key="xarray", allowed=EXTRA) from None
+    return xarray
+
+
+def rows_dataset(rows: Sequence[Mapping[str, float]], dimensions: Mapping[str, str],
+                 shape: Sequence[int], metadata: Mapping[str, Any], *,
+                 reduced: Mapping[str, tuple[str, ...]] | None = None):
+    """A Dataset of `rows` in product order over the columns `dimensions` (column -> dimension
+    name, outermost first) of sizes `shape`. Every other column is a data variable over all
+    dimensions, or over `reduced[column]` (a subset, e.g. ("wavelength",)) where it does not
+    depend on the rest; () makes it a scalar coordinate. `metadata` (`output_metadata`) gives
+    the global attributes, `output_metadata.COLUMNS` the units."""
+    xarray = import_xarray()
+    columns = list(rows[0])
+    table = np.array([[row[name] for name in columns] for row in rows], dtype=np.float64)
+    names = list(dimensions)
+    cube = table.reshape(*shape, len(columns))
+    dims = [dimensions[name] for name in names]
+    coords = {}
+    for axis, name in enumerate(names):
+        index = [0] * len(names)
+        index[axis] = slice(None)
+        coords[dimensions[name]] = (dimensions[name], cube[(*index, columns.index(name))],
+                                    _attributes(name))
+    variables, scalars = {}, {}
+    for name in columns:
+        if name in dimensions:
+            continue
+        keep = tuple(dims) if reduced is None else reduced.get(name, tuple(dims))
+        index = tuple(slice(None) if dim in keep else 0 for dim in dims)
+        values = cube[(*index, columns.index(name))]
+        if keep:
+            variables[name] = (keep, values, _attributes(name))
+        else:
+            scalars[name] = ((), values, _attributes(name))
+    attributes = {"Conventions": "CF-1.8", **_flat_attributes(
+        {key: value for key, value in metadata.items() if key != "columns"})}
+    return xarray.Dataset(variables, coords={**coords, **scalars}, attrs=attributes)
+
+
+def _attributes(column: str) -> dict[str, str]:
+    units, long_name = COLUMNS[column]
+    return {"units": units, "long_name": long_name}
+
+
+def _flat_attributes(metadata: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """NetCDF-ready attributes: nested keys joined with "_", lists as float64 arrays."""
+    flat: dict[str, Any] = {}
+    for key, value in metadata.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            flat.update(_flat_attributes(value, f"{name}_"))
+        elif isinstance(value, list | tuple):
+            flat[name] = np.asarray(value, dtype=np.float64)
+        elif isinstance(value, bool):
+            flat[name] = int(value)
+        elif value is not None:
+            flat[name] = value
+    return flat
+
+
+def write_netcdf(dataset, path: str | Path) -> Path:
+    """Write `dataset` to `path` as NetCDF-3 (scipy), whole or not at all."""
+    if Path(path).suffix.lower() != ".nc":
+        raise InputError(f"cannot write a dataset as {str(path)!r}: name it .nc (NetCDF)",
+                         key="path", value=str(path), allowed=".nc")
+    return atomic_write(path, lambda temporary: dataset.to_netcdf(temporary, engine="scipy"))
