@@ -531,7 +531,8 @@ def build_parser() -> argparse.ArgumentParser:
                            "minutes (default 10; 0 meters every frame on its own)")
     _add_image_arguments(timelapse)
     timelapse.add_argument("-o", "--output", type=Path, default=Path("timelapse.mp4"),
-                           help="video path, .mp4 or .gif (default timelapse.mp4)")
+                           help="video path, .mp4 (needs `pip install skyscatter[video]`) or "
+                           ".gif (default timelapse.mp4)")
     timelapse.add_argument("--frames-dir", type=Path, default=None, metavar="DIR",
                            help="where the PNG frames go (default: beside the video, "
                            "<name>_frames/); the folder holds only frames and is replaced as "

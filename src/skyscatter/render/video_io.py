@@ -16,7 +16,6 @@ keeps Pillow's palettised frames, 1 byte per pixel).
 
 from __future__ import annotations
 
-import importlib.util
 import os
 from pathlib import Path
 
@@ -56,10 +55,13 @@ class VideoWriter:
             raise InputError(f"fps = {fps!r} must lie in [0.1, 120]", key="fps", value=fps,
                              allowed="[0.1, 120]")
         self.fps = float(fps)
-        if self.format == "mp4" and importlib.util.find_spec("imageio_ffmpeg") is None:
-            raise InputError(f"cannot write {self.path}: MP4 needs `pip install "
-                             "skyscatter[video]` (imageio-ffmpeg); or name it .gif",
-                             key="video", value=str(self.path))
+        if self.format == "mp4":
+            try:
+                import imageio_ffmpeg  # noqa: F401 - the optional [video] extra
+            except ImportError:
+                raise InputError(f"cannot write {self.path}: MP4 needs `pip install "
+                                 "skyscatter[video]` (imageio-ffmpeg); or name it .gif",
+                                 key="video", value=str(self.path)) from None
         self._own_stage = stage is None
         self._stage = StagedOutputs() if stage is None else stage
         self._gif_frames: list[Image.Image] = []
