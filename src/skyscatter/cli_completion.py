@@ -107,11 +107,13 @@ def _bash_case(command: _Command) -> list[str]:
 def _bash(prog: str, top: _Command, commands: list[_Command]) -> str:
     function = "_" + prog.replace("-", "_")
     lines = [f"{function}() {{",
-             '    local cur="${COMP_WORDS[COMP_CWORD]}" prev="${COMP_WORDS[COMP_CWORD-1]}"',
-             '    local command="" i',
+             "    # slices index from 0 in bash and zsh alike (zsh's arrays start at 1)",
+             '    local cur="${COMP_WORDS[@]:$COMP_CWORD:1}" '
+             'prev="${COMP_WORDS[@]:$((COMP_CWORD - 1)):1}"',
+             '    local command="" word i',
              "    for ((i = 1; i < COMP_CWORD; i++)); do  # the first word not an option",
-             '        if [[ -z $command && ${COMP_WORDS[i]} != -* ]]; then '
-             'command=${COMP_WORDS[i]}; fi',
+             '        word="${COMP_WORDS[@]:$i:1}"',
+             '        if [[ -z $command && $word != -* ]]; then command=$word; fi',
              "    done",
              '    case "$command" in',
              '        "")',
