@@ -665,7 +665,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _add_completion_command(commands) -> None:
+def _add_completion_command(commands: argparse._SubParsersAction) -> None:
     from skyscatter.cli_completion import SHELLS
     completion = commands.add_parser(
         "completion", help="print a shell completion script (bash, zsh, fish)",
@@ -678,7 +678,8 @@ def _add_completion_command(commands) -> None:
     completion.set_defaults(run=_completion)
 
 
-def _add_quiet_arguments(parser: argparse.ArgumentParser, commands) -> None:
+def _add_quiet_arguments(parser: argparse.ArgumentParser,
+                         commands: argparse._SubParsersAction) -> None:
     """-q/--quiet before or after the command (`_stderr_unless_quiet`)."""
     text = "print only errors on stderr: no progress bars, no notes"
     parser.add_argument("-q", "--quiet", action="store_true", help=text)
