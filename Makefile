@@ -1,8 +1,12 @@
 # skyscatter: `make run` renders the default scenes into out/, `make test` runs the tests.
+# `make run` installs the package alone (`pip install -e .`: its default scenes write PNG, EXR
+# and a GIF, no MP4); `make test` adds the [test] extras. Each has its stamp, so `make run`
+# then `make test` installs the test extras once.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+TEST_STAMP := $(VENV)/.installed-test
 
 # Debian's chromium for the viewer's browser tests (root, or sudo when not root)
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
@@ -13,9 +17,13 @@ APT    := $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e ".[test]"
+	$(BIN)/pip install --quiet -e .
 	$(BIN)/skyscatter compile
 	touch $(STAMP)
+
+$(TEST_STAMP): $(STAMP)
+	$(BIN)/pip install --quiet -e ".[test]"
+	touch $(TEST_STAMP)
 
 run: $(STAMP)
 	$(BIN)/python scripts/render_defaults.py out
@@ -25,11 +33,11 @@ chromium:
 	  $(APT) install -y -qq chromium >/dev/null 2>&1 || \
 	  { $(APT) update -qq && $(APT) install -y -qq chromium >/dev/null; }; }
 
-test: $(STAMP) chromium
+test: $(TEST_STAMP) chromium
 	$(BIN)/ruff check .
 	SKYSCATTER_REQUIRE_BROWSER=1 $(BIN)/python -m pytest -q
 
-bench: $(STAMP)
+bench: $(TEST_STAMP)  # bench_viewer drives chromium (playwright)
 	$(BIN)/python benchmarks/bench_single_scattering.py
 	$(BIN)/python benchmarks/bench_tables.py
 	$(BIN)/python benchmarks/bench_viewer.py

@@ -57,6 +57,7 @@ TOP_LEVEL = {
     "api_constants": "api",  # the API's constants that the CLI's help names, cheap to import
     "cli": "cli",
     "cli_progress": "cli",
+    "cli_completion": "cli",  # `skyscatter completion`: scripts from the parser
     "compile_ahead": "cli",  # `skyscatter compile`: runs command lines ahead of the first run
 }
 

@@ -1,4 +1,5 @@
-"""Command line: `skyscatter render | timelapse | radiance | precompute | validate | presets`.
+"""Command line: `skyscatter render | timelapse | radiance | precompute | validate | presets`
+(and `completion`, from `cli_completion`).
 Thin: parse,
 call the library, print.
 
@@ -16,7 +17,7 @@ import os
 import re
 import sys
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, redirect_stderr
 from pathlib import Path
 from typing import NoReturn
 
@@ -548,7 +549,8 @@ def build_parser() -> argparse.ArgumentParser:
                            "minutes (default 10; 0 meters every frame on its own)")
     _add_image_arguments(timelapse)
     timelapse.add_argument("-o", "--output", type=Path, default=Path("timelapse.mp4"),
-                           help="video path, .mp4 or .gif (default timelapse.mp4)")
+                           help="video path, .mp4 (needs `pip install skyscatter[video]`) or "
+                           ".gif (default timelapse.mp4)")
     timelapse.add_argument("--frames-dir", type=Path, default=None, metavar="DIR",
                            help="where the PNG frames go (default: beside the video, "
                            "<name>_frames/); the folder holds only frames and is replaced as "
@@ -691,7 +693,51 @@ def build_parser() -> argparse.ArgumentParser:
         "running the usual commands at a tiny size: about a minute of CPU, once. Without it "
         "the first render or radiance pays that minute. `make` runs it at install time.")
     compile_command.set_defaults(run=_compile)
+    _add_completion_command(commands)
+    _add_quiet_arguments(parser, commands)
     return parser
+
+
+def _add_completion_command(commands: argparse._SubParsersAction) -> None:
+    from skyscatter.cli_completion import SHELLS
+    completion = commands.add_parser(
+        "completion", help="print a shell completion script (bash, zsh, fish)",
+        description="Print a script that completes skyscatter's commands, options, choices and "
+        "preset names in your shell. bash: `source <(skyscatter completion bash)` (or save it "
+        "to ~/.local/share/bash-completion/completions/skyscatter); zsh, after compinit: "
+        "`source <(skyscatter completion zsh)`; fish: `skyscatter completion fish > "
+        "~/.config/fish/completions/skyscatter.fish`.")
+    completion.add_argument("shell", choices=SHELLS, help="the shell")
+    completion.set_defaults(run=_completion)
+
+
+def _add_quiet_arguments(parser: argparse.ArgumentParser,
+                         commands: argparse._SubParsersAction) -> None:
+    """-q/--quiet before or after the command (`_stderr_unless_quiet`)."""
+    text = "print only errors on stderr: no progress bars, no notes"
+    parser.add_argument("-q", "--quiet", action="store_true", help=text)
+    for command in commands.choices.values():  # the command's flag sets it, its absence not
+        command.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS,
+                             help=text)
+
+
+def _completion(args: argparse.Namespace) -> None:
+    from skyscatter import api
+    from skyscatter.cli_completion import completion_script
+    values = {"atmosphere": list(api.list_presets()), "solver": list(solver_descriptions()),
+              "clouds": list(api.list_cloud_presets()), "terrain": ["demo"]}
+    sys.stdout.write(completion_script(build_parser(), args.shell, values=values))
+
+
+@contextmanager
+def _stderr_unless_quiet(quiet: bool) -> Iterator[None]:
+    """With `quiet`, the run's notes and progress bars (stderr) go nowhere; main still prints
+    the error that ends a run, after this block."""
+    if not quiet:
+        yield
+        return
+    with open(os.devnull, "w") as sink, redirect_stderr(sink):
+        yield
 
 
 def _compile(args: argparse.Namespace) -> None:
@@ -1241,10 +1287,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command in COMPILING_COMMANDS:
         from skyscatter import compile_ahead
         first_run = not compile_ahead.kernels_compiled()
-        if first_run:
+        if first_run and not args.quiet:
             print(compile_ahead.FIRST_RUN_NOTE, file=sys.stderr, flush=True)
     try:
-        with sigterm_as_interrupt():  # SIGTERM cleans up like Ctrl-C
+        # SIGTERM cleans up like Ctrl-C
+        with sigterm_as_interrupt(), _stderr_unless_quiet(args.quiet):
             code = args.run(args)
     except SkyscatterError as error:
         if args.debug:

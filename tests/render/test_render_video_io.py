@@ -1,9 +1,12 @@
 """The video writer: files that other readers open with the frames we sent, written atomically."""
 
+import sys
+
 import numpy as np
 import pytest
 from PIL import Image
 
+from cli_runner import run_cli
 from skyscatter.errors import InputError
 from skyscatter.render.video_io import VideoWriter, video_format
 
@@ -60,3 +63,21 @@ def test_failure_leaves_no_file_and_bad_input_is_named(tmp_path):
                                                                          match="frames must"):
         video.add(_frames(1)[0])
         video.add(_frames(1, height=10)[0])
+
+
+def test_mp4_without_the_video_extra_is_refused_in_one_line(tmp_path, monkeypatch, capsys):
+    """imageio-ffmpeg is the [video] extra: without it (None in sys.modules makes its import
+    fail as a missing package does) an .mp4 is refused before any frame, a .gif still works."""
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)
+    with pytest.raises(InputError, match=r"MP4 needs `pip install skyscatter\[video\]`"):
+        VideoWriter(tmp_path / "sky.mp4", fps=10)
+    code, _, err = run_cli(capsys, [
+        "timelapse", "earth", "--start", "2024-06-21T20:30+02:00", "--end",
+        "2024-06-21T21:30+02:00", "--frames", "2", "--lat", "52.5", "--lon", "13.4",
+        "--size", "8", "-o", str(tmp_path / "sky.mp4")])
+    assert code == 2
+    assert err.count("\n") == 1 and "pip install skyscatter[video]" in err
+    assert not any(tmp_path.iterdir())  # refused before any work
+    with VideoWriter(tmp_path / "sky.gif", fps=10) as video:
+        video.add(_frames(1)[0])
+    assert (tmp_path / "sky.gif").is_file()

@@ -2,7 +2,8 @@
 
 - MP4: frames are piped to the ffmpeg executable that the `imageio-ffmpeg` wheel ships (no
   system ffmpeg needed), H.264 in yuv420p so that every player opens it. yuv420p needs even
-  sizes, so an odd last row or column is dropped.
+  sizes, so an odd last row or column is dropped. imageio-ffmpeg is the optional `[video]`
+  extra: without it an .mp4 target is refused before any frame is rendered.
 - GIF: Pillow, one 256-colour palette per frame, looping forever.
 
 Both write to a temporary file beside the target and rename it when complete, so an
@@ -54,6 +55,13 @@ class VideoWriter:
             raise InputError(f"fps = {fps!r} must lie in [0.1, 120]", key="fps", value=fps,
                              allowed="[0.1, 120]")
         self.fps = float(fps)
+        if self.format == "mp4":
+            try:
+                import imageio_ffmpeg  # noqa: F401 - the optional [video] extra
+            except ImportError:
+                raise InputError(f"cannot write {self.path}: MP4 needs `pip install "
+                                 "skyscatter[video]` (imageio-ffmpeg); or name it .gif",
+                                 key="video", value=str(self.path)) from None
         self._own_stage = stage is None
         self._stage = StagedOutputs() if stage is None else stage
         self._gif_frames: list[Image.Image] = []
