@@ -8,11 +8,12 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-# Debian's chromium for the viewer's browser tests (root, or sudo when not root)
+# Debian's chromium for the viewer's browser tests, zsh and fish for the shell-completion tests
+# (root, or sudo when not root)
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 APT    := $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get
 
-.PHONY: run test lint bench clean chromium
+.PHONY: run test lint bench clean test-tools
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -28,12 +29,14 @@ $(TEST_STAMP): $(STAMP)
 run: $(STAMP)
 	$(BIN)/python scripts/render_defaults.py out
 
-chromium:
-	@command -v chromium >/dev/null 2>&1 || { echo "installing chromium (apt) for the viewer tests"; \
-	  $(APT) install -y -qq chromium >/dev/null 2>&1 || \
-	  { $(APT) update -qq && $(APT) install -y -qq chromium >/dev/null; }; }
+TEST_TOOLS := chromium zsh fish
+test-tools:
+	@missing=$$(for t in $(TEST_TOOLS); do command -v $$t >/dev/null 2>&1 || echo $$t; done); \
+	if [ -n "$$missing" ]; then echo "installing" $$missing "(apt) for the tests"; \
+	  $(APT) install -y -qq $$missing >/dev/null 2>&1 || \
+	  { $(APT) update -qq && $(APT) install -y -qq $$missing >/dev/null; }; fi
 
-test: $(TEST_STAMP) chromium
+test: $(TEST_STAMP) test-tools
 	$(BIN)/ruff check .
 	SKYSCATTER_REQUIRE_BROWSER=1 $(BIN)/python -m pytest -q
 

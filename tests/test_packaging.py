@@ -26,6 +26,8 @@ PROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
 # modules imported only where an extra is needed; each must name its extra where it fails
 EXTRA_ONLY = {"imageio_ffmpeg": "video", "matplotlib": "validate", "pvlib": "validate",
               "PythonicDISORT": "validate", "xarray": "science"}
+# where each extra's modules may be imported: only there does a missing extra make itself felt
+EXTRA_HOME = {"video": "render/video_io.py", "validate": "validate/", "science": "datasets.py"}
 
 
 def _requirement_name(requirement: str) -> str:
@@ -86,15 +88,12 @@ def test_every_import_is_a_core_dependency_or_its_extra():
             extra = EXTRA_ONLY[module]
             assert distributions & extras[extra], f"{module} is not in [{extra}]"
             assert not distributions & core
-            if extra == "validate":
-                assert all(f.startswith("validate/") for f in files), files
-            else:
-                assert files == {"render/video_io.py"}, files
+            assert all(f.startswith(EXTRA_HOME[extra]) for f in files), files
         else:
             assert distributions & core, f"{module} ({files}) is not a core dependency"
     assert "imageio-ffmpeg" not in core
     test_extra = " ".join(PROJECT["optional-dependencies"]["test"])
-    assert all(extra in test_extra for extra in ("video", "viewer", "validate"))
+    assert all(extra in test_extra for extra in ("video", "viewer", "validate", "science"))
 
 
 @pytest.mark.slow  # builds an sdist and a wheel from a copy of the tree: about 10 s

@@ -1188,7 +1188,7 @@ def _view(args: argparse.Namespace) -> None:
               "skyscatter: WARNING: only the secret token in the address below lets a page use "
               "it (and make this computer compute tables): share that address only with people "
               "you trust; --host 127.0.0.1 keeps the viewer to this computer.",
-              file=sys.stderr, flush=True)
+              file=sys.__stderr__ if args.quiet else sys.stderr, flush=True)  # --quiet too
     print(f"skyscatter viewer: {server.url}  (Ctrl-C stops it)", flush=True)
     api.serve_viewer(server, open_browser=not args.no_browser)
 

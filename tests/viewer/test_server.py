@@ -214,6 +214,15 @@ def test_cli_view_off_loopback_warns(fake_serve_forever, capsys, tmp_path):
     assert "WARNING" in err and "0.0.0.0" in err and "anyone" in err and "token" in err
 
 
+def test_cli_view_off_loopback_warns_even_when_quiet(fake_serve_forever, capfd, tmp_path):
+    """--quiet silences notes and progress, not the warning that the network can reach it."""
+    code = main(["--quiet", "view", "--host", "0.0.0.0", "--no-browser",
+                 "--cache-dir", str(tmp_path)])
+    out, err = capfd.readouterr()
+    assert code == 0 and "skyscatter viewer: http://0.0.0.0:" in out
+    assert "WARNING" in err and "anyone" in err
+
+
 def test_cli_view_on_loopback_does_not_warn(fake_serve_forever, capsys, tmp_path):
     code = main(["view", "--no-browser", "--cache-dir", str(tmp_path)])
     out, err = capsys.readouterr()
