@@ -97,10 +97,12 @@ def scaled_float16(values: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def channel_tables(tables: AtmosphereTables, profile: OpticalProfile,
-                   weights: np.ndarray, label: str = "") -> dict[str, np.ndarray]:
+                   weights: np.ndarray, label: str = "", *,
+                   transmittance_weights: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """The tables of `tables` (computed for `profile`) in texture order (module docstring),
     float64, with one channel per column of `weights` (n_wl, c): CIE XYZ for the viewer,
-    linear RGB or the wavelengths themselves (the identity) for `table_export`. Also the
+    linear RGB or the wavelengths themselves (the identity) for `table_export`; the
+    transmittance weighted with `transmittance_weights` (default `weights`). Also the
     solar-weighted "ground_albedo" (c,) and the star's "sun_irradiance" (c,) at the top."""
     if not np.array_equal(tables.wavelengths_nm, profile.wavelengths_nm):
         raise InputError("gpu_tables: the tables and the profile have different wavelengths",
@@ -123,7 +125,9 @@ def channel_tables(tables: AtmosphereTables, profile: OpticalProfile,
         if t < n_s:
             mean = table.reshape(-1, table.shape[-1]).mean(axis=0)
             phase[t, :tables.phase.shape[1]] = _weighted(tables.phase[t], weights, mean)
-    return {"transmittance": _weighted(tables.transmittance, weights, sun),
+    if transmittance_weights is None:
+        transmittance_weights = weights
+    return {"transmittance": _weighted(tables.transmittance, transmittance_weights, sun),
             "irradiance": tables.irradiance @ weights,
             "scattering": scattering,
             "phase": phase.reshape(n_s * phase_rows, PHASE_ROW, channels),

@@ -24,8 +24,10 @@ scale per table (sidecar "scales"; 1 for float32; for float16 the largest value 
 Channels (`colour`): "xyz" CIE 1931 XYZ (Y luminance [cd m^-2], irradiance in lux), as the
 viewer; "rgb" linear RGB of `colour_space`, 1.0 = 1 cd m^-2 of luminance (the weights of XYZ
 turned into RGB, `spectrum.colour.xyz_to_rgb`: exact for the tables that enter the radiance
-linearly; transmittance weighted by the sun's spectrum as in `gpu_tables`, clipped to [0, 1]
-where the negative lobes of an RGB space's weights push a reddened path outside); "spectral"
+linearly; transmittance weighted by the sun's spectrum as in `gpu_tables`, but through the
+positive part of each channel's weights: with the negative lobes of an RGB space's weights the
+blue transmittance of a long, reddened path goes negative, and the ratio of two of them that
+sky.glsl takes for a segment of a ray loses the ground's blue); "spectral"
 one channel per wavelength, in SI units (docs/engines.md lists them).
 
 Files: exr (one file per table, the 3-D table as an atlas of its z slices stacked downwards:
@@ -150,9 +152,10 @@ def texture_arrays(tables: AtmosphereTables, profile: OpticalProfile, weights: n
     """(arrays by name in texture order (depth, height, width, c) or (height, width, c),
     scales by name (a list for the scattering tables), the channel tables' ground albedo and
     sun irradiance); `weights` from `channel_weights`."""
-    channels = channel_tables(tables, profile, weights, label)
-    if weights.shape[1] == 3 and np.any(weights < 0.0):  # RGB: module docstring
-        channels["transmittance"] = np.clip(channels["transmittance"], 0.0, 1.0)
+    # RGB: the transmittance through the positive part of each channel's weights (module
+    # docstring); XYZ's and the wavelengths' weights are never negative
+    channels = channel_tables(tables, profile, weights, label,
+                              transmittance_weights=np.maximum(weights, 0.0))
     dtype = PRECISIONS[precision]
     arrays, scales = {}, {}
     for name in ("transmittance", "irradiance", "phase"):
