@@ -1019,7 +1019,7 @@ def _add_export_tables_command(commands) -> None:
         "code that reads them, for engines",
         description="Write the atmosphere's precomputed tables as textures for a game engine "
         "or renderer: transmittance and irradiance (2-D), scattering (3-D, the 4-D table "
-        "packed as Bruneton's 2017 shaders and Unreal pack it) and phase functions, a JSON "
+        "packed as Bruneton's 2017 reference shaders pack it) and phase functions, a JSON "
         "sidecar (tables.json) with every constant a shader needs, and GLSL and HLSL that "
         "read them (the viewer's own shader code). The folder is replaced as a whole. "
         "docs/engines.md, \"Exported tables\", documents the layout.")

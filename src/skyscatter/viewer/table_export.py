@@ -7,8 +7,9 @@ Tables (`gpu_tables.channel_tables`: the viewer's layout, channels chosen by `co
   transmittance  2-D, width n_mu_t, height n_r_t: T to the top of the air [-]
   irradiance     2-D, width n_mu_s_e, height n_r_e: indirect irradiance on the ground
   scattering     3-D, width n_nu * n_mu_s, height n_mu, depth n_tables * n_r: the 4-D table
-                 (r, mu, mu_s, nu) packed as Bruneton's 2017 reference (and Unreal's
-                 SkyAtmosphere) packs it, the nu axis folded into x: texel (x, y, z) holds
+                 (r, mu, mu_s, nu) packed as Bruneton's 2017 reference packs it (and Unreal
+                 Engine 4's Atmospheric Fog, from Bruneton & Neyret 2008), the nu axis
+                 folded into x: texel (x, y, z) holds
                  nu index x // n_mu_s, mu_s index x % n_mu_s, mu index y, r index z % n_r of
                  table z // n_r; tables S_1 .. S_n_s (single scattering of each scattering
                  constituent, without its phase function), then M (orders >= 2, phases in)
@@ -84,8 +85,9 @@ SIDECAR_FORMAT = 1
 _KTX2_PRIMARIES = {"srgb": "bt709", "rec709": "bt709", "rec2020": "bt2020",
                    "display-p3": "displayp3", "acescg": "acescc", "aces2065-1": "aces"}
 _UNITS = {  # of each table's values times its scale, per colour
-    "xyz": {"transmittance": "1", "irradiance": "lx (Y)", "scattering": "cd m^-2 (Y), "
-            "single-scattering tables per sr^-1 of phase", "phase": "sr^-1"},
+    "xyz": {"transmittance": "1", "irradiance": "lx (Y)",
+            "scattering": "cd m^-2 (Y); the single-scattering tables times their phase function",
+            "phase": "sr^-1"},
     "spectral": {"transmittance": "1", "irradiance": "W m^-2 nm^-1",
                  "scattering": "W m^-2 sr^-1 nm^-1 (single-scattering tables: W m^-2 nm^-1, "
                                "times the phase [sr^-1])", "phase": "sr^-1"},
@@ -205,6 +207,11 @@ def _uniforms(tables: AtmosphereTables, profile: OpticalProfile, arrays: dict, s
             for key, value in uniforms.items()}
 
 
+def _layout(name: str) -> str:
+    """The viewer's layout of table `name` (`gpu_tables.LAYOUT`) for any number of channels."""
+    return LAYOUT[name].replace(", 3)", ", channels)")
+
+
 def _file_names(name: str, output_format: str, channels: int) -> list[str]:
     if output_format == "ktx2" and channels > 4:
         return [f"{name}_{g}.ktx2" for g in range(-(-channels // 4))]
@@ -222,7 +229,8 @@ def _sidecar(tables: AtmosphereTables, profile: OpticalProfile, settings: Export
                                 else (0, *array.shape[:2]))
         files[name] = {"files": _file_names(name, output_format, len(names)),
                        "texture": "3D" if depth else "2D", "width": width, "height": height,
-                       "depth": depth, "layout": LAYOUT[name], "units": _UNITS[colour][name]}
+                       "depth": depth, "layout": _layout(name),
+                       "units": _UNITS[colour][name]}
     return {
         "format": "skyscatter-tables", "format_version": SIDECAR_FORMAT,
         "skyscatter_version": __version__, "atmosphere": settings.label,
@@ -258,7 +266,7 @@ def _write_texture(folder: Path, name: str, array: np.ndarray, settings: ExportS
     if settings.format == "exr":
         atlas = array.reshape(-1, *array.shape[-2:])  # 3-D: z slices stacked downwards
         attributes = {"skyscatter_table": name, "skyscatter_scale": json.dumps(scale),
-                      "skyscatter_layout": LAYOUT[name]}
+                      "skyscatter_layout": _layout(name)}
         exr_writer(atlas, names, attributes,
                    chromaticities=rgb_space_chromaticities(settings.colour_space)
                    if settings.colour == "rgb" else None)(str(folder / f"{name}.exr"))
