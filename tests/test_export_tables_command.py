@@ -79,7 +79,8 @@ def test_export_writes_the_folder_and_replaces_an_earlier_export(capsys, tmp_pat
         "skyscatter_tables.glsl", "skyscatter_tables.hlsl", "tables.json", "tables.npz"]
     sidecar = json.loads((folder / "tables.json").read_text())
     assert sidecar["orders"] == 2 and sidecar["channels"] == [
-        f"{w:07.2f}nm" for w in api.wavelength_grid(4)]
+        "S0.418,750000nm", "S0.536,250000nm", "S0.653,750000nm", "S0.771,250000nm"]
+    assert sidecar["wavelengths_nm"] == list(api.wavelength_grid(4))
     with np.load(folder / "tables.npz") as archive:
         assert archive["transmittance"].shape == (64, 256, 4)  # Bruneton 2017's sizes
         assert archive["scattering"].shape == (3 * 32, 128, 8 * 40, 4)

@@ -246,20 +246,27 @@ def test_spectral_ktx2_splits_wavelengths_into_groups_of_four(preview, tmp_path)
                                atol=scale)
 
 
-def test_exr_files_read_back_with_a_decoder_of_the_file_layout(preview, tmp_path):
-    sidecar = export(preview, tmp_path / "e", format="exr", colour="rgb")
-    export(preview, tmp_path / "n", format="npz", colour="rgb")
+@pytest.mark.parametrize("colour", ["rgb", "spectral"])
+def test_exr_files_read_back_with_a_decoder_of_the_file_layout(preview, tmp_path, colour):
+    sidecar = export(preview, tmp_path / "e", format="exr", colour=colour)
+    export(preview, tmp_path / "n", format="npz", colour=colour)
     with np.load(tmp_path / "n" / "tables.npz") as archive:
         arrays = dict(archive)
+    names = sidecar["channels"]
+    if colour == "spectral":  # Fichet et al. 2021: layer S0, wavelength with a decimal comma
+        assert [float(n[3:-2].replace(",", ".")) for n in names] == sidecar["wavelengths_nm"]
     for name, entry in sidecar["tables"].items():
         attributes, planes = read_exr(tmp_path / "e" / entry["files"][0])
-        assert set(planes) == {"R", "G", "B"} and planes["R"].dtype == np.float16
-        atlas = np.stack([planes[c] for c in "RGB"], axis=-1)
+        assert set(planes) == set(names) and planes[names[0]].dtype == np.float16
+        atlas = np.stack([planes[c] for c in names], axis=-1)
         # the 3-D table: its z slices stacked downwards, row z * height + y
         np.testing.assert_array_equal(atlas, arrays[name].reshape(atlas.shape))
         assert json.loads(attributes["skyscatter_scale"][1]) == sidecar["scales"][name]
-        chromaticities = struct.unpack("<8f", attributes["chromaticities"][1])
-        assert chromaticities == pytest.approx(sidecar["chromaticities"], abs=1e-6)
+        if colour == "rgb":
+            chromaticities = struct.unpack("<8f", attributes["chromaticities"][1])
+            assert chromaticities == pytest.approx(sidecar["chromaticities"], abs=1e-6)
+        else:
+            assert "chromaticities" not in attributes
 
 
 def test_rgb_tables_are_the_xyz_tables_in_srgb(preview, tmp_path):

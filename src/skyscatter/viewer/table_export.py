@@ -29,7 +29,8 @@ linearly; transmittance weighted by the sun's spectrum as in `gpu_tables`, but t
 positive part of each channel's weights: with the negative lobes of an RGB space's weights the
 blue transmittance of a long, reddened path goes negative, and the ratio of two of them that
 sky.glsl takes for a segment of a ray loses the ground's blue); "spectral"
-one channel per wavelength, in SI units (docs/engines.md lists them).
+one channel per wavelength, in SI units (docs/engines.md lists them), named as Fichet et al.
+2021 name spectral EXR channels ("S0.550,000000nm").
 
 Files: exr (one file per table, the 3-D table as an atlas of its z slices stacked downwards:
 row z * n_mu + y), ktx2 (`viewer.ktx2`, RGBA, the 3-D table a 3-D texture; spectral: one file
@@ -132,8 +133,10 @@ def channel_weights(wavelengths_nm: np.ndarray, colour: str,
                     colour_space: str = "srgb") -> tuple[np.ndarray, tuple[str, ...]]:
     """(weights (n_wl, c), channel names) of `colour` (module docstring)."""
     if colour == "spectral":
+        # Fichet et al. 2021, "An OpenEXR Layout for Spectral Images", JCGT 10(3): layer S0
+        # (emitted light), the wavelength with a decimal comma, so that no "." splits it
         return (np.eye(wavelengths_nm.size),
-                tuple(f"{w:07.2f}nm" for w in wavelengths_nm))
+                tuple("S0." + f"{w:.6f}".replace(".", ",") + "nm" for w in wavelengths_nm))
     weights = cmf_weights(wavelengths_nm)
     if colour == "rgb":
         return xyz_to_rgb(weights, colour_space), ("R", "G", "B")
