@@ -8,7 +8,7 @@ STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 APT    := $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get
 
-.PHONY: run test lint bench clean chromium
+.PHONY: run test lint bench clean chromium glslang
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -25,7 +25,14 @@ chromium:
 	  $(APT) install -y -qq chromium >/dev/null 2>&1 || \
 	  { $(APT) update -qq && $(APT) install -y -qq chromium >/dev/null; }; }
 
-test: $(STAMP) chromium
+# glslang's HLSL front end compiles the exported tables' HLSL (tests/viewer/test_table_export.py;
+# skipped without it)
+glslang:
+	@command -v glslangValidator >/dev/null 2>&1 || { echo "installing glslang-tools (apt)"; \
+	  $(APT) install -y -qq glslang-tools >/dev/null 2>&1 || \
+	  { $(APT) update -qq && $(APT) install -y -qq glslang-tools >/dev/null; } || true; }
+
+test: $(STAMP) chromium glslang
 	$(BIN)/ruff check .
 	SKYSCATTER_REQUIRE_BROWSER=1 $(BIN)/python -m pytest -q
 
