@@ -13,6 +13,7 @@ import pytest
 
 from cli_runner import run_cli, unprivileged_prefix
 from skyscatter import api
+from skyscatter.errors import InputError
 
 # The tables of tests/test_cli.py's render (--wavelengths 4 --orders 2): one computation a session
 TABLES = ["--wavelengths", "4", "--orders", "2"]
@@ -85,3 +86,15 @@ def test_export_writes_the_folder_and_replaces_an_earlier_export(capsys, tmp_pat
         assert archive["transmittance"].shape == (64, 256, 4)  # Bruneton 2017's sizes
         assert archive["scattering"].shape == (3 * 32, 128, 8 * 40, 4)
         assert archive["scattering"].dtype == np.float32
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    (("npz", "lab"), "unknown colour 'lab'"),
+    (("tiff", "rgb"), "unknown format 'tiff'"),
+])
+def test_the_api_refuses_unknown_choices_before_any_work(tmp_path, arguments, message):
+    with pytest.raises(InputError, match=message):
+        api.export_tables(api.load_atmosphere("earth"), tmp_path / "out", *arguments,
+                          options=api.solver_options(api.load_atmosphere("earth"),
+                                                     cache_dir=tmp_path / "cache"))
+    assert sorted(tmp_path.iterdir()) == []  # no folder, no table cache

@@ -42,7 +42,6 @@ temporaries, then renamed (`output_files.staged_outputs`).
 
 from __future__ import annotations
 
-import io
 import json
 import re
 from dataclasses import dataclass
@@ -298,9 +297,7 @@ def export_tables(tables: AtmosphereTables, profile: OpticalProfile, folder: str
     with staged_outputs() as stage:
         staging = stage.folder(target)
         if settings.format == "npz":
-            buffer = io.BytesIO()
-            np.savez(buffer, wavelengths_nm=profile.wavelengths_nm, **arrays)
-            (staging / "tables.npz").write_bytes(buffer.getvalue())
+            np.savez(staging / "tables.npz", wavelengths_nm=profile.wavelengths_nm, **arrays)
         else:
             for name, array in arrays.items():
                 _write_texture(staging, name, array, settings, names, scales[name])
