@@ -8,7 +8,8 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-# Debian's chromium for the viewer's browser tests, zsh and fish for the shell-completion tests
+# Debian's chromium for the viewer's browser tests, zsh and fish for the shell-completion tests,
+# glslang for the exported HLSL
 # (root, or sudo when not root)
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 APT    := $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get
@@ -29,9 +30,11 @@ $(TEST_STAMP): $(STAMP)
 run: $(STAMP)
 	$(BIN)/python scripts/render_defaults.py out
 
-TEST_TOOLS := chromium zsh fish
+# command:package; glslang's HLSL front end compiles the exported tables' HLSL
+# (tests/viewer/test_table_export.py)
+TEST_TOOLS := chromium:chromium zsh:zsh fish:fish glslangValidator:glslang-tools
 test-tools:
-	@missing=$$(for t in $(TEST_TOOLS); do command -v $$t >/dev/null 2>&1 || echo $$t; done); \
+	@missing=$$(for t in $(TEST_TOOLS); do command -v $${t%%:*} >/dev/null 2>&1 || echo $${t#*:}; done); \
 	if [ -n "$$missing" ]; then echo "installing" $$missing "(apt) for the tests"; \
 	  $(APT) install -y -qq $$missing >/dev/null 2>&1 || \
 	  { $(APT) update -qq && $(APT) install -y -qq $$missing >/dev/null; }; fi

@@ -126,6 +126,9 @@ from skyscatter.validate.suite import run_suite as run_validation
 from skyscatter.viewer import server as viewer_server_module
 from skyscatter.viewer.server import ViewerServer, make_server
 from skyscatter.viewer.sky_message import sky_message
+from skyscatter.viewer.table_export import OWNED as EXPORT_FILES
+from skyscatter.viewer.table_export import ExportedTables, ExportSettings
+from skyscatter.viewer.table_export import export_tables as write_exported_tables
 from skyscatter.viewer.table_service import TableService
 
 __all__ = [
@@ -170,6 +173,7 @@ __all__ = [
     "render",
     "render_at",
     "environment_light",
+    "export_tables",
     "irradiance_dataset",
     "irradiance_rows",
     "output_metadata",
@@ -877,6 +881,27 @@ def _angle_list(name: str, values: Sequence[float], bounds: Bounds) -> np.ndarra
         raise InputError(f"{name} = {values!r} is not allowed: a non-empty list of numbers",
                          key=name, value=values, allowed="a non-empty list of numbers")
     return array
+
+
+def export_tables(atmosphere: Atmosphere, folder: str | Path, output_format: str = "exr",
+                  colour: str = "rgb", *, colour_space: str = "srgb", precision: str = "half",
+                  wavelengths_nm: Sequence[float] | None = None,
+                  options: SolverOptions | None = None) -> ExportedTables:
+    """Write the precomputed tables of `atmosphere` for engines into `folder` (replaced as a
+    whole; docs/engines.md, "Exported tables"): transmittance, irradiance, scattering (Bruneton
+    2017's 3-D packing) and phase textures as `output_format` "exr", "ktx2" or "npz", with
+    `colour` channels "rgb" (linear `colour_space`), "xyz" or "spectral" (one per wavelength
+    of `wavelengths_nm`, default 16 bins), in `precision` "half" or "float", plus a JSON
+    sidecar with every constant a shader needs and the GLSL and HLSL that read them. The
+    tables come from the cache or are computed (`options`, default `solver_options`).
+    InputError for an unknown format, colour, colour space or precision, or a folder that
+    cannot be written (a file, or a folder holding other files), before any computation."""
+    _check_atmosphere(atmosphere)
+    settings = ExportSettings(output_format, colour, colour_space, precision, atmosphere.name)
+    settings.check()
+    check_writable_folder(folder, EXPORT_FILES)
+    solver = load_solver(atmosphere, wavelengths_nm, "lut", options)
+    return write_exported_tables(solver.tables, solver.profile, folder, settings)
 
 
 def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0, *,

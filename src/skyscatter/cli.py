@@ -622,6 +622,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_cache_arguments(precompute)
     precompute.set_defaults(run=_precompute)
 
+    _add_export_tables_command(commands)
+
     view = commands.add_parser(
         "view", help="the real-time viewer in a web browser (WebGL2)",
         description="Start the interactive viewer: a local web server that sends the "
@@ -1169,6 +1171,58 @@ def _precompute(args: argparse.Namespace) -> None:
           f"{time.perf_counter() - start:.1f} s", file=sys.stderr)
 
 
+def _add_export_tables_command(commands) -> None:
+    """`skyscatter export-tables`: the tables, their sidecar and shaders for engines."""
+    export = commands.add_parser(
+        "export-tables", help="write the precomputed tables with a JSON sidecar and GLSL/HLSL "
+        "code that reads them, for engines",
+        description="Write the atmosphere's precomputed tables as textures for a game engine "
+        "or renderer: transmittance and irradiance (2-D), scattering (3-D, the 4-D table "
+        "packed as Bruneton's 2017 reference shaders pack it) and phase functions, a JSON "
+        "sidecar (tables.json) with every constant a shader needs, and GLSL and HLSL that "
+        "read them (the viewer's own shader code). The folder is replaced as a whole. "
+        "docs/engines.md, \"Exported tables\", documents the layout.")
+    _add_atmosphere_argument(export)
+    export.add_argument("-o", "--output", type=Path, required=True, metavar="FOLDER",
+                        help="the folder to write (made, or replaced if it holds only an "
+                        "earlier export)")
+    export.add_argument("--format", default="exr", metavar="FORMAT",
+                        help="exr (one file per table; the 3-D table as a stack of slices), "
+                        "ktx2 (KTX 2.0 textures, the 3-D table a 3-D texture) or npz "
+                        "(default exr)")
+    export.add_argument("--colour", default="rgb", metavar="CHANNELS",
+                        help="rgb (linear --colour-space, 1.0 = 1 cd/m^2), xyz (CIE 1931) or "
+                        "spectral (one channel per wavelength) (default rgb)")
+    export.add_argument("--colour-space", default="srgb",
+                        help="for --colour rgb: srgb (default), rec709, display-p3, rec2020, "
+                        "acescg or aces2065-1")
+    export.add_argument("--precision", default="half", metavar="half|float",
+                        help="float16 (scaled per table, the scales in the sidecar) or "
+                        "float32 (default half)")
+    export.add_argument("--wavelengths", type=_wavelengths, default=None, metavar="N|LIST",
+                        help="as for render: N bins over 360-830 nm or a list in nm (default "
+                        f"{DEFAULT_WAVELENGTH_BINS} bins, the tables render uses)")
+    export.add_argument("--orders", type=_orders, default=None,
+                        help="scattering orders (default: the config's [tables] orders)")
+    _add_cache_arguments(export)
+    export.set_defaults(run=_export_tables)
+
+
+def _export_tables(args: argparse.Namespace) -> None:
+    import time
+
+    from skyscatter import api
+    atmosphere = api.load_atmosphere(args.atmosphere)
+    start = time.perf_counter()
+    with _solver_options(args, atmosphere) as options:
+        exported = api.export_tables(atmosphere, args.output, args.format, args.colour,
+                                     colour_space=args.colour_space, precision=args.precision,
+                                     wavelengths_nm=args.wavelengths, options=options)
+    size = sum(path.stat().st_size for path in exported.files)
+    print(f"{args.atmosphere}: {len(exported.files)} files, {size / 2**20:.1f} MiB in "
+          f"{exported.folder}, {time.perf_counter() - start:.1f} s", file=sys.stderr)
+
+
 def _view(args: argparse.Namespace) -> None:
     from skyscatter import api
 
@@ -1270,7 +1324,7 @@ def _validate(args: argparse.Namespace) -> int:
 
 # the commands whose first run compiles kernels (`compile_ahead`)
 COMPILING_COMMANDS = frozenset({"render", "timelapse", "radiance", "irradiance", "precompute",
-                                "view", "validate"})
+                                "view", "validate", "export-tables"})
 
 
 def main(argv: Sequence[str] | None = None) -> int:

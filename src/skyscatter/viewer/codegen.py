@@ -52,7 +52,7 @@ from skyscatter.viewer.gpu_tables import (
 
 __all__ = ["CLOUD_COLUMNS", "CLOUD_KERNEL_CONSTANTS", "EV100_RANGE", "GENERATED", "HALF_MAX",
            "OUTPUTS", "PROJECTIONS", "cloud_columns", "constants_glsl", "layout_json",
-           "write_generated"]
+           "table_constant_lines", "write_generated"]
 
 GENERATED = Path(__file__).parent / "static" / "generated"
 HALF_MAX = float(np.finfo(np.float16).max)
@@ -115,6 +115,17 @@ def _cloud_lines() -> list[str]:
     return lines
 
 
+def table_constant_lines() -> list[str]:
+    """The constants of parameterisation.glsl and sky.glsl: the head of constants.glsl and of
+    the exported tables' shader snippets (`viewer.shader_export`)."""
+    return [f"const float PI = {math.pi!r};",
+            f"const float SPREAD_MIN = {SPREAD_MIN!r};",
+            f"#define RADIUS_WARP_SEGMENTS {RADIUS_WARP_SEGMENTS}",
+            f"#define RADIUS_WARP_VEC4S {-(-(RADIUS_WARP_SEGMENTS + 1) // 4)}",
+            f"#define MAX_TABLES {MAX_TABLES}",
+            f"#define PHASE_ROW {PHASE_ROW}"]
+
+
 def constants_glsl() -> str:
     """The GLSL constants file."""
     lines = [_HEADER.format(sources="viewer/gpu_tables.py, render/scene.py, render/tonemap.py, "
@@ -122,12 +133,7 @@ def constants_glsl() -> str:
                                     "spectrum/colour.py, atmosphere/_cloud_sampling.py, "
                                     "transport/_cloud_kernels.py, "
                                     "transport/air_shadows.py, transport/clouds.py"),
-             f"const float PI = {math.pi!r};",
-             f"const float SPREAD_MIN = {SPREAD_MIN!r};",
-             f"#define RADIUS_WARP_SEGMENTS {RADIUS_WARP_SEGMENTS}",
-             f"#define RADIUS_WARP_VEC4S {-(-(RADIUS_WARP_SEGMENTS + 1) // 4)}",
-             f"#define MAX_TABLES {MAX_TABLES}",
-             f"#define PHASE_ROW {PHASE_ROW}",
+             *table_constant_lines(),
              f"#define SUN_DISK_SAMPLES {SUN_DISK_SAMPLES}",
              f"const float SPLAT_PIXELS = {float(SPLAT_PIXELS)!r};",
              f"const float SATURATION_FACTOR = {_SATURATION_FACTOR!r};",

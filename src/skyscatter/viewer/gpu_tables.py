@@ -52,7 +52,8 @@ from skyscatter.spectrum.star import Star
 from skyscatter.transport.tables import AtmosphereTables, is_identity_warp
 
 __all__ = ["FORMAT_VERSION", "GpuTables", "LAYOUT", "MAGIC", "MAX_TABLES", "PHASE_ROW",
-           "SUN_DISK_SAMPLES", "decode", "encode", "gpu_tables"]
+           "SUN_DISK_SAMPLES", "channel_tables", "decode", "encode", "gpu_tables",
+           "scaled_float16"]
 
 MAGIC = b"SKYT"
 FORMAT_VERSION = 2  # 2: the header holds the radius warp
@@ -88,48 +89,71 @@ def _weighted(values: np.ndarray, weights: np.ndarray, light: np.ndarray) -> np.
     return (values * light) @ weights / (light @ weights)
 
 
-def _scaled_float16(values: np.ndarray) -> tuple[np.ndarray, float]:
+def scaled_float16(values: np.ndarray) -> tuple[np.ndarray, float]:
     """(values / scale as float16, scale) with the largest magnitude at FLOAT16_TARGET."""
     largest = float(np.max(np.abs(values))) if values.size else 0.0
     scale = largest / FLOAT16_TARGET if largest > 0.0 else 1.0
     return np.ascontiguousarray(values / scale, dtype=np.float16), scale
 
 
-def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
-               label: str = "") -> GpuTables:
-    """The viewer's tables of `tables` (computed for `profile`, lit by `star`)."""
+def channel_tables(tables: AtmosphereTables, profile: OpticalProfile,
+                   weights: np.ndarray, label: str = "", *,
+                   transmittance_weights: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """The tables of `tables` (computed for `profile`) in texture order (module docstring),
+    float64, with one channel per column of `weights` (n_wl, c): CIE XYZ for the viewer,
+    linear RGB or the wavelengths themselves (the identity) for `table_export`; the
+    transmittance weighted with `transmittance_weights` (default `weights`). Also the
+    solar-weighted "ground_albedo" (c,) and the star's "sun_irradiance" (c,) at the top."""
     if not np.array_equal(tables.wavelengths_nm, profile.wavelengths_nm):
         raise InputError("gpu_tables: the tables and the profile have different wavelengths",
                          key="tables", value=tables.wavelengths_nm.size)
-    weights = cmf_weights(profile.wavelengths_nm)
+    channels = weights.shape[1]
     sun = np.asarray(profile.toa_irradiance, dtype=np.float64)
-    transmittance = _weighted(tables.transmittance, weights, sun)
-    irradiance = tables.irradiance @ weights
     n_r, n_mu, n_mu_s, n_nu, n_t, _ = tables.scattering.shape
     n_s = n_t - 1
     if n_t > MAX_TABLES:
         raise InputError(f"{label or 'this atmosphere'} has {n_s} scattering constituents; the "
                          f"viewer shows at most {MAX_TABLES - 1}", key="atmosphere", value=label)
-    scattering = np.empty((n_t, n_r, n_mu, n_nu, n_mu_s, 3))
+    # float32 beyond colour: a spectral set of the full Earth tables is 0.5 GB in float64
+    scattering = np.empty((n_t, n_r, n_mu, n_nu, n_mu_s, channels),
+                          dtype=np.float64 if channels <= 3 else np.float32)
     phase_rows = -(-tables.phase.shape[1] // PHASE_ROW)
-    phase = np.zeros((n_s, phase_rows * PHASE_ROW, 3))
+    phase = np.zeros((n_s, phase_rows * PHASE_ROW, channels))
     for t in range(n_t):
         table = tables.scattering[..., t, :].astype(np.float64)
-        scattering[t] = np.moveaxis(table @ weights, 3, 2)  # (r, mu, nu, mu_s, 3)
+        scattering[t] = np.moveaxis(table @ weights, 3, 2)  # (r, mu, nu, mu_s, c)
         if t < n_s:
             mean = table.reshape(-1, table.shape[-1]).mean(axis=0)
             phase[t, :tables.phase.shape[1]] = _weighted(tables.phase[t], weights, mean)
-    albedo = _weighted(np.asarray(profile.ground_albedo, dtype=np.float64), weights, sun)
+    if transmittance_weights is None:
+        transmittance_weights = weights
+    return {"transmittance": _weighted(tables.transmittance, transmittance_weights, sun),
+            "irradiance": tables.irradiance @ weights,
+            "scattering": scattering,
+            "phase": phase.reshape(n_s * phase_rows, PHASE_ROW, channels),
+            "ground_albedo": _weighted(np.asarray(profile.ground_albedo, dtype=np.float64),
+                                       weights, sun),
+            "sun_irradiance": sun @ weights}
+
+
+def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
+               label: str = "") -> GpuTables:
+    """The viewer's tables of `tables` (computed for `profile`, lit by `star`)."""
+    weights = cmf_weights(profile.wavelengths_nm)
+    channels = channel_tables(tables, profile, weights, label)
+    scattering = channels["scattering"]
+    n_t, n_r, n_mu, n_nu, n_mu_s, _ = scattering.shape
+    phase_rows = channels["phase"].shape[0] // (n_t - 1)
+    albedo = channels["ground_albedo"]
     cos_limb = np.linspace(0.0, 1.0, SUN_DISK_SAMPLES)
     disk = star.disk_radiance(profile.wavelengths_nm, cos_limb) @ weights
     arrays, scales = {}, {}
-    for name, values in (("transmittance", transmittance), ("irradiance", irradiance),
-                         ("phase", phase.reshape(n_s * phase_rows, PHASE_ROW, 3))):
-        arrays[name], scales[name] = _scaled_float16(values)
+    for name in ("transmittance", "irradiance", "phase"):
+        arrays[name], scales[name] = scaled_float16(channels[name])
     packed = np.empty(scattering.shape, dtype=np.float16)
     table_scales = []
     for t in range(n_t):
-        packed[t], scale = _scaled_float16(scattering[t])
+        packed[t], scale = scaled_float16(scattering[t])
         table_scales.append(scale)
     arrays["scattering"] = packed
     scales["scattering"] = table_scales
@@ -152,7 +176,7 @@ def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
         "phase_rows": int(phase_rows),
         "scales": scales,
         "ground_albedo_xyz": [float(v) for v in albedo],
-        "sun_irradiance_xyz": [float(v) for v in sun @ weights],
+        "sun_irradiance_xyz": [float(v) for v in channels["sun_irradiance"]],
         "sun_angular_radius_rad": float(profile.sun_angular_radius_rad),
         "sun_solid_angle_sr": float(star.solid_angle_sr),
         "sun_disk_xyz": [[float(v) for v in row] for row in disk],
