@@ -77,6 +77,7 @@ from skyscatter.render.exposure import display_rgb8, metered_ev100
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer
 from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOptions
 from skyscatter.render.octahedral import OctahedralCamera
+from skyscatter.render.paraboloid import ParaboloidCamera
 from skyscatter.render.radiance_hdr import hdr_writer
 from skyscatter.render.scene import (
     SkyImage,
@@ -94,6 +95,7 @@ from skyscatter.render.sky_at_time import (
     ephemeris,
     render_sky_at,
 )
+from skyscatter.render.sphere_map import SphereMapCamera
 from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
 from skyscatter.render.timelapse import write_frames
@@ -148,10 +150,12 @@ __all__ = [
     "ImageOptions",
     "Observer",
     "OctahedralCamera",
+    "ParaboloidCamera",
     "PerspectiveCamera",
     "SkyImage",
     "SkyObjects",
     "SolverOptions",
+    "SphereMapCamera",
     "check_image_options",
     "check_render_cost",
     "demo_mountains",
@@ -605,22 +609,25 @@ def _check_image_paths(png_path: str | Path | BinaryIO | None,
         check_writable_file(exr_path)
 
 
+# the cameras whose images hold the whole sphere (environment_light)
+_WHOLE_SPHERE_CAMERAS = (CubeMapCamera, OctahedralCamera, EquirectangularCamera, SphereMapCamera,
+                         ParaboloidCamera)
+
+
 def environment_light(image: SkyImage, camera: Camera, colour_space: str = "srgb", *,
                       balance_to_light: bool = False) -> dict:
     """The sun as a directional light (direction, illuminance [lux], linear RGB, angular
     radius) and the diffuse irradiance of the rest of the sky as 9 spherical-harmonic
     coefficients per channel (`render.environment_light`), from an image of the whole sphere
-    rendered by `camera` (a `CubeMapCamera`, `OctahedralCamera` or `EquirectangularCamera`),
-    in the EXR's units
-    and `colour_space`; a JSON-ready dict. InputError for a camera that does not see the
-    whole sphere."""
+    rendered by `camera` (a `CubeMapCamera`, `OctahedralCamera`, `EquirectangularCamera`,
+    `SphereMapCamera` or `ParaboloidCamera`), in the EXR's units and `colour_space`; a
+    JSON-ready dict. InputError for a camera that does not see the whole sphere."""
     checked_instance("image", image, SkyImage, "a SkyImage", " from render or render_at")
-    if not isinstance(camera, (CubeMapCamera, OctahedralCamera, EquirectangularCamera)):
+    if not isinstance(camera, _WHOLE_SPHERE_CAMERAS):
+        names = ", ".join(kind.__name__ for kind in _WHOLE_SPHERE_CAMERAS)
         raise InputError("the light of a sky needs an image of the whole sphere: render it "
-                         "with a CubeMapCamera, OctahedralCamera or EquirectangularCamera "
-                         "(--camera cubemap, octahedral or panorama)", key="camera",
-                         value=camera,
-                         allowed="CubeMapCamera, OctahedralCamera, EquirectangularCamera")
+                         f"with a {names} (--camera cubemap, octahedral, panorama, sphere or "
+                         "paraboloid)", key="camera", value=camera, allowed=names)
     check_image_options(colour_space=colour_space)
     directions, _ = camera.directions()
     return sky_light(image, directions, camera.pixel_solid_angles(), colour_space,

@@ -35,7 +35,9 @@ from skyscatter.output_files import atomic_write, check_writable_file
 
 __all__ = ["main"]
 
-CAMERAS = ("fisheye", "panorama", "perspective", "orbit", "cubemap", "octahedral")
+CAMERAS = ("fisheye", "panorama", "perspective", "orbit", "cubemap", "octahedral", "sphere",
+           "paraboloid")
+WHOLE_SPHERE = ("cubemap", "octahedral", "panorama", "sphere", "paraboloid")
 
 
 def _checked(bounds: Bounds, value: float, text: str) -> float:
@@ -276,6 +278,10 @@ _CAMERA_HELP = {
                "+Y up, +Z south), laid out by --cube-layout",
     "octahedral": "the whole sphere on one --size square as light probes store it: the zenith "
                   "at the centre, the horizon on the inner diamond, the nadir at the corners",
+    "sphere": "the whole sphere as OpenGL's sphere map (a mirror ball seen from above) on one "
+              "--size square: the zenith at the centre, the nadir on the rim",
+    "paraboloid": "the whole sphere on two --size paraboloid maps side by side (Heidrich & "
+                  "Seidel 1998): upper hemisphere left, lower right, the horizon on the rims",
 }
 
 
@@ -490,7 +496,8 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--light", type=Path, default=None, metavar="FILE",
                         help="also write the sun as a directional light and the rest of the "
                         "sky's diffuse irradiance as spherical harmonics, in the EXR's units "
-                        "(JSON; --camera cubemap, octahedral or panorama: docs/engines.md)")
+                        "(JSON; --camera cubemap, octahedral, panorama, sphere or paraboloid: "
+                        "docs/engines.md)")
     render.add_argument("--no-sun-disk", action="store_true",
                         help="leave the sun's disk out of the image (with --light the sun is "
                         "then only the directional light)")
@@ -706,9 +713,9 @@ def _render(args: argparse.Namespace) -> None:
     api.check_image_options(png_path=image_target, exr_path=args.exr,
                             options=image_options)  # the outputs can be written: before any work
     if args.light is not None:
-        if args.camera not in ("cubemap", "octahedral", "panorama"):
-            raise InputError("--light needs an image of the whole sphere: add --camera cubemap, "
-                             "--camera octahedral or --camera panorama", key="light",
+        if args.camera not in WHOLE_SPHERE:
+            raise InputError("--light needs an image of the whole sphere: add --camera cubemap "
+                             f"(or {', '.join(WHOLE_SPHERE[1:])})", key="light",
                              value=str(args.light))
         check_writable_file(args.light)
     atmosphere = api.load_atmosphere(args.atmosphere)
@@ -940,6 +947,10 @@ def _camera(args: argparse.Namespace):
         return api.CubeMapCamera(args.size, args.cube_layout)
     if args.camera == "octahedral":
         return api.OctahedralCamera(args.size)
+    if args.camera == "sphere":
+        return api.SphereMapCamera(args.size)
+    if args.camera == "paraboloid":
+        return api.ParaboloidCamera(args.size)
     width = max(1, round(args.size * args.aspect))
     fov = 60.0 if args.fov is None else args.fov
     return api.PerspectiveCamera(width, args.size, fov, heading_deg=args.heading,
