@@ -78,6 +78,7 @@ from skyscatter.render.image_io import display_format, display_image_writer, exr
 from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOptions
 from skyscatter.render.octahedral import OctahedralCamera
 from skyscatter.render.paraboloid import ParaboloidCamera
+from skyscatter.render.prefilter import prefiltered_mips
 from skyscatter.render.radiance_hdr import hdr_writer
 from skyscatter.render.scene import (
     SkyImage,
@@ -157,6 +158,7 @@ __all__ = [
     "SolverOptions",
     "SphereMapCamera",
     "check_image_options",
+    "check_mip_chain",
     "check_render_cost",
     "demo_mountains",
     "describe_gas",
@@ -175,6 +177,7 @@ __all__ = [
     "save_image",
     "sky_ephemeris",
     "timelapse",
+    "save_mip_chain",
     "sky_radiance_rows",
     "solver_options",
     "sun_direction",
@@ -704,6 +707,66 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
         write(stream)
         stream.flush()
     return float(ev100)
+
+
+MAX_MIP_LEVELS = 16
+MAX_MIP_FACE = 256  # level 1 sums face^4 texel pairs: about 17 s at 128, 16 times that at 256
+
+
+def _mip_chain_paths(exr_path: str | Path, levels: int) -> list[Path]:
+    """Where `save_mip_chain` writes levels 1 to `levels` - 1: beside `exr_path`, named
+    `<stem>_mip<k><suffix>` (sky.exr -> sky_mip1.exr, ...)."""
+    path = Path(exr_path)
+    return [path.with_name(f"{path.stem}_mip{k}{path.suffix}") for k in range(1, levels)]
+
+
+def check_mip_chain(camera: Camera, levels: int, exr_path: str | Path | None,
+                    exr_content: str = "rgb") -> None:
+    """InputError, before any work, unless a mip chain of `levels` can be made of `camera`'s
+    image and written beside `exr_path` (`save_mip_chain`)."""
+    checked_integer("mips", levels, 2, MAX_MIP_LEVELS)
+    if not isinstance(camera, CubeMapCamera):
+        raise InputError("a prefiltered mip chain (--mips) is made of cube maps: add --camera "
+                         "cubemap", key="mips", value=levels)
+    if exr_path is None or exr_content != "rgb":
+        raise InputError("the mip chain (--mips) is written beside the linear RGB image: add "
+                         "--exr sky.exr (or .hdr) with --exr-content rgb", key="mips",
+                         value=levels)
+    step = 1 << (levels - 1)
+    if camera.face % step or camera.face > MAX_MIP_FACE:
+        raise InputError(f"{levels} mip levels halve the face {levels - 1} times: --size must "
+                         f"be a multiple of {step} and at most {MAX_MIP_FACE}, got {camera.face}",
+                         key="size", value=camera.face,
+                         allowed=f"multiples of {step} up to {MAX_MIP_FACE}")
+    for path in _mip_chain_paths(exr_path, levels):
+        check_writable_file(path)
+
+
+def save_mip_chain(image: SkyImage, camera: CubeMapCamera, exr_path: str | Path, levels: int,
+                   *, options: ImageOptions | None = None) -> list[Path]:
+    """Write the specular mip chain of a cube map (`render.prefilter`: GGX-prefiltered, Karis
+    2013, roughness k / (levels - 1) at level k, faces halved at each level): levels 1 to
+    `levels` - 1 beside `exr_path` (`_mip_chain_paths`; level 0 is the image itself, which
+    `save_image` writes there), as EXR or Radiance .hdr like it, in its units (1.0 =
+    1 cd m^-2) and `options`' colour space. Returns the paths written. InputError as
+    `check_mip_chain`."""
+    checked_instance("image", image, SkyImage, "a SkyImage", " from render or render_at")
+    options = ImageOptions() if options is None else options
+    check_mip_chain(camera, levels, exr_path, options.exr_content)
+    space = options.colour_space
+    rgb = into_gamut(xyz_to_rgb(image.xyz(options.balance_to_light), space), space)
+    chain = prefiltered_mips(np.where(image.valid[..., None], rgb, 0.0), camera, levels)
+    paths = _mip_chain_paths(exr_path, levels)
+    with staged_outputs() as stage:
+        for path, level in zip(paths, chain[1:], strict=True):
+            if path.suffix.lower() == ".hdr":
+                stage.write(path, hdr_writer(level, rgb_space_chromaticities(space)))
+            else:
+                stage.write(path, exr_writer(
+                    level.astype(np.float32), ("R", "G", "B"),
+                    {"skyscatter_units": EXR_UNITS["rgb"], "skyscatter_colour_space": space},
+                    chromaticities=rgb_space_chromaticities(space), white_luminance=1.0))
+    return paths
 
 
 def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],

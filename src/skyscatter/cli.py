@@ -498,6 +498,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "sky's diffuse irradiance as spherical harmonics, in the EXR's units "
                         "(JSON; --camera cubemap, octahedral, panorama, sphere or paraboloid: "
                         "docs/engines.md)")
+    render.add_argument("--mips", type=int, default=None, metavar="LEVELS",
+                        help="with --camera cubemap and --exr: also write the specular mip "
+                        "chain, GGX-prefiltered (roughness k/(LEVELS-1) at level k, faces "
+                        "halved at each), as FILE_mip1.exr ... beside the --exr FILE "
+                        "(docs/engines.md)")
     render.add_argument("--no-sun-disk", action="store_true",
                         help="leave the sun's disk out of the image (with --light the sun is "
                         "then only the directional light)")
@@ -738,6 +743,8 @@ def _render(args: argparse.Namespace) -> None:
                          "and --pitch", key="look_at", value=args.look_at)
     else:
         camera = _camera(args)
+    if args.mips is not None:
+        api.check_mip_chain(camera, args.mips, args.exr, args.exr_content)
     api.check_render_cost(camera, args.wavelengths, solver=args.solver, n_samples=args.samples,
                           allow_large=args.allow_large)  # memory and time, before allocating
     ground = _ground(args, radius)
@@ -768,6 +775,9 @@ def _render(args: argparse.Namespace) -> None:
         atomic_write(args.light, lambda path: Path(path).write_text(
             json.dumps(light, indent=1, allow_nan=False) + "\n", encoding="utf-8"))
         written.append(str(args.light))
+    if args.mips is not None:
+        written += [str(path) for path in api.save_mip_chain(image, camera, args.exr, args.mips,
+                                                             options=image_options)]
     print(f"wrote {', '.join(written)} (EV100 {ev100:.2f})", file=sys.stderr)
     if summary is not None:
         print(summary, file=sys.stderr)
