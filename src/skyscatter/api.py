@@ -28,6 +28,8 @@ from __future__ import annotations
 import datetime
 import ipaddress
 import itertools
+import json
+import math
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -173,6 +175,7 @@ __all__ = [
     "render",
     "render_at",
     "environment_light",
+    "environment_series",
     "irradiance_rows",
     "save_image",
     "sky_ephemeris",
@@ -195,6 +198,8 @@ J2000_UTC = datetime.datetime(2000, 1, 1, 12, tzinfo=datetime.UTC)  # the clouds
 
 # The files of a time-lapse's frames folder: the folder holds these only, and is replaced whole
 FRAME_NAME = re.compile(r"frame_[0-9]{5,}\.png")
+# what a folder of `environment_series` holds
+ENVMAP_NAME = re.compile(r"sky_[0-9]{5,}(_mip[0-9]+)?\.(exr|hdr)|light_[0-9]{5,}\.json|index\.json")
 
 
 def solver_options(atmosphere: Atmosphere, *, orders: int | None = None, n_samples: int = 64,
@@ -617,6 +622,14 @@ _WHOLE_SPHERE_CAMERAS = (CubeMapCamera, OctahedralCamera, EquirectangularCamera,
                          ParaboloidCamera)
 
 
+def _check_whole_sphere(camera: Camera) -> None:
+    if not isinstance(camera, _WHOLE_SPHERE_CAMERAS):
+        names = ", ".join(kind.__name__ for kind in _WHOLE_SPHERE_CAMERAS)
+        raise InputError("the light of a sky needs an image of the whole sphere: render it "
+                         f"with a {names} (--camera cubemap, octahedral, panorama, sphere or "
+                         "paraboloid)", key="camera", value=camera, allowed=names)
+
+
 def environment_light(image: SkyImage, camera: Camera, colour_space: str = "srgb", *,
                       balance_to_light: bool = False) -> dict:
     """The sun as a directional light (direction, illuminance [lux], linear RGB, angular
@@ -626,11 +639,7 @@ def environment_light(image: SkyImage, camera: Camera, colour_space: str = "srgb
     `SphereMapCamera` or `ParaboloidCamera`), in the EXR's units and `colour_space`; a
     JSON-ready dict. InputError for a camera that does not see the whole sphere."""
     checked_instance("image", image, SkyImage, "a SkyImage", " from render or render_at")
-    if not isinstance(camera, _WHOLE_SPHERE_CAMERAS):
-        names = ", ".join(kind.__name__ for kind in _WHOLE_SPHERE_CAMERAS)
-        raise InputError("the light of a sky needs an image of the whole sphere: render it "
-                         f"with a {names} (--camera cubemap, octahedral, panorama, sphere or "
-                         "paraboloid)", key="camera", value=camera, allowed=names)
+    _check_whole_sphere(camera)
     check_image_options(colour_space=colour_space)
     directions, _ = camera.directions()
     return sky_light(image, directions, camera.pixel_solid_angles(), colour_space,
@@ -767,6 +776,93 @@ def save_mip_chain(image: SkyImage, camera: CubeMapCamera, exr_path: str | Path,
                     {"skyscatter_units": EXR_UNITS["rgb"], "skyscatter_colour_space": space},
                     chromaticities=rgb_space_chromaticities(space), white_luminance=1.0))
     return paths
+
+
+def environment_series(atmosphere: Atmosphere, camera: Camera,
+                       times: Sequence[datetime.datetime], latitude_deg: float,
+                       longitude_deg: float, *, out_dir: str | Path, elevation_m: float = 0.0,
+                       suffix: str = ".exr", mips: int | None = None,
+                       objects: SkyObjects | None = None,
+                       wavelengths_nm: Sequence[float] | None = None, solver: str = "lut",
+                       options: SolverOptions | None = None, image: ImageOptions | None = None,
+                       on_frame: Callable[[int, datetime.datetime], None] | None = None,
+                       allow_large: bool = False, clouds: Clouds | None = None) -> dict:
+    """Environment maps of the sky at each of `times` (aware datetimes) for one place, as
+    `render_at` sees it with a camera of the whole sphere (`environment_light`'s): in
+    `out_dir`, `sky_00001.exr` ... (or `.hdr`: `suffix`; linear RGB as `save_image` writes
+    it, `image` for the colour space), `light_00001.json` ... (`environment_light`), with
+    `mips` the mip chain of each (`save_mip_chain`), and `index.json`: the place, the camera
+    and, per time, its files and the sun (direction in the map's axes, elevation and azimuth
+    [deg], illuminance [lux]). The tables serve every time. The folder is checked before any
+    work and replaced as a whole when every map is written (as `timelapse`'s frames). Returns
+    the index. `on_frame(index, time)` is called after each map. InputError before any work
+    for bad arguments (as `render_at`, `check_mip_chain`) or more than `MAX_FRAMES` times."""
+    _check_atmosphere(atmosphere)
+    if not 1 <= len(times) <= MAX_FRAMES:
+        raise InputError(f"a series of {len(times)} times is not allowed: from 1 to "
+                         f"{MAX_FRAMES} maps", key="times", value=len(times),
+                         allowed=f"1 to {MAX_FRAMES} maps")
+    _check_whole_sphere(camera)
+    if suffix not in (".exr", ".hdr"):
+        raise InputError(f"environment maps are .exr or .hdr files, not {suffix!r}",
+                         key="suffix", value=suffix, allowed=".exr, .hdr")
+    image = ImageOptions() if image is None else image
+    check_image_options(colour_space=image.colour_space)
+    out_dir = Path(out_dir)
+    if mips is not None:
+        check_mip_chain(camera, mips, out_dir / f"sky_00001{suffix}", image.exr_content)
+    check_writable_folder(out_dir, ENVMAP_NAME)
+    observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
+    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
+    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
+                      allow_large=allow_large, frames=len(times))
+    if clouds is not None and solver != "lut":
+        raise InputError("clouds need the table solver (--solver lut)", key="solver",
+                         value=solver, allowed="lut")
+    engine = load_solver(atmosphere, wavelengths, solver, options)
+    entries = []
+    with staged_outputs() as stage:
+        folder = stage.folder(out_dir)
+        for number, observer in enumerate(observers, start=1):
+            sky = _render_at(engine, atmosphere, camera, observer, objects or SkyObjects(),
+                             None, None, None, clouds)
+            names = {"map": f"sky_{number:05d}{suffix}", "light": f"light_{number:05d}.json"}
+            save_image(sky, exr_path=folder / names["map"], options=image)
+            light = environment_light(sky, camera, image.colour_space,
+                                      balance_to_light=image.balance_to_light)
+            (folder / names["light"]).write_text(json.dumps(light, indent=1, allow_nan=False)
+                                                 + "\n", encoding="utf-8")
+            if mips is not None:
+                names["mips"] = [path.name for path in save_mip_chain(
+                    sky, camera, folder / names["map"], mips, options=image)]
+            entries.append({"time": observer.time_utc.isoformat(), **names,
+                            "sun": _sun_entry(light)})
+            if on_frame is not None:
+                on_frame(number - 1, observer.time_utc)
+        index = {"place": {"latitude_deg": latitude_deg, "longitude_deg": longitude_deg,
+                           "elevation_m": elevation_m},
+                 "camera": type(camera).__name__, "colour_space": image.colour_space,
+                 "units": {"map": EXR_UNITS["rgb"], "sun.illuminance": "lux",
+                           "sun.direction": "unit vector: x east, y up, z south",
+                           "sun.elevation_deg": "deg", "sun.azimuth_deg": "deg, from north "
+                           "towards east"},
+                 "maps": entries}
+        (folder / "index.json").write_text(json.dumps(index, indent=1, allow_nan=False)
+                                           + "\n", encoding="utf-8")
+    return index
+
+
+def _sun_entry(light: dict) -> dict | None:
+    """The sun of a light file for the series index: its direction (x east, y up, z south),
+    elevation and azimuth [deg] and illuminance [lux]; None without a sun."""
+    sun = light.get("sun")
+    if sun is None:
+        return None
+    x, y, z = sun["direction"]
+    return {"direction": sun["direction"],
+            "elevation_deg": round(math.degrees(math.asin(max(-1.0, min(1.0, y)))), 4),
+            "azimuth_deg": round(math.degrees(math.atan2(x, -z)) % 360.0, 4),
+            "illuminance": sun["illuminance"]}
 
 
 def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
