@@ -487,8 +487,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="none, or adapt the star's white (its top-of-atmosphere "
                         "spectrum) to D65 (default none)")
     render.add_argument("-o", "--output", type=Path, default=Path("sky.png"),
-                        help="display image: .png, .jpg or .jpeg, or - for a PNG on standard "
-                        "output (default sky.png; missing folders are made)")
+                        help="display image: .png, .jpg or .jpeg, .tif or .tiff, .webp "
+                        "(lossless), or - for a PNG on standard output (default sky.png; "
+                        "missing folders are made)")
     render.add_argument("--exr", type=Path, default=None,
                         help="also write a linear image: OpenEXR (.exr) or Radiance RGBE (.hdr, "
                         "RGB only); it and the display image replace old files together, or "
