@@ -98,6 +98,7 @@ from skyscatter.render.sky_at_time import (
     ephemeris,
     render_sky_at,
 )
+from skyscatter.render.spectral_exr import FICHET2021_ATTRIBUTES, fichet2021_channel_name
 from skyscatter.render.sphere_map import SphereMapCamera
 from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
@@ -661,7 +662,9 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
     the space's gamut desaturated into it at constant luminance, `spectrum.colour.into_gamut`,
     so no channel is negative; the header's standard `chromaticities` name the space's
     primaries and white, `whiteLuminance` is 1),
-    "luminance" (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
+    "luminance" (Y [cd m^-2]), "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1])
+    or "spectral-fichet2021" (the spectra named and tagged as Fichet et al. 2021 lay them
+    out, `render.spectral_exr`, with the "rgb" channels beside them).
     `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
     views from space from the starlight (incident-light metering: sunlit white is white);
     `adapt_to_night` meters night skies as night (`night_adapted_exposure`: darker than a
@@ -698,18 +701,23 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
             stage.write(exr_path, hdr_writer(into_gamut(linear, colour_space),
                                              rgb_space_chromaticities(colour_space)))
         elif exr_path is not None:
+            layout = {}
             if exr_content == "rgb":
                 data, names = into_gamut(linear, colour_space), ("R", "G", "B")
             elif exr_content == "luminance":
                 data, names = xyz[..., 1:2], ("Y",)
-            else:
+            elif exr_content == "spectral":
                 data = image.spectral
                 names = tuple(f"radiance_{w:07.2f}nm" for w in image.wavelengths_nm)
-            rgb = exr_content == "rgb"
+            else:  # spectral-fichet2021: the spectra and an RGB preview
+                data = np.concatenate([into_gamut(linear, colour_space), image.spectral], axis=-1)
+                names = ("R", "G", "B", *map(fichet2021_channel_name, image.wavelengths_nm))
+                layout = FICHET2021_ATTRIBUTES
+            rgb = exr_content in ("rgb", "spectral-fichet2021")
             stage.write(exr_path, exr_writer(
                 data.astype(np.float32), names,
                 {"skyscatter_units": EXR_UNITS[exr_content],
-                 "skyscatter_colour_space": colour_space},
+                 "skyscatter_colour_space": colour_space, **layout},
                 chromaticities=rgb_space_chromaticities(colour_space) if rgb else None,
                 white_luminance=1.0 if exr_content != "spectral" else None))
     if stream is not None:

@@ -507,8 +507,11 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--no-sun-disk", action="store_true",
                         help="leave the sun's disk out of the image (with --light the sun is "
                         "then only the directional light)")
-    render.add_argument("--exr-content", choices=("rgb", "luminance", "spectral"),
-                        default="rgb", help="what the EXR holds (default rgb)")
+    render.add_argument("--exr-content",
+                        choices=("rgb", "luminance", "spectral", "spectral-fichet2021"),
+                        default="rgb", help="what the EXR holds (default rgb); "
+                        "spectral-fichet2021: the spectra as channels S0.550,000000nm ... that "
+                        "spectral renderers read (Fichet et al. 2021, JCGT 10(3)), with R, G, B")
     render.set_defaults(run=_render)
 
     timelapse = commands.add_parser(
