@@ -72,7 +72,7 @@ function decodeRadianceHdr(bytes, url) {
   position = end + 1;
   const height = Number(size[1]);
   const width = Number(size[2]);
-  if (bytes.length - position !== width * height * 4 || bytes[position] === 2) {
+  if (bytes.length - position !== width * height * 4) {  // run-length encoded is shorter
     throw new Error(`${url}: only flat (not run-length encoded) scanlines are read here, ` +
                     "as skyscatter writes them");
   }

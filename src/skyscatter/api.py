@@ -849,7 +849,10 @@ def environment_series(atmosphere: Atmosphere, camera: Camera,
                 on_frame(number - 1, observer.time_utc)
         index = {"place": {"latitude_deg": latitude_deg, "longitude_deg": longitude_deg,
                            "elevation_m": elevation_m},
-                 "camera": type(camera).__name__, "colour_space": image.colour_space,
+                 "camera": type(camera).__name__,
+                 **({"cube_layout": camera.layout} if isinstance(camera, CubeMapCamera)
+                    else {}),
+                 "colour_space": image.colour_space,
                  "units": {"map": EXR_UNITS["rgb"], "sun.illuminance": "lux",
                            "sun.direction": "unit vector: x east, y up, z south",
                            "sun.elevation_deg": "deg", "sun.azimuth_deg": "deg, from north "

@@ -43,7 +43,8 @@ def test_the_series_writes_a_map_a_light_and_mips_per_time_and_an_index(tmp_path
     index = json.loads((out / "index.json").read_text())
     assert [entry["time"] for entry in index["maps"]] == [
         "2024-06-21T08:00:00+00:00", "2024-06-21T09:00:00+00:00", "2024-06-21T10:00:00+00:00"]
-    assert index["camera"] == "CubeMapCamera" and index["place"]["latitude_deg"] == LAT
+    assert index["camera"] == "CubeMapCamera" and index["cube_layout"] == "cross"
+    assert index["place"]["latitude_deg"] == LAT
     for entry in index["maps"]:
         channels = OpenEXR.File(str(out / entry["map"]), separate_channels=True).channels()
         assert channels["R"].pixels.shape == (24, 32)
