@@ -41,7 +41,7 @@ def _hidden(folder) -> list[str]:
 @pytest.mark.parametrize(("argv", "message"), [
     (["render", "earth", "-o", "{t}/adir.png"], "adir.png: it is a directory; give a file"),
     (["render", "earth", "-o", "{t}/afile/x.png"], "afile/x.png: Not a directory"),
-    (["render", "earth", "-o", "{t}/x.tif"], "'{t}/x.tif': name it .png, .jpg, .jpeg"),
+    (["render", "earth", "-o", "{t}/x.bmp"], "'{t}/x.bmp': name it .png, .jpg, .jpeg, .tif"),
     (["render", "earth", "-o", "{t}/x.exr"], "a linear EXR is written with --exr"),
     (["render", "earth", "--exr", "{t}/x.png"],
      "a linear image as '{t}/x.png': name it .exr (OpenEXR) or .hdr"),

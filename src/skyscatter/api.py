@@ -28,6 +28,8 @@ from __future__ import annotations
 import datetime
 import ipaddress
 import itertools
+import json
+import math
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -79,6 +81,8 @@ from skyscatter.render.exposure import display_rgb8, metered_ev100
 from skyscatter.render.image_io import display_format, display_image_writer, exr_writer
 from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOptions
 from skyscatter.render.octahedral import OctahedralCamera
+from skyscatter.render.paraboloid import ParaboloidCamera
+from skyscatter.render.prefilter import prefiltered_mips
 from skyscatter.render.radiance_hdr import hdr_writer
 from skyscatter.render.scene import (
     SkyImage,
@@ -96,6 +100,8 @@ from skyscatter.render.sky_at_time import (
     ephemeris,
     render_sky_at,
 )
+from skyscatter.render.spectral_exr import FICHET2021_ATTRIBUTES, fichet2021_channel_name
+from skyscatter.render.sphere_map import SphereMapCamera
 from skyscatter.render.surfaces import Ground
 from skyscatter.render.terrain import Heightfield, demo_mountains
 from skyscatter.render.timelapse import write_frames
@@ -154,11 +160,14 @@ __all__ = [
     "ImageOptions",
     "Observer",
     "OctahedralCamera",
+    "ParaboloidCamera",
     "PerspectiveCamera",
     "SkyImage",
     "SkyObjects",
     "SolverOptions",
+    "SphereMapCamera",
     "check_image_options",
+    "check_mip_chain",
     "check_render_cost",
     "demo_mountains",
     "describe_gas",
@@ -173,6 +182,7 @@ __all__ = [
     "render",
     "render_at",
     "environment_light",
+    "environment_series",
     "export_tables",
     "irradiance_dataset",
     "irradiance_rows",
@@ -182,6 +192,7 @@ __all__ = [
     "save_image",
     "sky_ephemeris",
     "timelapse",
+    "save_mip_chain",
     "sky_radiance_rows",
     "solver_options",
     "sun_direction",
@@ -199,6 +210,8 @@ J2000_UTC = datetime.datetime(2000, 1, 1, 12, tzinfo=datetime.UTC)  # the clouds
 
 # The files of a time-lapse's frames folder: the folder holds these only, and is replaced whole
 FRAME_NAME = re.compile(r"frame_[0-9]{5,}\.png")
+# what a folder of `environment_series` holds
+ENVMAP_NAME = re.compile(r"sky_[0-9]{5,}(_mip[0-9]+)?\.(exr|hdr)|light_[0-9]{5,}\.json|index\.json")
 
 
 def solver_options(atmosphere: Atmosphere, *, orders: int | None = None, n_samples: int = 64,
@@ -616,22 +629,29 @@ def _check_image_paths(png_path: str | Path | BinaryIO | None,
         check_writable_file(exr_path)
 
 
+# the cameras whose images hold the whole sphere (environment_light)
+_WHOLE_SPHERE_CAMERAS = (CubeMapCamera, OctahedralCamera, EquirectangularCamera, SphereMapCamera,
+                         ParaboloidCamera)
+
+
+def _check_whole_sphere(camera: Camera) -> None:
+    if not isinstance(camera, _WHOLE_SPHERE_CAMERAS):
+        names = ", ".join(kind.__name__ for kind in _WHOLE_SPHERE_CAMERAS)
+        raise InputError("the light of a sky needs an image of the whole sphere: render it "
+                         f"with a {names} (--camera cubemap, octahedral, panorama, sphere or "
+                         "paraboloid)", key="camera", value=camera, allowed=names)
+
+
 def environment_light(image: SkyImage, camera: Camera, colour_space: str = "srgb", *,
                       balance_to_light: bool = False) -> dict:
     """The sun as a directional light (direction, illuminance [lux], linear RGB, angular
     radius) and the diffuse irradiance of the rest of the sky as 9 spherical-harmonic
     coefficients per channel (`render.environment_light`), from an image of the whole sphere
-    rendered by `camera` (a `CubeMapCamera`, `OctahedralCamera` or `EquirectangularCamera`),
-    in the EXR's units
-    and `colour_space`; a JSON-ready dict. InputError for a camera that does not see the
-    whole sphere."""
+    rendered by `camera` (a `CubeMapCamera`, `OctahedralCamera`, `EquirectangularCamera`,
+    `SphereMapCamera` or `ParaboloidCamera`), in the EXR's units and `colour_space`; a
+    JSON-ready dict. InputError for a camera that does not see the whole sphere."""
     checked_instance("image", image, SkyImage, "a SkyImage", " from render or render_at")
-    if not isinstance(camera, (CubeMapCamera, OctahedralCamera, EquirectangularCamera)):
-        raise InputError("the light of a sky needs an image of the whole sphere: render it "
-                         "with a CubeMapCamera, OctahedralCamera or EquirectangularCamera "
-                         "(--camera cubemap, octahedral or panorama)", key="camera",
-                         value=camera,
-                         allowed="CubeMapCamera, OctahedralCamera, EquirectangularCamera")
+    _check_whole_sphere(camera)
     check_image_options(colour_space=colour_space)
     directions, _ = camera.directions()
     return sky_light(image, directions, camera.pixel_solid_angles(), colour_space,
@@ -653,7 +673,9 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
     the space's gamut desaturated into it at constant luminance, `spectrum.colour.into_gamut`,
     so no channel is negative; the header's standard `chromaticities` name the space's
     primaries and white, `whiteLuminance` is 1),
-    "luminance" (Y [cd m^-2]) or "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1]).
+    "luminance" (Y [cd m^-2]), "spectral" (one channel per wavelength [W m^-2 sr^-1 nm^-1])
+    or "spectral-fichet2021" (the spectra named and tagged as Fichet et al. 2021 lay them
+    out, `render.spectral_exr`, with the "rgb" channels beside them).
     `ev100=None` picks the exposure from the sky pixels (geometric-mean metering), or for
     views from space from the starlight (incident-light metering: sunlit white is white);
     `adapt_to_night` meters night skies as night (`night_adapted_exposure`: darker than a
@@ -690,24 +712,179 @@ def save_image(image: SkyImage, png_path: str | Path | BinaryIO | None = None,
             stage.write(exr_path, hdr_writer(into_gamut(linear, colour_space),
                                              rgb_space_chromaticities(colour_space)))
         elif exr_path is not None:
+            layout = {}
             if exr_content == "rgb":
                 data, names = into_gamut(linear, colour_space), ("R", "G", "B")
             elif exr_content == "luminance":
                 data, names = xyz[..., 1:2], ("Y",)
-            else:
+            elif exr_content == "spectral":
                 data = image.spectral
                 names = tuple(f"radiance_{w:07.2f}nm" for w in image.wavelengths_nm)
-            rgb = exr_content == "rgb"
+            else:  # spectral-fichet2021: the spectra and an RGB preview
+                data = np.concatenate([into_gamut(linear, colour_space), image.spectral], axis=-1)
+                names = ("R", "G", "B", *map(fichet2021_channel_name, image.wavelengths_nm))
+                layout = FICHET2021_ATTRIBUTES
+            rgb = exr_content in ("rgb", "spectral-fichet2021")
             stage.write(exr_path, exr_writer(
                 data.astype(np.float32), names,
                 {"skyscatter_units": EXR_UNITS[exr_content],
-                 "skyscatter_colour_space": colour_space},
+                 "skyscatter_colour_space": colour_space, **layout},
                 chromaticities=rgb_space_chromaticities(colour_space) if rgb else None,
                 white_luminance=1.0 if exr_content != "spectral" else None))
     if stream is not None:
         write(stream)
         stream.flush()
     return float(ev100)
+
+
+MAX_MIP_LEVELS = 16
+MAX_MIP_FACE = 256  # level 1 sums 9 face^4 texel pairs: 11 s at 128, 16 times that at 256
+
+
+def _mip_chain_paths(exr_path: str | Path, levels: int) -> list[Path]:
+    """Where `save_mip_chain` writes levels 1 to `levels` - 1: beside `exr_path`, named
+    `<stem>_mip<k><suffix>` (sky.exr -> sky_mip1.exr, ...)."""
+    path = Path(exr_path)
+    return [path.with_name(f"{path.stem}_mip{k}{path.suffix}") for k in range(1, levels)]
+
+
+def check_mip_chain(camera: Camera, levels: int, exr_path: str | Path | None,
+                    exr_content: str = "rgb") -> None:
+    """InputError, before any work, unless a mip chain of `levels` can be made of `camera`'s
+    image and written beside `exr_path` (`save_mip_chain`)."""
+    checked_integer("mips", levels, 2, MAX_MIP_LEVELS)
+    if not isinstance(camera, CubeMapCamera):
+        raise InputError("a prefiltered mip chain (--mips) is made of cube maps: add --camera "
+                         "cubemap", key="mips", value=levels)
+    if exr_path is None or exr_content != "rgb":
+        raise InputError("the mip chain (--mips) is written beside the linear RGB image: add "
+                         "--exr sky.exr (or .hdr) with --exr-content rgb", key="mips",
+                         value=levels)
+    step = 1 << (levels - 1)
+    if camera.face % step or camera.face > MAX_MIP_FACE:
+        raise InputError(f"{levels} mip levels halve the face {levels - 1} times: --size must "
+                         f"be a multiple of {step} and at most {MAX_MIP_FACE}, got {camera.face}",
+                         key="size", value=camera.face,
+                         allowed=f"multiples of {step} up to {MAX_MIP_FACE}")
+    for path in _mip_chain_paths(exr_path, levels):
+        check_writable_file(path)
+
+
+def save_mip_chain(image: SkyImage, camera: CubeMapCamera, exr_path: str | Path, levels: int,
+                   *, options: ImageOptions | None = None) -> list[Path]:
+    """Write the specular mip chain of a cube map (`render.prefilter`: GGX-prefiltered, Karis
+    2013, roughness k / (levels - 1) at level k, faces halved at each level): levels 1 to
+    `levels` - 1 beside `exr_path` (`_mip_chain_paths`; level 0 is the image itself, which
+    `save_image` writes there), as EXR or Radiance .hdr like it, in its units (1.0 =
+    1 cd m^-2) and `options`' colour space. Returns the paths written. InputError as
+    `check_mip_chain`."""
+    checked_instance("image", image, SkyImage, "a SkyImage", " from render or render_at")
+    options = ImageOptions() if options is None else options
+    check_mip_chain(camera, levels, exr_path, options.exr_content)
+    space = options.colour_space
+    rgb = into_gamut(xyz_to_rgb(image.xyz(options.balance_to_light), space), space)
+    chain = prefiltered_mips(np.where(image.valid[..., None], rgb, 0.0), camera, levels)
+    paths = _mip_chain_paths(exr_path, levels)
+    with staged_outputs() as stage:
+        for path, level in zip(paths, chain[1:], strict=True):
+            if path.suffix.lower() == ".hdr":
+                stage.write(path, hdr_writer(level, rgb_space_chromaticities(space)))
+            else:
+                stage.write(path, exr_writer(
+                    level.astype(np.float32), ("R", "G", "B"),
+                    {"skyscatter_units": EXR_UNITS["rgb"], "skyscatter_colour_space": space},
+                    chromaticities=rgb_space_chromaticities(space), white_luminance=1.0))
+    return paths
+
+
+def environment_series(atmosphere: Atmosphere, camera: Camera,
+                       times: Sequence[datetime.datetime], latitude_deg: float,
+                       longitude_deg: float, *, out_dir: str | Path, elevation_m: float = 0.0,
+                       suffix: str = ".exr", mips: int | None = None,
+                       objects: SkyObjects | None = None,
+                       wavelengths_nm: Sequence[float] | None = None, solver: str = "lut",
+                       options: SolverOptions | None = None, image: ImageOptions | None = None,
+                       on_frame: Callable[[int, datetime.datetime], None] | None = None,
+                       allow_large: bool = False, clouds: Clouds | None = None) -> dict:
+    """Environment maps of the sky at each of `times` (aware datetimes) for one place, as
+    `render_at` sees it with a camera of the whole sphere (`environment_light`'s): in
+    `out_dir`, `sky_00001.exr` ... (or `.hdr`: `suffix`; linear RGB as `save_image` writes
+    it, `image` for the colour space), `light_00001.json` ... (`environment_light`), with
+    `mips` the mip chain of each (`save_mip_chain`), and `index.json`: the place, the camera
+    and, per time, its files and the sun (direction in the map's axes, elevation and azimuth
+    [deg], illuminance [lux]). The tables serve every time. The folder is checked before any
+    work and replaced as a whole when every map is written (as `timelapse`'s frames). Returns
+    the index. `on_frame(index, time)` is called after each map. InputError before any work
+    for bad arguments (as `render_at`, `check_mip_chain`) or more than `MAX_FRAMES` times."""
+    _check_atmosphere(atmosphere)
+    if not 1 <= len(times) <= MAX_FRAMES:
+        raise InputError(f"a series of {len(times)} times is not allowed: from 1 to "
+                         f"{MAX_FRAMES} maps", key="times", value=len(times),
+                         allowed=f"1 to {MAX_FRAMES} maps")
+    _check_whole_sphere(camera)
+    if suffix not in (".exr", ".hdr"):
+        raise InputError(f"environment maps are .exr or .hdr files, not {suffix!r}",
+                         key="suffix", value=suffix, allowed=".exr, .hdr")
+    image = ImageOptions() if image is None else image
+    check_image_options(colour_space=image.colour_space)
+    out_dir = Path(out_dir)
+    if mips is not None:
+        check_mip_chain(camera, mips, out_dir / f"sky_00001{suffix}", image.exr_content)
+    check_writable_folder(out_dir, ENVMAP_NAME)
+    observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
+    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
+    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
+                      allow_large=allow_large, frames=len(times))
+    if clouds is not None and solver != "lut":
+        raise InputError("clouds need the table solver (--solver lut)", key="solver",
+                         value=solver, allowed="lut")
+    engine = load_solver(atmosphere, wavelengths, solver, options)
+    entries = []
+    with staged_outputs() as stage:
+        folder = stage.folder(out_dir)
+        for number, observer in enumerate(observers, start=1):
+            sky = _render_at(engine, atmosphere, camera, observer, objects or SkyObjects(),
+                             None, None, None, clouds)
+            names = {"map": f"sky_{number:05d}{suffix}", "light": f"light_{number:05d}.json"}
+            save_image(sky, exr_path=folder / names["map"], options=image)
+            light = environment_light(sky, camera, image.colour_space,
+                                      balance_to_light=image.balance_to_light)
+            (folder / names["light"]).write_text(json.dumps(light, indent=1, allow_nan=False)
+                                                 + "\n", encoding="utf-8")
+            if mips is not None:
+                names["mips"] = [path.name for path in save_mip_chain(
+                    sky, camera, folder / names["map"], mips, options=image)]
+            entries.append({"time": observer.time_utc.isoformat(), **names,
+                            "sun": _sun_entry(light)})
+            if on_frame is not None:
+                on_frame(number - 1, observer.time_utc)
+        index = {"place": {"latitude_deg": latitude_deg, "longitude_deg": longitude_deg,
+                           "elevation_m": elevation_m},
+                 "camera": type(camera).__name__,
+                 **({"cube_layout": camera.layout} if isinstance(camera, CubeMapCamera)
+                    else {}),
+                 "colour_space": image.colour_space,
+                 "units": {"map": EXR_UNITS["rgb"], "sun.illuminance": "lux",
+                           "sun.direction": "unit vector: x east, y up, z south",
+                           "sun.elevation_deg": "deg", "sun.azimuth_deg": "deg, from north "
+                           "towards east"},
+                 "maps": entries}
+        (folder / "index.json").write_text(json.dumps(index, indent=1, allow_nan=False)
+                                           + "\n", encoding="utf-8")
+    return index
+
+
+def _sun_entry(light: dict) -> dict | None:
+    """The sun of a light file for the series index: its direction (x east, y up, z south),
+    elevation and azimuth [deg] and illuminance [lux]; None without a sun."""
+    sun = light.get("sun")
+    if sun is None:
+        return None
+    x, y, z = sun["direction"]
+    return {"direction": sun["direction"],
+            "elevation_deg": round(math.degrees(math.asin(max(-1.0, min(1.0, y)))), 4),
+            "azimuth_deg": round(math.degrees(math.atan2(x, -z)) % 360.0, 4),
+            "illuminance": sun["illuminance"]}
 
 
 def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],

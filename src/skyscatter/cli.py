@@ -42,7 +42,9 @@ from skyscatter.row_output import (
 
 __all__ = ["main"]
 
-CAMERAS = ("fisheye", "panorama", "perspective", "orbit", "cubemap", "octahedral")
+CAMERAS = ("fisheye", "panorama", "perspective", "orbit", "cubemap", "octahedral", "sphere",
+           "paraboloid")
+WHOLE_SPHERE = ("cubemap", "octahedral", "panorama", "sphere", "paraboloid")
 
 
 def _checked(bounds: Bounds, value: float, text: str) -> float:
@@ -283,6 +285,10 @@ _CAMERA_HELP = {
                "+Y up, +Z south), laid out by --cube-layout",
     "octahedral": "the whole sphere on one --size square as light probes store it: the zenith "
                   "at the centre, the horizon on the inner diamond, the nadir at the corners",
+    "sphere": "the whole sphere as OpenGL's sphere map (a mirror ball seen from above) on one "
+              "--size square: the zenith at the centre, the nadir on the rim",
+    "paraboloid": "the whole sphere on two --size paraboloid maps side by side (Heidrich & "
+                  "Seidel 1998): upper hemisphere left, lower right, the horizon on the rims",
 }
 
 
@@ -500,8 +506,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="none, or adapt the star's white (its top-of-atmosphere "
                         "spectrum) to D65 (default none)")
     render.add_argument("-o", "--output", type=Path, default=Path("sky.png"),
-                        help="display image: .png, .jpg or .jpeg, or - for a PNG on standard "
-                        "output (default sky.png; missing folders are made)")
+                        help="display image: .png, .jpg or .jpeg, .tif or .tiff, .webp "
+                        "(lossless), or - for a PNG on standard output (default sky.png; "
+                        "missing folders are made)")
     render.add_argument("--exr", type=Path, default=None,
                         help="also write a linear image: OpenEXR (.exr) or Radiance RGBE (.hdr, "
                         "RGB only); it and the display image replace old files together, or "
@@ -509,12 +516,21 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--light", type=Path, default=None, metavar="FILE",
                         help="also write the sun as a directional light and the rest of the "
                         "sky's diffuse irradiance as spherical harmonics, in the EXR's units "
-                        "(JSON; --camera cubemap, octahedral or panorama: docs/engines.md)")
+                        "(JSON; --camera cubemap, octahedral, panorama, sphere or paraboloid: "
+                        "docs/engines.md)")
+    render.add_argument("--mips", type=int, default=None, metavar="LEVELS",
+                        help="with --camera cubemap and --exr: also write the specular mip "
+                        "chain, GGX-prefiltered (roughness k/(LEVELS-1) at level k, faces "
+                        "halved at each), as FILE_mip1.exr ... beside the --exr FILE "
+                        "(docs/engines.md)")
     render.add_argument("--no-sun-disk", action="store_true",
                         help="leave the sun's disk out of the image (with --light the sun is "
                         "then only the directional light)")
-    render.add_argument("--exr-content", choices=("rgb", "luminance", "spectral"),
-                        default="rgb", help="what the EXR holds (default rgb)")
+    render.add_argument("--exr-content",
+                        choices=("rgb", "luminance", "spectral", "spectral-fichet2021"),
+                        default="rgb", help="what the EXR holds (default rgb); "
+                        "spectral-fichet2021: the spectra as channels S0.550,000000nm ... that "
+                        "spectral renderers read (Fichet et al. 2021, JCGT 10(3)), with R, G, B")
     render.set_defaults(run=_render)
 
     timelapse = commands.add_parser(
@@ -526,15 +542,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--lon 13.40 -o berlin.mp4")
     timelapse.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
                            help="an Earth or Mars preset, or a TOML file with [planet] body")
-    timelapse.add_argument("--start", required=True, metavar="ISO8601",
-                           help="first frame's time with a time zone")
-    timelapse.add_argument("--end", required=True, metavar="ISO8601",
-                           help="last frame's time with a time zone")
-    frames = timelapse.add_mutually_exclusive_group()
-    frames.add_argument("--step", type=_duration_s, default=None, metavar="DURATION",
-                        help="time between frames: 30s, 10min, 1h ... (default: 60 frames)")
-    frames.add_argument("--frames", type=_frame_count, default=None, metavar="N",
-                        help="number of frames, evenly spread from --start to --end")
+    _add_time_range_arguments(timelapse, "frame")
     _add_place_arguments(timelapse, required=True)
     _add_camera_arguments(timelapse, CAMERAS[:3], 384)
     _add_wavelength_argument(timelapse)
@@ -556,6 +564,7 @@ def build_parser() -> argparse.ArgumentParser:
                            "<name>_frames/); the folder holds only frames and is replaced as "
                            "a whole when the run completes")
     timelapse.set_defaults(run=_timelapse)
+    _add_envmap_command(commands)
 
     radiance = commands.add_parser(
         "radiance", help="print spectral sky radiance as CSV or JSON",
@@ -787,9 +796,9 @@ def _render(args: argparse.Namespace) -> None:
     api.check_image_options(png_path=image_target, exr_path=args.exr,
                             options=image_options)  # the outputs can be written: before any work
     if args.light is not None:
-        if args.camera not in ("cubemap", "octahedral", "panorama"):
-            raise InputError("--light needs an image of the whole sphere: add --camera cubemap, "
-                             "--camera octahedral or --camera panorama", key="light",
+        if args.camera not in WHOLE_SPHERE:
+            raise InputError("--light needs an image of the whole sphere: add --camera cubemap "
+                             f"(or {', '.join(WHOLE_SPHERE[1:])})", key="light",
                              value=str(args.light))
         check_writable_file(args.light)
     atmosphere = api.load_atmosphere(args.atmosphere)
@@ -812,6 +821,8 @@ def _render(args: argparse.Namespace) -> None:
                          "and --pitch", key="look_at", value=args.look_at)
     else:
         camera = _camera(args)
+    if args.mips is not None:
+        api.check_mip_chain(camera, args.mips, args.exr, args.exr_content)
     api.check_render_cost(camera, args.wavelengths, solver=args.solver, n_samples=args.samples,
                           allow_large=args.allow_large)  # memory and time, before allocating
     ground = _ground(args, radius)
@@ -842,6 +853,9 @@ def _render(args: argparse.Namespace) -> None:
         atomic_write(args.light, lambda path: Path(path).write_text(
             json.dumps(light, indent=1, allow_nan=False) + "\n", encoding="utf-8"))
         written.append(str(args.light))
+    if args.mips is not None:
+        written += [str(path) for path in api.save_mip_chain(image, camera, args.exr, args.mips,
+                                                             options=image_options)]
     print(f"wrote {', '.join(written)} (EV100 {ev100:.2f})", file=sys.stderr)
     if summary is not None:
         print(summary, file=sys.stderr)
@@ -892,13 +906,12 @@ def _sky_summary(sky) -> str:
     return line
 
 
-def _timelapse(args: argparse.Namespace) -> None:
+def _time_steps(args: argparse.Namespace) -> list:
+    """The times of --start, --end and --step or --frames (default 60)."""
     import datetime
 
     from skyscatter import api
-    from skyscatter.cli_progress import progress
 
-    api.check_image_options(args.tonemap, args.colour_space)
     start, end = api.parse_time(args.start), api.parse_time(args.end)
     if not end > start:
         raise InputError(f"--end {args.end} must come after --start {args.start}", key="end",
@@ -913,7 +926,88 @@ def _timelapse(args: argparse.Namespace) -> None:
     else:
         count = args.frames if args.frames is not None else 60
     step = args.step if args.step is not None else span / max(count - 1, 1)
-    times = [start + datetime.timedelta(seconds=i * step) for i in range(count)]
+    return [start + datetime.timedelta(seconds=i * step) for i in range(count)]
+
+
+def _add_time_range_arguments(command: argparse.ArgumentParser, unit: str) -> None:
+    """--start, --end and --step or --frames (`_time_steps`)."""
+    command.add_argument("--start", required=True, metavar="ISO8601",
+                         help=f"first {unit}'s time with a time zone")
+    command.add_argument("--end", required=True, metavar="ISO8601",
+                         help=f"last {unit}'s time with a time zone")
+    steps = command.add_mutually_exclusive_group()
+    steps.add_argument("--step", type=_duration_s, default=None, metavar="DURATION",
+                       help=f"time between {unit}s: 30s, 10min, 1h ... (default: 60 {unit}s)")
+    steps.add_argument("--frames", type=_frame_count, default=None, metavar="N",
+                       help=f"number of {unit}s, evenly spread from --start to --end")
+
+
+def _add_envmap_command(commands) -> None:
+    envmap = commands.add_parser(
+        "envmap", help="write environment maps over a time range, with their light and an index",
+        description="Render environment maps of the whole sky over a time range at one place, "
+        "reusing the precomputed tables: a linear map (EXR or Radiance .hdr), the sun and the "
+        "SH irradiance (light JSON) and optionally the specular mip chain for each time, and "
+        "index.json listing the times, files and the sun (docs/engines.md). Example: "
+        "skyscatter envmap earth --start 2024-06-21T04:00+02:00 --end 2024-06-21T22:00+02:00 "
+        "--step 1h --lat 52.52 --lon 13.40 -o berlin_maps")
+    envmap.add_argument("atmosphere", metavar="PRESET_OR_CONFIG",
+                        help="an Earth or Mars preset, or a TOML file with [planet] body")
+    _add_time_range_arguments(envmap, "map")
+    _add_place_arguments(envmap, required=True)
+    envmap.add_argument("--camera", choices=WHOLE_SPHERE, default="cubemap",
+                        help="the map's projection (as for render; default cubemap)")
+    envmap.add_argument("--size", type=_size, default=128, metavar="PIXELS",
+                        help="a cube face's side, or the image height (default 128)")
+    envmap.add_argument("--cube-layout", choices=tuple(CUBE_LAYOUTS), default="cross",
+                        help="cubemap faces: cross or strip (default cross)")
+    envmap.add_argument("--format", choices=("exr", "hdr"), default="exr",
+                        help="the maps' file format: OpenEXR or Radiance RGBE (default exr)")
+    envmap.add_argument("--mips", type=int, default=None, metavar="LEVELS",
+                        help="also write each cube map's GGX-prefiltered mip chain (as render)")
+    envmap.add_argument("--colour-space", default="srgb",
+                        help="srgb (default), rec709, display-p3, rec2020, acescg or "
+                        "aces2065-1")
+    _add_wavelength_argument(envmap)
+    _add_solver_arguments(envmap, 64)
+    _add_cloud_argument(envmap)
+    _add_sky_object_arguments(envmap)
+    envmap.add_argument("--no-sun-disk", action="store_true",
+                        help="leave the sun's disk out of the maps (it stays in the light file)")
+    envmap.add_argument("-o", "--output", type=Path, default=Path("envmaps"), metavar="DIR",
+                        help="the folder of maps (default envmaps); it holds only this "
+                        "command's files and is replaced as a whole when the run completes")
+    envmap.set_defaults(run=_envmap)
+
+
+def _envmap(args: argparse.Namespace) -> None:
+    from skyscatter import api
+    from skyscatter.cli_progress import progress
+
+    times = _time_steps(args)
+    atmosphere = api.load_atmosphere(args.atmosphere)
+    api.sky_ephemeris(atmosphere, _observer(args, args.start))  # checks before the tables
+    camera = _camera(args)
+    objects = _sky_objects(args)
+    with _solver_options(args, atmosphere) as options, progress(len(times), "maps",
+                                                                unit="map") as bar:
+        index = api.environment_series(
+            atmosphere, camera, times, args.lat, args.lon, out_dir=args.output,
+            elevation_m=args.altitude, suffix=f".{args.format}", mips=args.mips,
+            objects=objects, wavelengths_nm=args.wavelengths, solver=args.solver,
+            options=options, image=api.ImageOptions(colour_space=args.colour_space),
+            on_frame=lambda *_: bar.update(1), allow_large=args.allow_large,
+            clouds=_clouds(args))
+    print(f"wrote {len(index['maps'])} maps and index.json in {args.output}", file=sys.stderr)
+
+
+def _timelapse(args: argparse.Namespace) -> None:
+    from skyscatter import api
+    from skyscatter.cli_progress import progress
+
+    api.check_image_options(args.tonemap, args.colour_space)
+    times = _time_steps(args)
+    count = len(times)
     atmosphere = api.load_atmosphere(args.atmosphere)
     api.sky_ephemeris(atmosphere, _observer(args, args.start))  # checks before the tables
     camera = _camera(args)
@@ -1016,11 +1110,16 @@ def _camera(args: argparse.Namespace):
     if args.camera == "fisheye":
         return api.FisheyeCamera(args.size)
     if args.camera == "panorama":
-        return api.EquirectangularCamera(2 * args.size, args.size, heading_deg=args.heading)
+        return api.EquirectangularCamera(2 * args.size, args.size,
+                                         heading_deg=getattr(args, "heading", 180.0))
     if args.camera == "cubemap":
         return api.CubeMapCamera(args.size, args.cube_layout)
     if args.camera == "octahedral":
         return api.OctahedralCamera(args.size)
+    if args.camera == "sphere":
+        return api.SphereMapCamera(args.size)
+    if args.camera == "paraboloid":
+        return api.ParaboloidCamera(args.size)
     width = max(1, round(args.size * args.aspect))
     fov = 60.0 if args.fov is None else args.fov
     return api.PerspectiveCamera(width, args.size, fov, heading_deg=args.heading,

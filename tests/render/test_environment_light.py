@@ -104,7 +104,8 @@ def test_the_command_line_writes_the_light_and_refuses_a_partial_sky(tmp_path, c
     assert len(light["sh_irradiance"]["rgb"]) == 9 and light["sun"]["illuminance"] > 0.0
     assert main(["render", "earth", "--size", "8", "-o", str(tmp_path / "fish.png"),
                  "--light", str(tmp_path / "no.json")]) == 2
-    assert "--camera octahedral or --camera panorama" in capsys.readouterr().err
+    assert ("whole sphere: add --camera cubemap (or octahedral, panorama, sphere, paraboloid)"
+            in capsys.readouterr().err)
     assert not (tmp_path / "no.json").exists()
 
 

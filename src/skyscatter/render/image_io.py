@@ -41,7 +41,8 @@ __all__ = ["DISPLAY_FORMATS", "atomic_write", "display_format", "display_image_w
 # The colour spaces whose display images are sRGB (same primaries, white and curve)
 SRGB_TAGGED = ("srgb", "rec709")
 # Display image formats by file suffix (Pillow's format names)
-DISPLAY_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG"}
+DISPLAY_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG", ".tif": "TIFF",
+                   ".tiff": "TIFF", ".webp": "WEBP"}
 JPEG_QUALITY = 95  # with full-resolution chroma: sky gradients without visible blocks
 
 _DEFAULT_CHANNELS = {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}
@@ -172,10 +173,12 @@ def display_image_writer(rgb8: ArrayLike, text: Mapping[str, str] | None = None,
                          image_format: str = "PNG", *,
                          colour_space: str = "srgb") -> Callable[[str | BinaryIO], None]:
     """Check an 8-bit image (sRGB-encoded codes of `colour_space`); returns `write(target)`,
-    which writes it to a path or a binary stream as PNG (with `text` as tEXt chunks) or JPEG
-    (quality 95, no chroma subsampling, alpha dropped, `text` as one comment). sRGB and
-    Rec. 709 images are tagged sRGB (a PNG's `sRGB` chunk), the wide gamuts carry an ICC
-    profile of their primaries (`render.icc_profile`), so viewers show their colours.
+    which writes it to a path or a binary stream as PNG (with `text` as tEXt chunks), JPEG
+    (quality 95, no chroma subsampling, alpha dropped, `text` as one comment), TIFF (8 bits a
+    channel, deflate, `text` as its ImageDescription) or WebP (lossless, the codes exactly;
+    no `text`). sRGB and Rec. 709 images are tagged sRGB in a PNG (its `sRGB` chunk) and
+    untagged (read as sRGB) in the others; the wide gamuts carry an ICC profile of their
+    primaries (`render.icc_profile`), so viewers show their colours.
 
     Parameters
     ----------
@@ -183,7 +186,7 @@ def display_image_writer(rgb8: ArrayLike, text: Mapping[str, str] | None = None,
         sRGB-encoded codes (see `tonemap.to_srgb8`); a 4th channel is alpha.
     text : mapping of str to str, optional
         Metadata (e.g. {"Software": "skyscatter", "Description": ...}).
-    image_format : {"PNG", "JPEG"}
+    image_format : {"PNG", "JPEG", "TIFF", "WEBP"}
         A value of `DISPLAY_FORMATS` (see `display_format`).
     colour_space : str
         The RGB space of the codes (`spectrum.colour.RGB_SPACES`).
@@ -194,11 +197,18 @@ def display_image_writer(rgb8: ArrayLike, text: Mapping[str, str] | None = None,
                          f"{arr.dtype} {arr.shape}", key="rgb8", value=(str(arr.dtype), arr.shape))
     picture = Image.fromarray(np.ascontiguousarray(arr))  # uint8 (h, w, 3|4) -> RGB|RGBA
     profile = {} if colour_space in SRGB_TAGGED else {"icc_profile": icc_profile(colour_space)}
+    comment = "; ".join(f"{key}: {value}" for key, value in (text or {}).items())
     if image_format == "JPEG":
-        comment = "; ".join(f"{key}: {value}" for key, value in (text or {}).items())
         rgb = picture.convert("RGB")
         return lambda target: rgb.save(target, format="JPEG", quality=JPEG_QUALITY,
                                        subsampling=0, comment=comment, **profile)
+    if image_format == "TIFF":
+        return lambda target: picture.save(target, format="TIFF", compression="tiff_deflate",
+                                           description=comment, software="skyscatter",
+                                           **profile)
+    if image_format == "WEBP":
+        return lambda target: picture.save(target, format="WEBP", lossless=True, exact=True,
+                                           **profile)
     info = PngInfo()
     if not profile:
         info.add(b"sRGB", b"\0")  # rendering intent: perceptual

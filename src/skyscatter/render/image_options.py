@@ -18,7 +18,9 @@ __all__ = ["EXR_CONTENTS", "EXR_UNITS", "ImageOptions"]
 
 # What an EXR can hold -> the unit written in its header
 EXR_UNITS = {"rgb": "linear RGB, Y = 1 for 1 cd/m^2", "luminance": "cd/m^2",
-             "spectral": "W m^-2 sr^-1 nm^-1"}
+             "spectral": "W m^-2 sr^-1 nm^-1",
+             "spectral-fichet2021": "S0 channels: W m^-2 sr^-1 nm^-1; R, G, B: linear RGB, "
+                                    "Y = 1 for 1 cd/m^2"}
 EXR_CONTENTS = tuple(EXR_UNITS)
 
 
@@ -30,7 +32,8 @@ class ImageOptions:
     compensation_ev: stops added to the exposure [EV]; operator: the tone curve
     (`render.tonemap.OPERATORS`); colour_space: the RGB space of the PNG and the "rgb" EXR
     (`spectrum.colour.RGB_SPACES`); balance_to_light: adapt the star's white to D65;
-    exr_content: "rgb", "luminance" or "spectral" (`EXR_UNITS`); adapt_to_night: meter night
+    exr_content: "rgb", "luminance", "spectral" or "spectral-fichet2021" (`EXR_UNITS`;
+    `render.spectral_exr`); adapt_to_night: meter night
     skies as night. InputError when made with an exposure outside [-40, 40] or an unknown
     name."""
 
