@@ -54,6 +54,7 @@ from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.output_files import check_writable_folder, staged_outputs
 from skyscatter.render.image_io import exr_writer
+from skyscatter.render.spectral_exr import FICHET2021_ATTRIBUTES, fichet2021_channel_name
 from skyscatter.spectrum.colour import (
     RGB_SPACES,
     cmf_weights,
@@ -132,10 +133,8 @@ def channel_weights(wavelengths_nm: np.ndarray, colour: str,
                     colour_space: str = "srgb") -> tuple[np.ndarray, tuple[str, ...]]:
     """(weights (n_wl, c), channel names) of `colour` (module docstring)."""
     if colour == "spectral":
-        # Fichet et al. 2021, "An OpenEXR Layout for Spectral Images", JCGT 10(3): layer S0
-        # (emitted light), the wavelength with a decimal comma, so that no "." splits it
         return (np.eye(wavelengths_nm.size),
-                tuple("S0." + f"{w:.6f}".replace(".", ",") + "nm" for w in wavelengths_nm))
+                tuple(fichet2021_channel_name(w) for w in wavelengths_nm))
     weights = cmf_weights(wavelengths_nm)
     if colour == "rgb":
         return xyz_to_rgb(weights, colour_space), ("R", "G", "B")
@@ -268,7 +267,10 @@ def _write_texture(folder: Path, name: str, array: np.ndarray, settings: ExportS
     if settings.format == "exr":
         atlas = array.reshape(-1, *array.shape[-2:])  # 3-D: z slices stacked downwards
         attributes = {"skyscatter_table": name, "skyscatter_scale": json.dumps(scale),
-                      "skyscatter_layout": _layout(name)}
+                      "skyscatter_layout": _layout(name),
+                      # the layout's version; its emissiveUnits (radiance) fit no table but one
+                      **({"spectralLayoutVersion": FICHET2021_ATTRIBUTES["spectralLayoutVersion"]}
+                         if settings.colour == "spectral" else {})}
         exr_writer(atlas, names, attributes,
                    chromaticities=rgb_space_chromaticities(settings.colour_space)
                    if settings.colour == "rgb" else None)(str(folder / f"{name}.exr"))
