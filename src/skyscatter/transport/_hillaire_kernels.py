@@ -24,7 +24,11 @@ from skyscatter.transport._kernels import (
     split_sample_count,
     sun_columns,
 )
-from skyscatter.transport.geometry import atmosphere_segment, sun_visible_fraction
+from skyscatter.transport.geometry import (
+    atmosphere_segment,
+    horizon_cos_zenith,
+    sun_visible_fraction,
+)
 
 ISOTROPIC = 1.0 / (4.0 * math.pi)  # p_u [sr^-1]
 
@@ -64,7 +68,7 @@ def multiple_scattering_at(r, mu_s, bottom_radius, top_radius, ms_table, out):
 
 
 @njit(parallel=True, cache=True)
-def multiple_scattering_table(n_h, n_mu_s, dir_mu, dir_weight, n_phi, n_samples,
+def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
                               bottom_radius, top_radius, h_step, density, extinction,
                               scattering, sun_table, albedo, sun_angular_radius):
     """(psi, second, f_ms), each (n_h, n_mu_s, n_wl): Hillaire 2020 eqs. 5-9 at the nodes of
@@ -74,10 +78,11 @@ def multiple_scattering_table(n_h, n_mu_s, dir_mu, dir_weight, n_phi, n_samples,
     phase function, sunlit ground included (eq. 5-6); f_ms = int_4pi L_f(x, -w) p_u dw with
     L_f = int T(x, x_t) sigma_s(x_t) dt, the share of light scattered back to x (eq. 7-8);
     psi = second / (1 - f_ms), the geometric sum of all orders >= 2 (eq. 9). The sphere is
-    integrated on `dir_mu` (zenith cosines) x `n_phi` (even) midpoint azimuths with
-    `dir_weight` (their weights in mu, summing to 2) times 2 pi / n_phi; the sun lies in the
-    plane of azimuth 0, so the azimuths phi and -phi see the same light and only those in
-    (0, pi) are marched, with twice the weight."""
+    integrated with Gauss-Legendre nodes `gauss_x`, `gauss_w` (on [-1, 1]) in the zenith
+    cosine on each side of the node's horizon (the light jumps there, from the ground to the
+    sky) x `n_phi` (even) midpoint azimuths; the sun lies in the plane of azimuth 0, so the
+    azimuths phi and -phi see the same light and only those in (0, pi) are marched, with
+    twice the weight."""
     n_c, n_wl = extinction.shape
     second = np.zeros((n_h, n_mu_s, n_wl))
     f_ms = np.zeros((n_h, n_mu_s, n_wl))
@@ -96,11 +101,15 @@ def multiple_scattering_table(n_h, n_mu_s, dir_mu, dir_weight, n_phi, n_samples,
         back_prev = np.empty(n_wl)
         lit = np.empty(n_wl)
         back = np.empty(n_wl)
-        for k in range(dir_mu.size):
-            mu = dir_mu[k]
+        mu_h = horizon_cos_zenith(r, bottom_radius)
+        for k in range(2 * gauss_x.size):
+            low, high = (mu_h, 1.0) if k < gauss_x.size else (-1.0, mu_h)
+            g = k % gauss_x.size
+            mu = low + (high - low) * 0.5 * (gauss_x[g] + 1.0)
             sin_v = math.sqrt(max(1.0 - mu * mu, 0.0))
             for m in range(n_phi // 2):
-                weight = 2.0 * dir_weight[k] * 2.0 * math.pi / n_phi * ISOTROPIC
+                weight = (2.0 * 0.5 * (high - low) * gauss_w[g] * 2.0 * math.pi / n_phi
+                          * ISOTROPIC)
                 nu = sin_v * math.cos(2.0 * math.pi * (m + 0.5) / n_phi) * sin_s + mu * mu_s0
                 t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius,
                                                                  top_radius)

@@ -51,9 +51,10 @@ from skyscatter.transport.transmittance import ray_marched_transmittance
 __all__ = ["HillaireSolver", "sky_view_directions"]
 
 TRANSMITTANCE_SIZE = (64, 256)  # (r, mu), the paper's 256 x 64 texture
-TRANSMITTANCE_SAMPLES = 64  # intervals per column integral of the transmittance table
+TRANSMITTANCE_SAMPLES = 128  # intervals per column integral of the transmittance table
 MULTIPLE_SCATTERING_SIZE = (32, 32)  # (altitude, mu_s)
-MULTIPLE_SCATTERING_DIRECTIONS = (8, 8)  # Gauss-Legendre zenith cosines x azimuths: 64
+# Gauss-Legendre zenith cosines on each side of the horizon x azimuths: 64 directions
+MULTIPLE_SCATTERING_DIRECTIONS = (4, 8)
 MULTIPLE_SCATTERING_SAMPLES = 32  # intervals per ray of the multiple-scattering table
 SKY_VIEW_SIZE = (108, 192)  # (latitude, azimuth from the sun)
 # One observer inside the atmosphere with at least this many rays reads the sky-view table
@@ -90,11 +91,11 @@ class HillaireSolver:
         self.transmittance_columns = _kernels.column_table(
             TRANSMITTANCE_SIZE[0], TRANSMITTANCE_SIZE[1], TRANSMITTANCE_SAMPLES,
             profile.bottom_radius_m, profile.top_radius_m, self._h_step, self._density)
-        nodes, weights = np.polynomial.legendre.leggauss(MULTIPLE_SCATTERING_DIRECTIONS[0])
+        gauss_x, gauss_w = np.polynomial.legendre.leggauss(MULTIPLE_SCATTERING_DIRECTIONS[0])
         # Psi_ms, L_2nd and f_ms (32, 32, n_wl), per unit sun irradiance
         self.multiple_scattering, self.second_order, self.f_ms = (
             _hillaire_kernels.multiple_scattering_table(
-                MULTIPLE_SCATTERING_SIZE[0], MULTIPLE_SCATTERING_SIZE[1], nodes, weights,
+                MULTIPLE_SCATTERING_SIZE[0], MULTIPLE_SCATTERING_SIZE[1], gauss_x, gauss_w,
                 MULTIPLE_SCATTERING_DIRECTIONS[1], MULTIPLE_SCATTERING_SAMPLES,
                 profile.bottom_radius_m, profile.top_radius_m, self._h_step, self._density,
                 self._extinction, self._scattering, self.transmittance_columns, self._albedo,
