@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import quad
 from transport_cases import EARTH_RADIUS_M, exponential_earth, homogeneous_shell
 
-from skyscatter.transport import _hillaire_kernels, _kernels
+from skyscatter.transport import _hillaire_kernels, _kernels, hillaire
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.hillaire import MULTIPLE_SCATTERING_SIZE, HillaireSolver
 
@@ -155,3 +155,26 @@ def test_multiple_scattering_kernel_converges_to_the_papers_formula(shell):
             np.testing.assert_allclose(second[i, j], reference_second, rtol=1e-3)
             np.testing.assert_allclose(psi[i, j], reference_second / (1 - reference_f),
                                        rtol=1e-3)
+
+
+@pytest.mark.parametrize("sun_zenith_deg", [0.0, 45.0, 80.0, 93.0])
+def test_the_sky_view_table_adds_little_to_marching_every_ray(monkeypatch, sun_zenith_deg):
+    # 4 000 views of the upper hemisphere from the ground of `exponential_earth` (Rayleigh +
+    # HG 0.8 haze), read from the 192 x 108 sky-view table against the same solver marching
+    # each ray. Measured on Earth's preset (HG 0.65) at 256 x 256 fisheye pixels: median 3e-4,
+    # 95th percentile <= 1.7e-3, at most 5e-3 by day and 1.5e-2 in twilight (the Earth's
+    # shadow by the horizon); here 95th percentile <= 1.8e-3, at most 1.5e-2 by day (next to
+    # the sun, in the haze's sharper peak) and 2.6e-2 in twilight. Tolerances: 95th
+    # percentile 3e-3, at most 4e-2.
+    solver = HillaireSolver(exponential_earth())
+    rng = np.random.default_rng(5)
+    views = local_frame_directions(np.arccos(rng.uniform(0.0, 1.0, 4000)),
+                                   rng.uniform(0.0, 2 * np.pi, 4000))
+    sun = local_frame_directions(sun_zenith_deg * DEG, 0.7)
+    ground = np.array([0.0, 0.0, EARTH_RADIUS_M])
+    monkeypatch.setattr(hillaire, "SKY_VIEW_MIN_RAYS", 1)
+    from_table = solver.sky_radiance(ground, views, sun)
+    monkeypatch.setattr(hillaire, "SKY_VIEW_MIN_RAYS", 10**9)
+    marched = solver.sky_radiance(ground, views, sun)
+    error = np.abs(from_table / marched - 1.0)
+    assert np.percentile(error, 95) < 3e-3 and error.max() < 4e-2

@@ -179,7 +179,7 @@ def march_rays(origins, directions, max_distances, sun_direction, n_samples, bot
 
     `phase_scattering` (n_ray or 1, n_c, n_wl) holds beta_s,c p_c(nu) of each ray
     (per unit density), `ms_table` Psi_ms (`multiple_scattering_table`)."""
-    n_ray = origins.shape[0]
+    n_ray = directions.shape[0]
     n_c, n_wl = extinction.shape
     radiance = np.zeros((n_ray, n_wl))
     transmittance = np.ones((n_ray, n_wl))
@@ -259,19 +259,20 @@ def march_rays(origins, directions, max_distances, sun_direction, n_samples, bot
 @njit(cache=True)
 def sky_view_coordinates(mu, phi, horizon_zenith, n_lat, n_lon):
     """Fractional (row, column) of the view (zenith cosine mu, azimuth from the sun phi in
-    [0, pi]) in the sky-view table (Hillaire 2020 section 5.3): rows 0 .. n_lat/2 - 1 above
-    the horizon, the others below, each half's nodes at s = (k + 1/2) / (n_lat / 2) of
-    s = 1 - sqrt(1 - theta / theta_h) above and s = sqrt((theta - theta_h) / (pi - theta_h))
-    below (dense at the horizon); columns phi = pi k / (n_lon - 1). The row is clamped to the
-    view's half, so that the sky and the ground are never blended."""
+    [0, pi]) in the sky-view table (Hillaire 2020 section 5.3): rows k = 0 .. n/2 - 1 (n =
+    n_lat) above the horizon at s = k / (n/2 - 1/2) of s = 1 - sqrt(1 - theta / theta_h), from
+    the zenith to half a row above the horizon; rows n/2 + k below it at
+    s = (k + 1/2) / (n/2 - 1/2) of s = sqrt((theta - theta_h) / (pi - theta_h)), from half a
+    row below the horizon to the nadir (dense at the horizon); columns phi = pi k / (n_lon - 1).
+    The row is clamped to the view's half, so that the sky and the ground are never blended."""
     half = n_lat // 2
     theta = math.acos(min(max(mu, -1.0), 1.0))
     if theta < horizon_zenith:
         s = 1.0 - math.sqrt(max(1.0 - theta / horizon_zenith, 0.0))
-        row = min(max(s * half - 0.5, 0.0), half - 1.0)
+        row = min(s * (half - 0.5), half - 1.0)
     else:
         s = math.sqrt(min((theta - horizon_zenith) / (math.pi - horizon_zenith), 1.0))
-        row = half + min(max(s * half - 0.5, 0.0), half - 1.0)
+        row = half + max(s * (half - 0.5) - 0.5, 0.0)
     column = min(max(phi / math.pi, 0.0), 1.0) * (n_lon - 1)
     return row, column
 

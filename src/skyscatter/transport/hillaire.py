@@ -212,14 +212,15 @@ class HillaireSolver:
 def sky_view_directions(r: float, bottom_radius: float) -> np.ndarray:
     """Local directions (108, 192, 3) of the sky-view table's nodes for an observer at radius
     r [m]: x towards the sun's azimuth, z up (`_hillaire_kernels.sky_view_coordinates` gives
-    the mapping: rows crowded at the horizon, whose zenith angle theta_h is that of the
-    geometric horizon, azimuths 0 .. pi from the sun)."""
+    the mapping: rows from the zenith to the nadir crowded at the horizon, whose zenith angle
+    theta_h is that of the geometric horizon, azimuths 0 .. pi from the sun)."""
     n_lat, n_lon = SKY_VIEW_SIZE
     half = n_lat // 2
     theta_h = float(np.arccos(horizon_cos_zenith(r, bottom_radius)))
-    s = (np.arange(half) + 0.5) / half
-    theta = np.concatenate([theta_h * (1.0 - (1.0 - s) ** 2),
-                            theta_h + (np.pi - theta_h) * s**2])
+    above = np.arange(half) / (half - 0.5)
+    below = (np.arange(half) + 0.5) / (half - 0.5)
+    theta = np.concatenate([theta_h * (1.0 - (1.0 - above) ** 2),
+                            theta_h + (np.pi - theta_h) * below**2])
     phi = np.linspace(0.0, np.pi, n_lon)
     sin_theta = np.sin(theta)[:, None]
     return np.stack(np.broadcast_arrays(sin_theta * np.cos(phi), sin_theta * np.sin(phi),
