@@ -76,7 +76,8 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
 
     second = int_4pi L'(x, -w) p_u dw, L' the light scattered once towards x by an isotropic
     phase function, sunlit ground included (eq. 5-6); f_ms = int_4pi L_f(x, -w) p_u dw with
-    L_f = int T(x, x_t) sigma_s(x_t) dt, the share of light scattered back to x (eq. 7-8);
+    L_f = int T(x, x_t) sigma_s(x_t) dt, the share of light scattered back to x (eq. 7-8),
+    integrated exactly over each step with its mean coefficients (so f_ms < 1 however thick);
     psi = second / (1 - f_ms), the geometric sum of all orders >= 2 (eq. 9). The sphere is
     integrated with Gauss-Legendre nodes `gauss_x`, `gauss_w` (on [-1, 1]) in the zenith
     cosine on each side of the node's horizon (the light jumps there, from the ground to the
@@ -98,9 +99,7 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
         dens_prev = np.empty(n_c)
         sun = np.empty(n_wl)
         lit_prev = np.empty(n_wl)
-        back_prev = np.empty(n_wl)
         lit = np.empty(n_wl)
-        back = np.empty(n_wl)
         mu_h = horizon_cos_zenith(r, bottom_radius)
         for k in range(2 * gauss_x.size):
             low, high = (mu_h, 1.0) if k < gauss_x.size else (-1.0, mu_h)
@@ -115,7 +114,6 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
                                                                  top_radius)
                 view_column[:] = 0.0
                 lit_prev[:] = 0.0
-                back_prev[:] = 0.0
                 t_prev = 0.0
                 radius = r
                 mu_s = mu_s0
@@ -136,17 +134,25 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
                         for w in range(n_wl):
                             tau = 0.0
                             sigma_s = 0.0
+                            step_tau = 0.0
+                            step_scattered = 0.0
                             for c in range(n_c):
                                 tau += extinction[c, w] * view_column[c]
                                 sigma_s += scattering[c, w] * dens[c]
-                            transmitted = math.exp(-tau) * sigma_s
-                            lit[w] = transmitted * sun[w] * ISOTROPIC
-                            back[w] = transmitted
+                                mean = 0.5 * (dens_prev[c] + dens[c]) * dt
+                                step_tau += extinction[c, w] * mean
+                                step_scattered += scattering[c, w] * mean
+                            lit[w] = math.exp(-tau) * sigma_s * sun[w] * ISOTROPIC
                             if s > 0:
                                 second[i, j, w] += weight * 0.5 * (lit_prev[w] + lit[w]) * dt
-                                f_ms[i, j, w] += weight * 0.5 * (back_prev[w] + back[w]) * dt
+                                # L_f over the step with its mean coefficients, exactly:
+                                # T_before sigma_s / sigma_t (1 - exp(-sigma_t dt)), so that
+                                # f_ms stays below the single-scattering albedo (< 1)
+                                if step_tau > 1e-12:
+                                    step_scattered *= -math.expm1(-step_tau) / step_tau
+                                f_ms[i, j, w] += (weight * math.exp(step_tau - tau)
+                                                  * step_scattered)
                             lit_prev[w] = lit[w]
-                            back_prev[w] = back[w]
                         for c in range(n_c):
                             dens_prev[c] = dens[c]
                         t_prev = t
@@ -159,7 +165,9 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
                             tau += extinction[c, w] * view_column[c]
                         second[i, j, w] += (weight * math.exp(-tau) * albedo[w] / math.pi
                                             * sun[w] * max(mu_s, 0.0))
-    return second / (1.0 - f_ms), second, f_ms
+    # f_ms -> 1 only in conservative media of infinite depth, where L_2nd -> 0 too: the floor
+    # keeps the rounding of f_ms = 1 from making 0 / 0
+    return second / np.maximum(1.0 - f_ms, 1e-12), second, f_ms
 
 
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loop

@@ -232,8 +232,8 @@ def _montecarlo(profile: OpticalProfile, options: SolverOptions) -> MonteCarloSo
     return MonteCarloSolver(profile, n_samples=options.n_samples, seed=options.seed)
 
 
-@register_solver("hillaire", "Hillaire 2020: small tables in milliseconds, multiple scattering "
-                             "from an isotropic second-order approximation, a sky-view table "
-                             "per observer (fast)")
+@register_solver("hillaire", "Hillaire 2020: small tables in under a second, orders >= 2 from "
+                             "an isotropic approximation, a sky-view table per observer (fast, "
+                             "approximate)")
 def _hillaire(profile: OpticalProfile, options: SolverOptions) -> HillaireSolver:
     return HillaireSolver(profile, n_samples=options.n_samples)
