@@ -15,6 +15,7 @@ import pytest
 from scipy.integrate import quad
 from transport_cases import EARTH_RADIUS_M, exponential_earth, homogeneous_shell
 
+from skyscatter import compile_ahead
 from skyscatter.api import load_atmosphere
 from skyscatter.transport import _hillaire_kernels, _kernels, hillaire
 from skyscatter.transport.geometry import local_frame_directions
@@ -221,3 +222,13 @@ def test_earth_sky_is_near_the_bruneton_tables(earth_solvers, sun_zenith_deg):
     print(f"sun {sun_zenith_deg}: median {np.median(error):.4f}, "
           f"p95 {np.percentile(error, 95):.4f}, max {error.max():.4f}")
     assert np.median(error) < median and np.percentile(error, 95) < p95
+
+
+def test_the_warm_up_compiles_the_sky_view_table():
+    # `skyscatter compile` renders a panorama with the Hillaire solver: its rays must be
+    # enough for the sky-view table (`SKY_VIEW_MIN_RAYS`), whose kernels compile only then
+    command = next(arguments for what, arguments in compile_ahead.WARM_UP_COMMANDS
+                   if "hillaire" in arguments)
+    assert "panorama" in command
+    size = int(command[command.index("--size") + 1])
+    assert size * (2 * size) >= hillaire.SKY_VIEW_MIN_RAYS
