@@ -95,9 +95,9 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
         sin_s = math.sqrt(max(1.0 - mu_s0 * mu_s0, 0.0))
         dens = np.empty(n_c)
         column = np.empty(n_c)
-        view_column = np.empty(n_c)
         dens_prev = np.empty(n_c)
         sun = np.empty(n_wl)
+        view = np.empty(n_wl)  # transmittance from the node to the sample
         lit_prev = np.empty(n_wl)
         lit = np.empty(n_wl)
         mu_h = horizon_cos_zenith(r, bottom_radius)
@@ -112,7 +112,7 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
                 nu = sin_v * math.cos(2.0 * math.pi * (m + 0.5) / n_phi) * sin_s + mu * mu_s0
                 t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius,
                                                                  top_radius)
-                view_column[:] = 0.0
+                view[:] = 1.0
                 lit_prev[:] = 0.0
                 t_prev = 0.0
                 radius = r
@@ -126,32 +126,30 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
                         mu_s = (r * mu_s0 + t * nu) / radius
                         density_at(radius - bottom_radius, h_step, density, dens)
                         dt = t - t_prev
-                        if s > 0:
-                            for c in range(n_c):
-                                view_column[c] += 0.5 * (dens_prev[c] + dens[c]) * dt
                         sunlight(radius, mu_s, bottom_radius, top_radius, sun_table,
                                  extinction, sun_angular_radius, column, sun)
                         for w in range(n_wl):
-                            tau = 0.0
                             sigma_s = 0.0
-                            step_tau = 0.0
-                            step_scattered = 0.0
                             for c in range(n_c):
-                                tau += extinction[c, w] * view_column[c]
                                 sigma_s += scattering[c, w] * dens[c]
-                                mean = 0.5 * (dens_prev[c] + dens[c]) * dt
-                                step_tau += extinction[c, w] * mean
-                                step_scattered += scattering[c, w] * mean
-                            lit[w] = math.exp(-tau) * sigma_s * sun[w] * ISOTROPIC
                             if s > 0:
-                                second[i, j, w] += weight * 0.5 * (lit_prev[w] + lit[w]) * dt
+                                step_tau = 0.0
+                                step_scattered = 0.0
+                                for c in range(n_c):
+                                    mean = 0.5 * (dens_prev[c] + dens[c]) * dt
+                                    step_tau += extinction[c, w] * mean
+                                    step_scattered += scattering[c, w] * mean
                                 # L_f over the step with its mean coefficients, exactly:
                                 # T_before sigma_s / sigma_t (1 - exp(-sigma_t dt)), so that
                                 # f_ms stays below the single-scattering albedo (< 1)
+                                step_loss = -math.expm1(-step_tau)
                                 if step_tau > 1e-12:
-                                    step_scattered *= -math.expm1(-step_tau) / step_tau
-                                f_ms[i, j, w] += (weight * math.exp(step_tau - tau)
-                                                  * step_scattered)
+                                    step_scattered *= step_loss / step_tau
+                                f_ms[i, j, w] += weight * view[w] * step_scattered
+                                view[w] *= 1.0 - step_loss
+                            lit[w] = view[w] * sigma_s * sun[w] * ISOTROPIC
+                            if s > 0:
+                                second[i, j, w] += weight * 0.5 * (lit_prev[w] + lit[w]) * dt
                             lit_prev[w] = lit[w]
                         for c in range(n_c):
                             dens_prev[c] = dens[c]
@@ -160,11 +158,8 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
                     sunlight(radius, mu_s, bottom_radius, top_radius, sun_table, extinction,
                              sun_angular_radius, column, sun)
                     for w in range(n_wl):
-                        tau = 0.0
-                        for c in range(n_c):
-                            tau += extinction[c, w] * view_column[c]
-                        second[i, j, w] += (weight * math.exp(-tau) * albedo[w] / math.pi
-                                            * sun[w] * max(mu_s, 0.0))
+                        second[i, j, w] += (weight * view[w] * albedo[w] / math.pi * sun[w]
+                                            * max(mu_s, 0.0))
     # f_ms -> 1 only in conservative media of infinite depth, where L_2nd -> 0 too: the floor
     # keeps the rounding of f_ms = 1 from making 0 / 0
     return second / np.maximum(1.0 - f_ms, 1e-12), second, f_ms
