@@ -21,6 +21,7 @@ from skyscatter.transport import _hillaire_kernels, _kernels, hillaire
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.hillaire import MULTIPLE_SCATTERING_SIZE, HillaireSolver
 from skyscatter.transport.lut_solver import LutSolver
+from skyscatter.transport.single_scattering import SingleScatteringSolver
 from skyscatter.transport.tables import precompute_tables
 
 DEG = math.pi / 180.0
@@ -232,3 +233,23 @@ def test_the_warm_up_compiles_the_sky_view_table():
     assert "panorama" in command
     size = int(command[command.index("--size") + 1])
     assert size * (2 * size) >= hillaire.SKY_VIEW_MIN_RAYS
+
+
+@pytest.mark.parametrize("sun_zenith_deg", [0.0, 80.0, 93.0])
+def test_without_multiple_scattering_it_is_the_single_scattering_solver(monkeypatch,
+                                                                        sun_zenith_deg):
+    # Psi_ms set to 0 leaves single scattering and the sunlit ground, which the "single" solver
+    # marches on its own (its sun columns from a finer table, 128 x 256 nodes of 512
+    # intervals). Views 0-120 deg from the zenith (the ground from 95 deg), 64 samples each.
+    # Measured: within 4.3e-5 relative with the sun at the zenith, 2.2e-4 at 80 deg, 4.6e-4 in
+    # twilight (where both give 0 on the unlit ground). Tolerance 1e-3.
+    profile = exponential_earth()
+    solver = HillaireSolver(profile)
+    monkeypatch.setattr(solver, "multiple_scattering", np.zeros_like(solver.multiple_scattering))
+    views = local_frame_directions(*np.broadcast_arrays(
+        np.radians([[0.0], [45.0], [80.0], [89.0], [95.0], [120.0]]),
+                                   np.radians([0.0, 90.0, 180.0])))
+    sun = local_frame_directions(sun_zenith_deg * DEG, 0.0)
+    ground = np.array([0.0, 0.0, EARTH_RADIUS_M])
+    single = SingleScatteringSolver(profile, n_samples=64).sky_radiance(ground, views, sun)
+    np.testing.assert_allclose(solver.sky_radiance(ground, views, sun), single, rtol=1e-3)
