@@ -26,7 +26,8 @@ Spectral on the profile's wavelengths, for any profile: all constituents, their 
 functions, absorbers through extinction minus scattering, the ground albedo per wavelength.
 Limits (docs/techniques.md, "Hillaire 2020"): orders >= 2 see isotropic phase functions and a
 medium that is laterally uniform around each point (the paper's assumptions), which is good
-for thin clear air but not for thick or strongly forward-scattering media; the ground reflects
+for thin clear air but not for thick or strongly forward-scattering media (Mars' dust); in
+twilight Psi_ms, interpolated between 32 sun zenith cosines, is too large; the ground reflects
 the direct sun only; transmittance along views is ray marched (`transport/transmittance.py`),
 as the paper marches its view rays. Kernels: `transport/_hillaire_kernels.py`.
 """
