@@ -70,6 +70,8 @@ WARM_UP_COMMANDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("Mie dust", ("render", "mars-physical", *_TINY)),
     ("clouds, their shadows on the ground", ("render", "earth", "--clouds", "cumulus",
                                              "--altitude", "2", *_TINY)),
+    ("the Hillaire 2020 solver and its sky-view table", (
+        "render", "earth", "--solver", "hillaire", "--camera", "panorama", *_FULL_FRAME)),
     ("radiance", ("radiance", "earth", "--sun-zenith", "30", "--wavelengths", "550")),
 )
 

@@ -24,7 +24,8 @@ from skyscatter.transport.geometry import (
 )
 from skyscatter.transport.transmittance import ray_marched_transmittance
 
-__all__ = ["SingleScatteringSolver", "observer_position", "ray_marched_transmittance"]
+__all__ = ["SingleScatteringSolver", "hemisphere_irradiance", "observer_position",
+           "ray_marched_transmittance"]
 
 CHUNK_RAYS = 16384  # rays per kernel call: bounds memory (n_c x n_wl doubles per ray)
 
@@ -115,31 +116,40 @@ class SingleScatteringSolver:
     def ground_irradiance(self, position: ArrayLike, sun_direction: ArrayLike,
                           n_zenith: int = 24, n_azimuth: int = 48) -> tuple[np.ndarray, np.ndarray]:
         """(direct, diffuse) spectral irradiance on a horizontal surface at `position`
-        [W m^-2 nm^-1], each (n_wl,). Direct: E_sun T_sun mu_s times the visible part of the
-        disk; diffuse: the single-scattered sky radiance integrated over the upper hemisphere
-        (Gauss-Legendre in cos(zenith), midpoint rule in azimuth)."""
-        origin = np.asarray(position, dtype=np.float64)
-        up = _unit(origin)
-        sun = _unit(np.asarray(sun_direction, dtype=np.float64))
-        p = self.profile
-        mu_s = float(up @ sun)
-        r = float(np.linalg.norm(origin))
-        visible = sun_visible_fraction(r, mu_s, p.bottom_radius_m, p.sun_angular_radius_rad)
-        sun_transmittance = self.transmittance(
-            origin, towards_visible_sun(origin, sun, p.bottom_radius_m))
-        direct = p.toa_irradiance * sun_transmittance * max(mu_s, 0.0) * visible
-        nodes, weights = np.polynomial.legendre.leggauss(n_zenith)
-        cos_zenith = 0.5 * (nodes + 1.0)
-        azimuth = (np.arange(n_azimuth) + 0.5) * 2.0 * np.pi / n_azimuth
-        east, north = _tangent_frame(up)
-        sin_zenith = np.sqrt(1.0 - cos_zenith**2)
-        dirs = (sin_zenith[:, None, None] * (np.cos(azimuth)[None, :, None] * east
-                                             + np.sin(azimuth)[None, :, None] * north)
-                + cos_zenith[:, None, None] * up)
-        radiance = self.sky_radiance(origin, dirs, sun)
-        weight = (0.5 * weights * cos_zenith)[:, None, None] * (2.0 * np.pi / n_azimuth)
-        diffuse = np.sum(radiance * weight, axis=(0, 1))
-        return direct, diffuse
+        [W m^-2 nm^-1], each (n_wl,): `hemisphere_irradiance` of this solver."""
+        return hemisphere_irradiance(self, position, sun_direction, n_zenith, n_azimuth)
+
+
+def hemisphere_irradiance(solver, position: ArrayLike, sun_direction: ArrayLike,
+                          n_zenith: int = 24, n_azimuth: int = 48
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """(direct, diffuse) spectral irradiance [W m^-2 nm^-1], each (n_wl,), on a horizontal
+    surface at `position` (planet-centred [m], (3,)) from a solver's `transmittance` and
+    `sky_radiance`. Direct: E_sun T_sun mu_s times the visible part of the disk; diffuse: the
+    sky radiance integrated over the upper hemisphere (Gauss-Legendre in cos(zenith),
+    midpoint rule in azimuth)."""
+    origin = np.asarray(position, dtype=np.float64)
+    up = _unit(origin)
+    sun = _unit(np.asarray(sun_direction, dtype=np.float64))
+    p = solver.profile
+    mu_s = float(up @ sun)
+    r = float(np.linalg.norm(origin))
+    visible = sun_visible_fraction(r, mu_s, p.bottom_radius_m, p.sun_angular_radius_rad)
+    sun_transmittance = solver.transmittance(
+        origin, towards_visible_sun(origin, sun, p.bottom_radius_m))
+    direct = p.toa_irradiance * sun_transmittance * max(mu_s, 0.0) * visible
+    nodes, weights = np.polynomial.legendre.leggauss(n_zenith)
+    cos_zenith = 0.5 * (nodes + 1.0)
+    azimuth = (np.arange(n_azimuth) + 0.5) * 2.0 * np.pi / n_azimuth
+    east, north = _tangent_frame(up)
+    sin_zenith = np.sqrt(1.0 - cos_zenith**2)
+    dirs = (sin_zenith[:, None, None] * (np.cos(azimuth)[None, :, None] * east
+                                         + np.sin(azimuth)[None, :, None] * north)
+            + cos_zenith[:, None, None] * up)
+    radiance = solver.sky_radiance(origin, dirs, sun)
+    weight = (0.5 * weights * cos_zenith)[:, None, None] * (2.0 * np.pi / n_azimuth)
+    diffuse = np.sum(radiance * weight, axis=(0, 1))
+    return direct, diffuse
 
 
 def _unit(vector: np.ndarray) -> np.ndarray:

@@ -14,11 +14,11 @@ the planet.
 
 What only some solvers can do is a capability protocol, asked for with `isinstance`:
 
-    protocol               members                                   lut   single  montecarlo
-    SurfaceSolver          ground_irradiance, aerial_perspective     yes   yes     -
-    SurfaceRadianceSolver  surface_radiance (albedo maps, terrain)   yes   -       -
-    NoisySolver            sky_radiance_with_error                   -     -       yes
-    TableSolver            tables (eclipse optics, lowest sun)       yes   -       -
+    protocol               members                                  lut single montecarlo hillaire
+    SurfaceSolver          ground_irradiance, aerial_perspective    yes yes    -          yes
+    SurfaceRadianceSolver  surface_radiance (albedo maps, terrain)  yes -      -          -
+    NoisySolver            sky_radiance_with_error                  -   -      yes        -
+    TableSolver            tables (eclipse optics, lowest sun)      yes -      -          -
 
 `tests/transport/test_solver_conformance.py` runs every registered solver through the same
 checks (shapes, units, broadcasting, wavelength last, finite at the horizon) and calls the
@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport.cache import TableCache
+from skyscatter.transport.hillaire import HillaireSolver
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.monte_carlo import MonteCarloSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver
@@ -229,3 +230,10 @@ def _single(profile: OpticalProfile, options: SolverOptions) -> SingleScattering
                                "reference")
 def _montecarlo(profile: OpticalProfile, options: SolverOptions) -> MonteCarloSolver:
     return MonteCarloSolver(profile, n_samples=options.n_samples, seed=options.seed)
+
+
+@register_solver("hillaire", "Hillaire 2020: small tables in under a second, orders >= 2 from "
+                             "an isotropic approximation, a sky-view table per observer (fast, "
+                             "approximate)")
+def _hillaire(profile: OpticalProfile, options: SolverOptions) -> HillaireSolver:
+    return HillaireSolver(profile, n_samples=options.n_samples)
