@@ -10,6 +10,7 @@ import pytest
 
 from cli_runner import run_cli
 from skyscatter import api
+from skyscatter.cli import CAMERAS
 
 
 def _script(capsys, shell: str) -> str:
@@ -42,8 +43,10 @@ def test_bash_accepts_the_script_and_completes(capsys):
     assert _bash_complete(script, ["skyscatter", "--qu"]) == ["--quiet"]
     assert set(_bash_complete(script, ["skyscatter", "render", ""])) >= set(api.list_presets())
     assert _bash_complete(script, ["skyscatter", "render", "mars-p"]) == ["mars-physical"]
-    assert _bash_complete(script, ["skyscatter", "-q", "render", "earth", "--camera", "pa"]) \
+    assert _bash_complete(script, ["skyscatter", "-q", "render", "earth", "--camera", "pan"]) \
         == ["panorama"]
+    assert _bash_complete(script, ["skyscatter", "render", "earth", "--camera", "pa"]) \
+        == [camera for camera in CAMERAS if camera.startswith("pa")]
     assert _bash_complete(script, ["skyscatter", "render", "earth", "--sun-el"]) \
         == ["--sun-elevation"]
     assert _bash_complete(script, ["skyscatter", "cache", ""]) == ["list", "size", "clear"]
@@ -70,8 +73,7 @@ def test_zsh_runs_the_bash_function(capsys):
     assert "render" in offered(["skyscatter", "ren"])
     assert "render" not in offered(["skyscatter", "render", "ea"])
     assert "mars-physical" in offered(["skyscatter", "render", "ea"])
-    assert offered(["skyscatter", "-q", "render", "earth", "--camera", "pa"]) == [
-        "fisheye", "panorama", "perspective", "orbit", "cubemap", "octahedral"]
+    assert offered(["skyscatter", "-q", "render", "earth", "--camera", "pa"]) == list(CAMERAS)
 
 
 def test_fish_completes_from_its_script(capsys):
@@ -86,7 +88,7 @@ def test_fish_completes_from_its_script(capsys):
 
     assert offered("skyscatter ren") == ["render"]
     assert offered("skyscatter render mars-p") == ["mars-physical"]
-    assert offered("skyscatter render earth --camera pa") == ["panorama"]
+    assert offered("skyscatter render earth --camera pan") == ["panorama"]
     assert "--quiet" in offered("skyscatter render earth --qu")
 
 
