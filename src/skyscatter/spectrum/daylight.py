@@ -21,7 +21,7 @@ from importlib import resources
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["daylight_basis", "daylight_spectrum"]
+__all__ = ["daylight_basis", "daylight_spectrum", "daylight_weights"]
 
 DAYLIGHT_DATA_FILE = "cie_daylight_basis.npz"  # in skyscatter/data; see data/PROVENANCE.md
 
@@ -41,14 +41,18 @@ def daylight_basis(wavelengths_nm: ArrayLike) -> np.ndarray:
     return np.stack([np.interp(wl, grid, row, left=0.0, right=0.0) for row in basis])
 
 
+def daylight_weights(x: ArrayLike, y: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """(M1, M2) [-] of daylight of chromaticity (x, y) (module docstring), broadcast."""
+    x = np.asarray(x, dtype=np.float64)
+    y = np.asarray(y, dtype=np.float64)
+    m = 0.0241 + 0.2562 * x - 0.7341 * y
+    return (-1.3515 - 1.7703 * x + 5.9114 * y) / m, (0.0300 - 31.4424 * x + 30.0717 * y) / m
+
+
 def daylight_spectrum(x: ArrayLike, y: ArrayLike, wavelengths_nm: ArrayLike) -> np.ndarray:
     """Relative spectral power of daylight of chromaticity (x, y) (CIE 1931), shape
     S + (n_wl,) for x, y broadcast to S, on `wavelengths_nm` [nm] (module docstring); 100 at
     560 nm, where S1 = S2 = 0."""
-    x = np.asarray(x, dtype=np.float64)[..., None]
-    y = np.asarray(y, dtype=np.float64)[..., None]
-    m = 0.0241 + 0.2562 * x - 0.7341 * y
-    m1 = (-1.3515 - 1.7703 * x + 5.9114 * y) / m
-    m2 = (0.0300 - 31.4424 * x + 30.0717 * y) / m
+    m1, m2 = daylight_weights(x, y)
     s0, s1, s2 = daylight_basis(wavelengths_nm)
-    return s0 + m1 * s1 + m2 * s2
+    return s0 + m1[..., None] * s1 + m2[..., None] * s2
