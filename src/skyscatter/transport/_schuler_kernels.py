@@ -71,6 +71,62 @@ def sun_transmittance(px, py, pz, sun_direction, bottom_radius, top_radius, sun_
         out[w] = visible * math.exp(-tau)
 
 
+RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loop
+
+
+@njit(cache=True)
+def _march_ray(ox, oy, oz, dx, dy, dz, sun_direction, n_samples, bottom_radius, top_radius,
+               h_step, density, extinction, sun_angular_radius, model, scratch, inscatter,
+               transmittance, ground):
+    """One ray of `single_scattering` into its rows inscatter (n_c, n_wl), transmittance and
+    ground (n_wl,); scratch = (samples, columns (4, n_c), densities, t_sun, t_view, previous)."""
+    samples, cols, dens, t_sun, t_view, previous = scratch
+    n_c, n_wl = extinction.shape
+    r = math.sqrt(ox * ox + oy * oy + oz * oz)
+    mu = (ox * dx + oy * dy + oz * dz) / r
+    t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+    if t_end <= t_start and not hits_ground:  # misses the atmosphere
+        return
+    sign = -1.0 if hits_ground else 1.0
+    first, here = cols[0], cols[1]
+    previous[:, :] = 0.0
+    sx, sy, sz = ox + t_start * dx, oy + t_start * dy, oz + t_start * dz
+    r_start = math.sqrt(sx * sx + sy * sy + sz * sz)
+    mu_start = (sx * dx + sy * dy + sz * dz) / r_start
+    count = table_ray_distances(r_start, mu_start, t_end - t_start, hits_ground, n_samples,
+                                samples)
+    _point_columns(ox, oy, oz, dx, dy, dz, t_start, sign, bottom_radius, model, first)
+    for k in range(count):
+        t = t_start + samples[k]
+        _point_columns(ox, oy, oz, dx, dy, dz, t, sign, bottom_radius, model, here)
+        for w in range(n_wl):
+            tau = 0.0
+            for c in range(n_c):
+                tau += extinction[c, w] * max(sign * (first[c] - here[c]), 0.0)
+            t_view[w] = math.exp(-tau)
+        px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+        sun_transmittance(px, py, pz, sun_direction, bottom_radius, top_radius,
+                          sun_angular_radius, model, extinction, cols[2], cols[3], t_sun)
+        altitude = math.sqrt(px * px + py * py + pz * pz) - bottom_radius
+        density_at(altitude, h_step, density, dens)
+        step = 0.5 * (samples[k] - samples[k - 1]) if k > 0 else 0.0
+        for c in range(n_c):
+            if dens[c] == 0.0 and previous[c, 0] == 0.0:
+                continue
+            for w in range(n_wl):
+                value = t_view[w] * dens[c] * t_sun[w]
+                inscatter[c, w] += step * (previous[c, w] + value)
+                previous[c, w] = value
+    for w in range(n_wl):
+        transmittance[w] = t_view[w]
+    if hits_ground:
+        gx, gy, gz = ox + t_end * dx, oy + t_end * dy, oz + t_end * dz
+        mu_s = (gx * sun_direction[0] + gy * sun_direction[1]
+                + gz * sun_direction[2]) / math.sqrt(gx * gx + gy * gy + gz * gz)
+        for w in range(n_wl):
+            ground[w] = t_view[w] * t_sun[w] * max(mu_s, 0.0)
+
+
 @njit(parallel=True, cache=True)
 def single_scattering(origins, directions, sun_direction, n_samples, bottom_radius, top_radius,
                       h_step, density, extinction, sun_angular_radius, model):
@@ -85,55 +141,16 @@ def single_scattering(origins, directions, sun_direction, n_samples, bottom_radi
     inscatter = np.zeros((n_ray, n_c, n_wl))
     transmittance = np.ones((n_ray, n_wl))
     ground = np.zeros((n_ray, n_wl))
-    for i in prange(n_ray):
-        ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
-        dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        r = math.sqrt(ox * ox + oy * oy + oz * oz)
-        mu = (ox * dx + oy * dy + oz * dz) / r
-        t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
-        if t_end <= t_start and not hits_ground:  # misses the atmosphere
-            continue
-        sign = -1.0 if hits_ground else 1.0
-        samples = np.empty(n_samples + 1)
-        first, here, sun_cols, top_cols = np.empty(n_c), np.empty(n_c), np.empty(n_c), \
-            np.empty(n_c)
-        dens = np.empty(n_c)
-        t_sun = np.empty(n_wl)
-        t_view = np.empty(n_wl)
-        previous = np.zeros((n_c, n_wl))
-        sx, sy, sz = ox + t_start * dx, oy + t_start * dy, oz + t_start * dz
-        r_start = math.sqrt(sx * sx + sy * sy + sz * sz)
-        mu_start = (sx * dx + sy * dy + sz * dz) / r_start
-        count = table_ray_distances(r_start, mu_start, t_end - t_start, hits_ground, n_samples,
-                                    samples)
-        _point_columns(ox, oy, oz, dx, dy, dz, t_start, sign, bottom_radius, model, first)
-        for k in range(count):
-            t = t_start + samples[k]
-            _point_columns(ox, oy, oz, dx, dy, dz, t, sign, bottom_radius, model, here)
-            for w in range(n_wl):
-                tau = 0.0
-                for c in range(n_c):
-                    tau += extinction[c, w] * max(sign * (first[c] - here[c]), 0.0)
-                t_view[w] = math.exp(-tau)
-            px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
-            sun_transmittance(px, py, pz, sun_direction, bottom_radius, top_radius,
-                              sun_angular_radius, model, extinction, sun_cols, top_cols, t_sun)
-            altitude = math.sqrt(px * px + py * py + pz * pz) - bottom_radius
-            density_at(altitude, h_step, density, dens)
-            step = 0.5 * (samples[k] - samples[k - 1]) if k > 0 else 0.0
-            for c in range(n_c):
-                for w in range(n_wl):
-                    value = t_view[w] * dens[c] * t_sun[w]
-                    inscatter[i, c, w] += step * (previous[c, w] + value)
-                    previous[c, w] = value
-        for w in range(n_wl):
-            transmittance[i, w] = t_view[w]
-        if hits_ground:
-            gx, gy, gz = ox + t_end * dx, oy + t_end * dy, oz + t_end * dz
-            mu_s = (gx * sun_direction[0] + gy * sun_direction[1]
-                    + gz * sun_direction[2]) / math.sqrt(gx * gx + gy * gy + gz * gz)
-            for w in range(n_wl):
-                ground[i, w] = t_view[w] * t_sun[w] * max(mu_s, 0.0)
+    n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
+    for block in prange(n_blocks):
+        scratch = (np.empty(n_samples + 1), np.empty((4, n_c)), np.empty(n_c), np.empty(n_wl),
+                   np.empty(n_wl), np.zeros((n_c, n_wl)))
+        for i in range(block * RAYS_PER_BLOCK, min(n_ray, (block + 1) * RAYS_PER_BLOCK)):
+            _march_ray(origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0],
+                       directions[i, 1], directions[i, 2], sun_direction, n_samples,
+                       bottom_radius, top_radius, h_step, density, extinction,
+                       sun_angular_radius, model, scratch, inscatter[i], transmittance[i],
+                       ground[i])
     return inscatter, transmittance, ground
 
 
