@@ -89,13 +89,13 @@ def test_the_scaled_column_is_the_chapman_function_times_the_density_and_height(
 
 def test_a_thin_layer_is_crossed_once_from_below_twice_or_never_from_above():
     # A shell at 25 km, 5 km wide: from the ground straight up the column is 1 / sqrt(1 +
-    # 2 w / R_c) (the width's term); from above looking down twice that; looking up from above,
+    # w / R_c) (the width's term); from above looking down twice that; looking up from above,
     # or past the shell, 0.
     shell = EARTH_RADIUS_M + 25e3
     up = layer_column(EARTH_RADIUS_M, 1.0, shell, 5e3)
-    assert up == pytest.approx(1.0 / math.sqrt(1.0 + 1e4 / shell), rel=1e-12)
+    assert up == pytest.approx(1.0 / math.sqrt(1.0 + 5e3 / shell), rel=1e-12)
     assert layer_column(shell + 10e3, -1.0, shell, 5e3) == pytest.approx(
-        2.0 / math.sqrt(1.0 + 1e4 / shell), rel=1e-12)
+        2.0 / math.sqrt(1.0 + 5e3 / shell), rel=1e-12)
     assert layer_column(shell + 10e3, 1.0, shell, 5e3) == 0.0
     assert layer_column(shell + 10e3, -0.01, shell, 5e3) == 0.0  # perigee above the shell
 
@@ -116,3 +116,4 @@ def test_the_fit_recovers_exponential_scale_heights_and_a_layers_centroid():
     assert model.layer_radius[1] - EARTH_RADIUS_M == pytest.approx(25e3, rel=1e-3)
     assert model.layer_width[1] == pytest.approx(5e3, rel=1e-3)
     assert model.layer_column[1] == pytest.approx(5e3 * math.sqrt(2.0 * math.pi), rel=1e-3)
+

@@ -37,11 +37,15 @@ exponential of its ground density n0 and the scale height H that keeps its verti
 on the profile's levels, n0 H (1 - exp(-z_top / H)) (`fit_constituents`). Any other (an ozone
 layer, an elevated aerosol layer) is a thin absorbing shell at its column's centroid altitude
 z_c with its whole vertical column N; a ray crossing it at the local zenith cosine mu_c gains
-N / sqrt(mu_c^2 + 2 w / (R + z_c)), w the layer's standard deviation in altitude, which is
-N / mu_c away from grazing and the column of a layer of thickness ~w at grazing (a thin
-shell's 1 / mu_c has no limit). Its limits: the layer's own thickness is ignored (observers
-inside it see it as all above or all below), and the inscattering of a layered scatterer
-still uses its true density (`transport/schuler.py`).
+N / sqrt(mu_c^2 + w / (R + z_c)), w the layer's standard deviation in altitude, which is
+N / mu_c away from grazing and, at grazing, sqrt((R + z_c) / w) N, the column of a Gaussian
+layer of width w along its tangent (a thin shell's 1 / mu_c has no limit). Its limits: the
+layer's own thickness is ignored (an observer below the centroid sees the whole layer above,
+one above it none), and the inscattering of a layered scatterer still uses its true density
+(`transport/schuler.py`). Earth's ozone (the earth preset, centroid 22.5 km, w 9 km) from the
+ground: the optical depth within 0.1 % at the zenith, 2 % low at 80 deg, 13 % at 88 deg and
+23 % at the horizon, where the layer's lower half, with the longer slant path, is not in the
+thin shell (tests/transport/test_schuler.py).
 """
 
 from __future__ import annotations
@@ -159,10 +163,10 @@ def exponential_column(r, mu, bottom_radius, scale_height):
 def layer_column(r, mu, layer_radius, layer_width):
     """Column [per unit vertical column] of a thin shell of radius `layer_radius` and width
     `layer_width` [m] along the ray (r, mu) to infinity (the line's crossings ahead, the planet
-    ignored): each crossing 1 / sqrt(mu_c^2 + 2 w / R_c), mu_c the zenith cosine there."""
+    ignored): each crossing 1 / sqrt(mu_c^2 + w / R_c), mu_c the zenith cosine there."""
     p2 = r * r * (1.0 - mu * mu)  # perigee radius squared
     cos2 = 1.0 - p2 / (layer_radius * layer_radius)
     if cos2 < 0.0:
         return 0.0
     crossings = 1.0 if r < layer_radius else (2.0 if mu < 0.0 else 0.0)
-    return crossings / math.sqrt(cos2 + 2.0 * layer_width / layer_radius)
+    return crossings / math.sqrt(cos2 + layer_width / layer_radius)
