@@ -46,29 +46,19 @@ def _point_columns(ox, oy, oz, dx, dy, dz, t, sign, bottom_radius, model, out):
 
 
 @njit(cache=True)
-def sun_transmittance(px, py, pz, sun_direction, bottom_radius, top_radius, sun_angular_radius,
-                      model, extinction, columns, top_columns, out):
-    """E-free transmittance of the sun's light (n_wl,) to the point p, times the visible part of
-    its disk, into out; columns from p to the top (to infinity less from the top on)."""
+def sun_columns(px, py, pz, sun_direction, bottom_radius, sun_angular_radius, model, out):
+    """Columns (n_c,) from the point p towards the sun to infinity (the part beyond the top,
+    < 1e-5 of them for Earth's 100 km, is kept), into out; returns the visible part of the
+    sun's disk (0: the planet hides it, out untouched)."""
     r = math.sqrt(px * px + py * py + pz * pz)
     mu_s = (px * sun_direction[0] + py * sun_direction[1] + pz * sun_direction[2]) / r
     visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
-    if visible <= 0.0:
-        out[:] = 0.0
-        return
-    horizon = -math.sqrt(max(1.0 - (bottom_radius / r) ** 2, 0.0)) if r > bottom_radius else 0.0
-    mu = min(max(mu_s, horizon), 1.0)
-    columns_to_infinity(r, mu, bottom_radius, model[0], model[1], model[2], model[3], model[4],
-                        model[5], columns)
-    r_top = max(r, top_radius)
-    mu_top = math.sqrt(max(1.0 - (r / r_top) ** 2 * (1.0 - mu * mu), 0.0))
-    columns_to_infinity(r_top, mu_top, bottom_radius, model[0], model[1], model[2], model[3],
-                        model[4], model[5], top_columns)
-    for w in range(out.size):
-        tau = 0.0
-        for c in range(columns.size):
-            tau += extinction[c, w] * max(columns[c] - top_columns[c], 0.0)
-        out[w] = visible * math.exp(-tau)
+    if visible > 0.0:
+        horizon = (-math.sqrt(max(1.0 - (bottom_radius / r) ** 2, 0.0))
+                   if r > bottom_radius else 0.0)
+        columns_to_infinity(r, min(max(mu_s, horizon), 1.0), bottom_radius, model[0],
+                            model[1], model[2], model[3], model[4], model[5], out)
+    return visible
 
 
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loop
@@ -96,17 +86,23 @@ def _march_ray(ox, oy, oz, dx, dy, dz, sun_direction, n_samples, bottom_radius, 
     count = table_ray_distances(r_start, mu_start, t_end - t_start, hits_ground, n_samples,
                                 samples)
     _point_columns(ox, oy, oz, dx, dy, dz, t_start, sign, bottom_radius, model, first)
+    last = count - 1
     for k in range(count):
         t = t_start + samples[k]
         _point_columns(ox, oy, oz, dx, dy, dz, t, sign, bottom_radius, model, here)
-        for w in range(n_wl):
-            tau = 0.0
-            for c in range(n_c):
-                tau += extinction[c, w] * max(sign * (first[c] - here[c]), 0.0)
-            t_view[w] = math.exp(-tau)
         px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
-        sun_transmittance(px, py, pz, sun_direction, bottom_radius, top_radius,
-                          sun_angular_radius, model, extinction, cols[2], cols[3], t_sun)
+        visible = sun_columns(px, py, pz, sun_direction, bottom_radius, sun_angular_radius,
+                              model, cols[2])
+        # T(x, p) T_sun(p) in one exponential per wavelength
+        for w in range(n_wl):
+            tau_view = 0.0
+            tau_sun = 0.0
+            for c in range(n_c):
+                tau_view += extinction[c, w] * max(sign * (first[c] - here[c]), 0.0)
+                tau_sun += extinction[c, w] * cols[2, c]
+            t_sun[w] = visible * math.exp(-(tau_view + tau_sun)) if visible > 0.0 else 0.0
+            if k == last:
+                t_view[w] = math.exp(-tau_view)
         altitude = math.sqrt(px * px + py * py + pz * pz) - bottom_radius
         density_at(altitude, h_step, density, dens)
         step = 0.5 * (samples[k] - samples[k - 1]) if k > 0 else 0.0
@@ -114,7 +110,7 @@ def _march_ray(ox, oy, oz, dx, dy, dz, sun_direction, n_samples, bottom_radius, 
             if dens[c] == 0.0 and previous[c, 0] == 0.0:
                 continue
             for w in range(n_wl):
-                value = t_view[w] * dens[c] * t_sun[w]
+                value = dens[c] * t_sun[w]
                 inscatter[c, w] += step * (previous[c, w] + value)
                 previous[c, w] = value
     for w in range(n_wl):
@@ -124,7 +120,7 @@ def _march_ray(ox, oy, oz, dx, dy, dz, sun_direction, n_samples, bottom_radius, 
         mu_s = (gx * sun_direction[0] + gy * sun_direction[1]
                 + gz * sun_direction[2]) / math.sqrt(gx * gx + gy * gy + gz * gz)
         for w in range(n_wl):
-            ground[w] = t_view[w] * t_sun[w] * max(mu_s, 0.0)
+            ground[w] = t_sun[w] * max(mu_s, 0.0)  # t_sun holds T(x, g) T_sun(g) here
 
 
 @njit(parallel=True, cache=True)
