@@ -20,7 +20,7 @@ from skyscatter.transport.chapman import LAYER, exponential_column, layer_column
 from skyscatter.transport.geometry import atmosphere_segment, sun_visible_fraction
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def columns_to_infinity(r, mu, bottom_radius, kind, ground_density, scale_height, layer_radius,
                         layer_width, layer_column_, out):
     """Column [density x m] of every constituent (`chapman.ColumnModel` arrays) along the ray
@@ -35,7 +35,7 @@ def columns_to_infinity(r, mu, bottom_radius, kind, ground_density, scale_height
             out[c] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _point_columns(ox, oy, oz, dx, dy, dz, t, sign, bottom_radius, model, out):
     """Columns to infinity from the point o + t d along sign * d."""
     px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
@@ -45,7 +45,7 @@ def _point_columns(ox, oy, oz, dx, dy, dz, t, sign, bottom_radius, model, out):
                         model[2], model[3], model[4], model[5], out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sun_columns(px, py, pz, sun_direction, bottom_radius, sun_angular_radius, model, out):
     """Columns (n_c,) from the point p towards the sun to infinity (the part beyond the top,
     < 1e-5 of them for Earth's 100 km, is kept), into out; returns the visible part of the

@@ -123,7 +123,7 @@ def fit_constituents(profile: OpticalProfile) -> ColumnModel:
     return ColumnModel(kind, n0, height, radius, width, column)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def chapman_horizontal(x):
     """Ch(x, 90 deg) = (1 / (2 x) + 1) sqrt(pi x / 2) [-], x = r / H (Schüler 2012, eq. 11;
     exact for an exponential atmosphere to O(1 / x^2))."""
@@ -143,7 +143,7 @@ def chapman_schuler_2012(x, cos_chi):
             - c / ((c - 1.0) * -cos_chi + 1.0))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def exponential_column(r, mu, bottom_radius, scale_height):
     """Column [m per unit ground density] of exp(-(r' - R) / H) along the ray (r, mu) to
     infinity, Schüler's Ch(x, chi) exp(-(r - R) / H) times H (module docstring); finite for rays
@@ -159,7 +159,7 @@ def exponential_column(r, mu, bottom_radius, scale_height):
     return scale_height * (whole - above * c / ((c - 1.0) * -mu + 1.0))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def layer_column(r, mu, layer_radius, layer_width):
     """Column [per unit vertical column] of a thin shell of radius `layer_radius` and width
     `layer_width` [m] along the ray (r, mu) to infinity (the line's crossings ahead, the planet
