@@ -87,17 +87,32 @@ def test_the_scaled_column_is_the_chapman_function_times_the_density_and_height(
                                                                                   rel=1e-9)
 
 
-def test_a_thin_layer_is_crossed_once_from_below_twice_or_never_from_above():
-    # A shell at 25 km, 5 km wide: from the ground straight up the column is 1 / sqrt(1 +
-    # w / R_c) (the width's term); from above looking down twice that; looking up from above,
-    # or past the shell, 0.
-    shell = EARTH_RADIUS_M + 25e3
-    up = layer_column(EARTH_RADIUS_M, 1.0, shell, 5e3)
-    assert up == pytest.approx(1.0 / math.sqrt(1.0 + 5e3 / shell), rel=1e-12)
-    assert layer_column(shell + 10e3, -1.0, shell, 5e3) == pytest.approx(
-        2.0 / math.sqrt(1.0 + 5e3 / shell), rel=1e-12)
-    assert layer_column(shell + 10e3, 1.0, shell, 5e3) == 0.0
-    assert layer_column(shell + 10e3, -0.01, shell, 5e3) == 0.0  # perigee above the shell
+def test_a_layer_is_crossed_once_from_below_twice_or_never_from_above_and_smoothly():
+    # A layer at 25 km, 5 km wide. Far from it (5 widths) its Gaussian share is whole or
+    # nothing (to 3e-7): from the ground straight up the column is 1 / sqrt(1 + w / R_c) (the
+    # width's term), from 25 km above looking down twice that, looking up from there or along
+    # a line passing 25 km above it 0. Across the layer's centre and across grazing the column
+    # changes by less than 3e-4 of itself per metre (at the centre the Gaussian's 1 /
+    # (sqrt(2 pi) w) = 8e-5 of the column per metre, 1.6e-4 of the half above; 6e-5 at
+    # grazing; a hard shell would jump by its whole column).
+    shell, width = EARTH_RADIUS_M + 25e3, 5e3
+    slant = 1.0 / math.sqrt(1.0 + width / shell)
+    assert layer_column(EARTH_RADIUS_M, 1.0, shell, width) == pytest.approx(slant, rel=1e-6)
+    assert layer_column(shell + 25e3, -1.0, shell, width) == pytest.approx(2.0 * slant,
+                                                                           rel=1e-6)
+    assert layer_column(shell + 25e3, 1.0, shell, width) < 1e-6
+    # perigee 25 km above: twice the share 2.9e-7 times the grazing slant sqrt(R_c / w) = 36
+    r = shell + 30e3
+    assert layer_column(r, -math.sqrt(1.0 - ((shell + 25e3) / r) ** 2), shell, width) < 3e-5
+    for mu in (1.0, 0.2, -0.2):
+        upper = layer_column(shell + 0.5, mu, shell, width)
+        assert abs(upper - layer_column(shell - 0.5, mu, shell, width)) < 3e-4 * upper
+    # perigee 0.5 m below and above the layer's centre radius, seen from 40 km above it
+    r = shell + 40e3
+    mu_low = -math.sqrt(1.0 - ((shell - 0.5) / r) ** 2)
+    mu_high = -math.sqrt(1.0 - ((shell + 0.5) / r) ** 2)
+    low = layer_column(r, mu_low, shell, width)
+    assert abs(low - layer_column(r, mu_high, shell, width)) < 3e-4 * low
 
 
 def test_the_fit_recovers_exponential_scale_heights_and_a_layers_centroid():

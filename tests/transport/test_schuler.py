@@ -72,8 +72,9 @@ def test_the_ground_seen_from_above_is_the_ray_marched_one(solvers):
 def test_earths_ozone_as_a_thin_shell_seen_from_the_ground():
     # The earth preset's ozone alone (a layer: centroid 22.5 km, width 9 km) at 600 nm; its
     # optical depth from the ground against the ray march through its profile (2000 samples):
-    # measured ratios 0.999 (zenith), 0.979 (80 deg), 0.869 (88 deg), 0.773 (horizon): the
-    # thin shell misses the longer slant path of the layer's lower half near the horizon.
+    # measured ratios 0.993 (zenith: the Gaussian share puts 0.6 % below the ground), 0.973
+    # (80 deg), 0.863 (88 deg), 0.768 (horizon): the shell's slant factor misses the longer
+    # paths of the layer's lower half near the horizon.
     # Bounds: the measured ratios -0.02 and +0.01.
     profile = load_atmosphere("earth").optical_profile(np.array([600.0]))
     ozone = profile.names.index("ozone")
@@ -84,5 +85,5 @@ def test_earths_ozone_as_a_thin_shell_seen_from_the_ground():
     v = views([0.0, 80.0, 88.0, 90.0])
     ratio = (np.log(SchulerSolver(profile).transmittance(ground, v))
              / np.log(ray_marched_transmittance(profile, ground, v, n_samples=2000)))[:, 0]
-    measured = np.array([0.999, 0.979, 0.869, 0.773])
+    measured = np.array([0.993, 0.973, 0.863, 0.768])
     assert np.all(ratio > measured - 0.02) and np.all(ratio < measured + 0.01)

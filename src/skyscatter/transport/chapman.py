@@ -36,16 +36,19 @@ A constituent of the profile whose density is largest at the ground is fitted wi
 exponential of its ground density n0 and the scale height H that keeps its vertical column
 on the profile's levels, n0 H (1 - exp(-z_top / H)) (`fit_constituents`). Any other (an ozone
 layer, an elevated aerosol layer) is a thin absorbing shell at its column's centroid altitude
-z_c with its whole vertical column N; a ray crossing it at the local zenith cosine mu_c gains
-N / sqrt(mu_c^2 + w / (R + z_c)), w the layer's standard deviation in altitude, which is
-N / mu_c away from grazing and, at grazing, sqrt((R + z_c) / w) N, the column of a Gaussian
-layer of width w along its tangent (a thin shell's 1 / mu_c has no limit). Its limits: the
-layer's own thickness is ignored (an observer below the centroid sees the whole layer above,
-one above it none), and the inscattering of a layered scatterer still uses its true density
+z_c with its whole vertical column N, crossed at the local zenith cosine mu_c with the slant
+factor 1 / sqrt(mu_c^2 + w / (R + z_c)), w the layer's standard deviation in altitude: 1 / mu_c
+away from grazing, sqrt((R + z_c) / w) at grazing (a thin shell's 1 / mu_c has no limit). The
+share of the layer a ray crosses is that of a Gaussian of width w about z_c (the part above
+the ray's start going up; going down, the part between the perigee and the start and then all
+above the perigee), so that the column changes smoothly with the observer's height and the
+ray's perigee (a hard shell draws rings in twilight skies, where the sun's rays graze it). Its
+limits: the slant factor is the shell's, not the layer's (the lower half's longer paths near
+the horizon are missed), the Gaussian puts ~0.6 % of the preset's ozone below the ground, and
+the inscattering of a layered scatterer still uses its true density
 (`transport/schuler.py`). Earth's ozone (the earth preset, centroid 22.5 km, w 9 km) from the
-ground: the optical depth within 0.1 % at the zenith, 2 % low at 80 deg, 13 % at 88 deg and
-23 % at the horizon, where the layer's lower half, with the longer slant path, is not in the
-thin shell (tests/transport/test_schuler.py).
+ground: the optical depth 0.7 % low at the zenith, 2.7 % at 80 deg, 14 % at 88 deg and 23 % at
+the horizon (tests/transport/test_schuler.py).
 """
 
 from __future__ import annotations
@@ -161,12 +164,18 @@ def exponential_column(r, mu, bottom_radius, scale_height):
 
 @njit(cache=True, inline="always")
 def layer_column(r, mu, layer_radius, layer_width):
-    """Column [per unit vertical column] of a thin shell of radius `layer_radius` and width
-    `layer_width` [m] along the ray (r, mu) to infinity (the line's crossings ahead, the planet
-    ignored): each crossing 1 / sqrt(mu_c^2 + w / R_c), mu_c the zenith cosine there."""
+    """Column [per unit vertical column] of a layer centred on the radius `layer_radius` with
+    the width (standard deviation) `layer_width` [m] along the ray (r, mu) to infinity, the
+    planet ignored: the slant factor 1 / sqrt(mu_c^2 + w / R_c) of its crossing (mu_c the
+    zenith cosine at R_c; 0 where the line passes above it) times the share of the layer the
+    ray crosses, a Gaussian's: a(r) = erfc((r - R_c) / (sqrt(2) w)) / 2 above r upwards, and
+    2 a(p) - a(r) downwards through the perigee p (module docstring)."""
     p2 = r * r * (1.0 - mu * mu)  # perigee radius squared
-    cos2 = 1.0 - p2 / (layer_radius * layer_radius)
-    if cos2 < 0.0:
-        return 0.0
-    crossings = 1.0 if r < layer_radius else (2.0 if mu < 0.0 else 0.0)
-    return crossings / math.sqrt(cos2 + layer_width / layer_radius)
+    cos2 = max(1.0 - p2 / (layer_radius * layer_radius), 0.0)
+    scale = math.sqrt(2.0) * layer_width
+    above = 0.5 * math.erfc((r - layer_radius) / scale)
+    if mu < 0.0:
+        share = 2.0 * 0.5 * math.erfc((math.sqrt(p2) - layer_radius) / scale) - above
+    else:
+        share = above
+    return share / math.sqrt(cos2 + layer_width / layer_radius)
