@@ -243,7 +243,7 @@ def _add_solver_arguments(command: argparse.ArgumentParser, samples_default: int
                          help="scattering orders of the tables (default: the config's "
                          "[tables] orders: 8 for the earth preset)")
     command.add_argument("--samples", type=_samples, default=samples_default,
-                         help="single, hillaire: ray-marching samples per view ray; "
+                         help="single, hillaire, schuler: ray-marching samples per view ray; "
                          "montecarlo: paths per view ray and wavelength (default "
                          f"{samples_default})")
     command.add_argument("--allow-large", action="store_true", help=_ALLOW_LARGE_HELP)

@@ -5,7 +5,9 @@ it satisfies. A solver registered later is tested here without a new line.
 
 The atmosphere is `exponential_earth` cut to 2 wavelengths, so that the spectral axis cannot be
 mistaken for the 3 components of a direction; the solvers get small settings (`SMALL` tables
-of 2 orders, 16 samples or paths).
+of 2 orders, 16 samples or paths). A solver with a narrower `domain` (`solver_domain`: the
+analytic skies of Earth's ground) is held to it: outside, its sky radiance must be refused with
+an InputError, inside the same checks apply.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from skyscatter.transport.solvers import (
     TableSolver,
     make_solver,
     register_solver,
+    solver_domain,
 )
 
 DEG = math.pi / 180.0
@@ -38,6 +41,7 @@ SCALE_HEIGHTS_M = np.array([8000.0, 1200.0])  # of exponential_earth's two const
 GROUND = np.array([0.0, 0.0, EARTH_RADIUS_M])
 AIRCRAFT = GROUND + [0.0, 0.0, 10_000.0]
 ORBIT = GROUND + [0.0, 0.0, 400_000.0]
+NEAR_GROUND = GROUND + [0.0, 0.0, 500.0]  # a second observer inside a ground-only domain
 HIGH_SUN = local_frame_directions(60.0 * DEG, 0.0)
 CAPABILITIES = (SurfaceSolver, SurfaceRadianceSolver, NoisySolver, TableSolver)
 
@@ -81,6 +85,12 @@ def assert_radiance(radiance: np.ndarray, shape: tuple[int, ...]) -> None:
     assert np.all(np.isfinite(radiance)) and np.all(radiance >= 0.0)
 
 
+def assert_refused(call) -> None:
+    """The call raises the one-line InputError of a request outside the solver's domain."""
+    with pytest.raises(InputError, match="solver '.*' describes"):
+        call()
+
+
 def assert_transmittance(transmittance: np.ndarray, shape: tuple[int, ...]) -> None:
     assert transmittance.shape == shape
     assert np.all((transmittance >= 0.0) & (transmittance <= 1.0))
@@ -109,7 +119,8 @@ def test_positions_and_distances_broadcast_against_the_directions(solver):
     # Two observers (2, 1, 3) x three directions (3, 3) -> (2, 3, n_wl), row i equal to the
     # call for observer i alone. Deterministic answers agree to rounding (1e-12); noisy ones
     # draw other random numbers for other rays, so they agree within 5 standard errors.
-    positions = np.stack([GROUND, AIRCRAFT])[:, None, :]
+    second = NEAR_GROUND if solver_domain(solver).ground_only else AIRCRAFT
+    positions = np.stack([GROUND, second])[:, None, :]
     views = directions([0.0, 45.0, 80.0], [0.0, 90.0, 200.0])
     radiance = solver.sky_radiance(positions, views, HIGH_SUN)
     transmittance = solver.transmittance(positions, views)
@@ -151,7 +162,10 @@ def test_answers_are_finite_at_the_horizon(solver, position):
     # View zenith 89.9-90.1 deg, where the ray grazes the ground or the planet's limb.
     views = directions(np.array([89.9, 90.0, 90.1])[:, None], np.array([0.0, 90.0, 180.0]))
     shape = (3, 3, solver.profile.n_wavelengths)
-    assert_radiance(solver.sky_radiance(position, views, HIGH_SUN), shape)
+    if solver_domain(solver).ground_only and position is AIRCRAFT:
+        assert_refused(lambda: solver.sky_radiance(position, views, HIGH_SUN))
+    else:
+        assert_radiance(solver.sky_radiance(position, views, HIGH_SUN), shape)
     assert_transmittance(solver.transmittance(position, views), shape)
 
 
@@ -162,8 +176,11 @@ def test_answers_are_finite_with_the_sun_below_the_horizon(solver, sun_zenith_de
     sun = directions(sun_zenith_deg, 0.0)
     views = directions(np.array([0.0, 45.0, 85.0, 89.9, 90.1, 120.0])[:, None],
                        np.array([0.0, 90.0, 180.0]))
-    assert_radiance(solver.sky_radiance(GROUND, views, sun),
-                    (6, 3, solver.profile.n_wavelengths))
+    if solver_domain(solver).sun_above_horizon:
+        assert_refused(lambda: solver.sky_radiance(GROUND, views, sun))
+    else:
+        assert_radiance(solver.sky_radiance(GROUND, views, sun),
+                        (6, 3, solver.profile.n_wavelengths))
     assert np.all(solver.transmittance(GROUND, sun) == 0.0)
 
 
@@ -172,11 +189,14 @@ def test_an_observer_in_space_sees_no_sky_where_its_rays_miss_the_atmosphere(sol
     # radiance, nothing lost); straight down they meet the planet (lit ground and air seen,
     # no light of a source passes).
     views = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-    radiance = solver.sky_radiance(ORBIT, views, HIGH_SUN)
     transmittance = solver.transmittance(ORBIT, views)
+    np.testing.assert_array_equal(transmittance, [[1.0, 1.0], [1.0, 1.0], [0.0, 0.0]])
+    if solver_domain(solver).ground_only:
+        assert_refused(lambda: solver.sky_radiance(ORBIT, views, HIGH_SUN))
+        return
+    radiance = solver.sky_radiance(ORBIT, views, HIGH_SUN)
     assert_radiance(radiance, (3, solver.profile.n_wavelengths))
     assert np.all(radiance[:2] == 0.0) and np.all(radiance[2] > 0.0)
-    np.testing.assert_array_equal(transmittance, [[1.0, 1.0], [1.0, 1.0], [0.0, 0.0]])
 
 
 # The capabilities it claims --------------------------------------------------------------

@@ -14,11 +14,24 @@ the planet.
 
 What only some solvers can do is a capability protocol, asked for with `isinstance`:
 
-    protocol               members                                  lut single montecarlo hillaire
-    SurfaceSolver          ground_irradiance, aerial_perspective    yes yes    -          yes
-    SurfaceRadianceSolver  surface_radiance (albedo maps, terrain)  yes -      -          -
-    NoisySolver            sky_radiance_with_error                  -   -      yes        -
-    TableSolver            tables (eclipse optics, lowest sun)      yes -      -          -
+    solver               SurfaceSolver  SurfaceRadianceSolver  NoisySolver  TableSolver
+    lut                  yes            yes                    -            yes
+    single               yes            -                      -            -
+    montecarlo           -              -                      yes          -
+    hillaire             yes            -                      -            -
+    schuler              -              -                      -            -
+    bruneton-simplified  -              -                      -            -
+    cie, preetham        -              -                      -            -
+
+    SurfaceSolver          ground_irradiance, aerial_perspective
+    SurfaceRadianceSolver  surface_radiance (albedo maps, terrain)
+    NoisySolver            sky_radiance_with_error
+    TableSolver            tables (eclipse optics, lowest sun)
+
+Where a solver answers at all is its `domain` (`SolverDomain`, read by `solver_domain`): the
+analytic skies fitted to Earth's ground ("cie", "preetham") refuse other planets, observers
+off the ground and the sun below the horizon with an InputError; the others declare none
+(`ANYWHERE`).
 
 `tests/transport/test_solver_conformance.py` runs every registered solver through the same
 checks (shapes, units, broadcasting, wavelength last, finite at the horizon) and calls the
@@ -46,25 +59,33 @@ from numpy.typing import ArrayLike
 
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
+from skyscatter.transport.bruneton_simplified import BrunetonSimplifiedSolver, SimplifiedTables
 from skyscatter.transport.cache import TableCache
+from skyscatter.transport.cie_sky import DEFAULT_SKY_TYPE, CieSkySolver
+from skyscatter.transport.ground_sky import ANYWHERE, SolverDomain, solver_domain
 from skyscatter.transport.hillaire import HillaireSolver
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.monte_carlo import MonteCarloSolver
+from skyscatter.transport.preetham import DEFAULT_TURBIDITY, PreethamSolver
+from skyscatter.transport.schuler import SchulerSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver
 from skyscatter.transport.table_store import cached_tables
 from skyscatter.transport.tables import AtmosphereTables, TableResolution
 
 __all__ = [
+    "ANYWHERE",
     "SOLVERS",
     "NoisySolver",
     "Solver",
     "SolverFactory",
+    "SolverDomain",
     "SolverOptions",
     "SurfaceRadianceSolver",
     "SurfaceSolver",
     "TableSolver",
     "make_solver",
     "register_solver",
+    "solver_domain",
 ]
 
 
@@ -168,6 +189,8 @@ class SolverOptions:
     progress       callable(done, total, stage) during the precomputation ("lut")
     log            callable(message): one line on where the tables came from ("lut")
     seed           seed of the random numbers ("montecarlo")
+    sky_type       CIE standard general sky type 1-15 ("cie"; 12: the CIE clear sky)
+    turbidity      Linke-style turbidity of the analytic sky ("preetham"; 2.5: clear)
     """
 
     n_samples: int = 64
@@ -178,6 +201,8 @@ class SolverOptions:
     progress: Callable[[int, int, str], None] | None = None
     log: Callable[[str], None] | None = None
     seed: int = 0
+    sky_type: int = DEFAULT_SKY_TYPE
+    turbidity: float = DEFAULT_TURBIDITY
 
 
 SolverFactory = Callable[[OpticalProfile, SolverOptions], Solver]
@@ -237,3 +262,32 @@ def _montecarlo(profile: OpticalProfile, options: SolverOptions) -> MonteCarloSo
                              "approximate)")
 def _hillaire(profile: OpticalProfile, options: SolverOptions) -> HillaireSolver:
     return HillaireSolver(profile, n_samples=options.n_samples)
+
+
+@register_solver("schuler", "single scattering with Schüler's analytic Chapman-function "
+                            "transmittances (GPU Pro 3, 2012): no precomputation")
+def _schuler(profile: OpticalProfile, options: SolverOptions) -> SchulerSolver:
+    return SchulerSolver(profile, n_samples=options.n_samples)
+
+
+@register_solver("bruneton-simplified", "single scattering from a transmittance and a 4-D "
+                                        "single-scattering table only (Bruneton & Neyret 2008 "
+                                        "without the multiple-scattering tables)")
+def _bruneton_simplified(profile: OpticalProfile, options: SolverOptions
+                         ) -> BrunetonSimplifiedSolver:
+    tables = cached_tables(profile, options.resolution, 1, cache=options.cache,
+                           force=options.force, progress=options.progress, log=options.log)
+    return BrunetonSimplifiedSolver(
+        profile, SimplifiedTables.from_tables(tables, profile.sun_angular_radius_rad))
+
+
+@register_solver("cie", "CIE standard general sky (ISO 15469), sky_type 1-15, scaled to the "
+                        "\"lut\" zenith: Earth, ground, sun up")
+def _cie(profile: OpticalProfile, options: SolverOptions) -> CieSkySolver:
+    return CieSkySolver(profile, lambda: _lut(profile, options), sky_type=options.sky_type)
+
+
+@register_solver("preetham", "Preetham, Shirley & Smits 1999 analytic daylight of a turbidity: "
+                             "Earth, ground, sun up")
+def _preetham(profile: OpticalProfile, options: SolverOptions) -> PreethamSolver:
+    return PreethamSolver(profile, turbidity=options.turbidity)
