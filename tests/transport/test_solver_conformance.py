@@ -284,17 +284,17 @@ def test_tables_are_those_of_the_profile_and_options(solver, profile):
 
 
 def test_the_module_docstring_lists_each_solvers_capabilities_truly(solver):
-    # The table in `transport/solvers.py`'s docstring: a column per registered solver, "yes"
-    # exactly where the solver is an instance of the row's protocol.
+    # The table in `transport/solvers.py`'s docstring: a row per registered solver, a column
+    # per protocol, "yes" exactly where the solver is an instance of the column's protocol.
     lines = solvers.__doc__.splitlines()
-    header = next(line.split() for line in lines if line.split()[:2] == ["protocol", "members"])
-    columns = header[2:]
-    assert sorted(columns) == sorted(SOLVERS)
-    rows = {line.split()[0]: line.split()[-len(columns):] for line in lines
-            if line.split() and line.split()[0] in {p.__name__ for p in CAPABILITIES}}
-    assert set(rows) == {p.__name__ for p in CAPABILITIES}
+    header = next(line.split() for line in lines if line.split()[:1] == ["solver"])
+    columns = header[1:]
+    assert set(columns) == {p.__name__ for p in CAPABILITIES}
+    rows = {line.split()[0]: line.split()[1:] for line in lines
+            if line.split() and line.split()[0] in SOLVERS}
+    assert sorted(rows) == sorted(SOLVERS)
     for protocol in CAPABILITIES:
-        said = rows[protocol.__name__][columns.index(solver.name)]
+        said = rows[solver.name][columns.index(protocol.__name__)]
         assert said == ("yes" if isinstance(solver, protocol) else "-"), protocol.__name__
 
 

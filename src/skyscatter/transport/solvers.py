@@ -21,7 +21,8 @@ What only some solvers can do is a capability protocol, asked for with `isinstan
     hillaire             yes            -                      -            -
     schuler              -              -                      -            -
     bruneton-simplified  -              -                      -            -
-    cie, preetham        -              -                      -            -
+    cie                  -              -                      -            -
+    preetham             -              -                      -            -
 
     SurfaceSolver          ground_irradiance, aerial_perspective
     SurfaceRadianceSolver  surface_radiance (albedo maps, terrain)
