@@ -45,6 +45,7 @@ from skyscatter.atmosphere.cloud_field import CloudField, cloud_field
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.gas import describe_gas
 from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS, Atmosphere
+from skyscatter.atmosphere.variants import with_ground_albedo
 from skyscatter.checks import (
     ALTITUDE_M,
     ANGLE_DEG,
@@ -92,6 +93,7 @@ from skyscatter.render.scene import (
     render_sky,
     sun_direction,
 )
+from skyscatter.render.scene import without_ground as _without_ground
 from skyscatter.render.sky_at_time import (
     Ephemeris,
     Observer,
@@ -183,6 +185,8 @@ __all__ = [
     "render_at",
     "environment_light",
     "environment_series",
+    "without_ground",
+    "with_ground_albedo",
     "export_tables",
     "irradiance_dataset",
     "irradiance_rows",
@@ -805,7 +809,8 @@ def environment_series(atmosphere: Atmosphere, camera: Camera,
                        wavelengths_nm: Sequence[float] | None = None, solver: str = "lut",
                        options: SolverOptions | None = None, image: ImageOptions | None = None,
                        on_frame: Callable[[int, datetime.datetime], None] | None = None,
-                       allow_large: bool = False, clouds: Clouds | None = None) -> dict:
+                       allow_large: bool = False, clouds: Clouds | None = None,
+                       black_ground: bool = False) -> dict:
     """Environment maps of the sky at each of `times` (aware datetimes) for one place, as
     `render_at` sees it with a camera of the whole sphere (`environment_light`'s): in
     `out_dir`, `sky_00001.exr` ... (or `.hdr`: `suffix`; linear RGB as `save_image` writes
@@ -814,7 +819,8 @@ def environment_series(atmosphere: Atmosphere, camera: Camera,
     and, per time, its files and the sun (direction in the map's axes, elevation and azimuth
     [deg], illuminance [lux]). The tables serve every time. The folder is checked before any
     work and replaced as a whole when every map is written (as `timelapse`'s frames). Returns
-    the index. `on_frame(index, time)` is called after each map. InputError before any work
+    the index. `on_frame(index, time)` is called after each map. With `black_ground` the maps
+    are black below the horizon (`without_ground`). InputError before any work
     for bad arguments (as `render_at`, `check_mip_chain`) or more than `MAX_FRAMES` times."""
     _check_atmosphere(atmosphere)
     if not 1 <= len(times) <= MAX_FRAMES:
@@ -845,6 +851,8 @@ def environment_series(atmosphere: Atmosphere, camera: Camera,
         for number, observer in enumerate(observers, start=1):
             sky = _render_at(engine, atmosphere, camera, observer, objects or SkyObjects(),
                              None, None, None, clouds)
+            if black_ground:
+                sky = without_ground(sky, camera, atmosphere, elevation_m)
             names = {"map": f"sky_{number:05d}{suffix}", "light": f"light_{number:05d}.json"}
             save_image(sky, exr_path=folder / names["map"], options=image)
             light = environment_light(sky, camera, image.colour_space,
@@ -872,6 +880,18 @@ def environment_series(atmosphere: Atmosphere, camera: Camera,
         (folder / "index.json").write_text(json.dumps(index, indent=1, allow_nan=False)
                                            + "\n", encoding="utf-8")
     return index
+
+
+def without_ground(image: SkyImage, camera: Camera, atmosphere: Atmosphere,
+                   altitude_m: float = 0.0) -> SkyImage:
+    """`image`, as `camera` saw it from `altitude_m` [m] above `atmosphere`'s ground, black
+    wherever the view meets the planet (the ground and the air in front of it): an environment
+    map whose lower half an engine draws itself (`render --ground black`)."""
+    _check_atmosphere(atmosphere)
+    _check_camera(camera)
+    radius = atmosphere.planet.radius_m
+    return _without_ground(image, camera, radius + ALTITUDE_M.check("altitude_m", altitude_m),
+                           radius)
 
 
 def _sun_entry(light: dict) -> dict | None:

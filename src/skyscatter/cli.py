@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import difflib
 import json
+import math
 import os
 import re
 import sys
@@ -524,6 +525,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "chain, GGX-prefiltered (roughness k/(LEVELS-1) at level k, faces "
                         "halved at each), as FILE_mip1.exr ... beside the --exr FILE "
                         "(docs/engines.md)")
+    _add_ground_argument(render)
     render.add_argument("--no-sun-disk", action="store_true",
                         help="leave the sun's disk out of the image (with --light the sun is "
                         "then only the directional light)")
@@ -723,6 +725,34 @@ def _add_completion_command(commands: argparse._SubParsersAction) -> None:
     completion.set_defaults(run=_completion)
 
 
+def _ground_half(text: str) -> str | float:
+    """--ground: "tables", "black" or an albedo from 0 to 1."""
+    if text in ("tables", "black"):
+        return text
+    try:
+        albedo = float(text)
+    except ValueError:
+        albedo = math.nan
+    if not 0.0 <= albedo <= 1.0:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not tables, black or an albedo from 0 to 1")
+    return albedo
+
+
+def _add_ground_argument(command: argparse.ArgumentParser) -> None:
+    command.add_argument(
+        "--ground", type=_ground_half, default="tables", metavar="tables|black|ALBEDO",
+        help="below the horizon: the ground as the atmosphere's tables see it (default), "
+        "black (for a map whose lower half the engine draws), or a grey ground of this albedo "
+        "(0-1) in place of the config's, which lights the sky too (new tables)")
+
+
+def _with_ground(atmosphere, ground: str | float):
+    """The atmosphere over the ground of --ground ALBEDO, else as it is."""
+    from skyscatter import api
+    return atmosphere if isinstance(ground, str) else api.with_ground_albedo(atmosphere, ground)
+
+
 def _add_quiet_arguments(parser: argparse.ArgumentParser,
                          commands: argparse._SubParsersAction) -> None:
     """-q/--quiet before or after the command (`_stderr_unless_quiet`)."""
@@ -802,7 +832,7 @@ def _render(args: argparse.Namespace) -> None:
                              f"(or {', '.join(WHOLE_SPHERE[1:])})", key="light",
                              value=str(args.light))
         check_writable_file(args.light)
-    atmosphere = api.load_atmosphere(args.atmosphere)
+    atmosphere = _with_ground(api.load_atmosphere(args.atmosphere), args.ground)
     observer = _observer(args) if args.time is not None else None
     summary = None
     if observer is not None:  # checks that the planet has an ephemeris before any table work
@@ -845,6 +875,8 @@ def _render(args: argparse.Namespace) -> None:
                                orbit_longitude_deg=longitude, ground=ground,
                                allow_large=args.allow_large, clouds=clouds,
                                cloud_time_s=args.cloud_time, sun_disk=not args.no_sun_disk)
+    if args.ground == "black":
+        image = api.without_ground(image, camera, atmosphere, altitude)
     ev100 = api.save_image(image, image_target, args.exr, options=image_options)
     written = ["the PNG to standard output" if image_target is not args.output
                else str(args.output)] + ([str(args.exr)] if args.exr else [])
@@ -973,6 +1005,7 @@ def _add_envmap_command(commands) -> None:
     _add_solver_arguments(envmap, 64)
     _add_cloud_argument(envmap)
     _add_sky_object_arguments(envmap)
+    _add_ground_argument(envmap)
     envmap.add_argument("--no-sun-disk", action="store_true",
                         help="leave the sun's disk out of the maps (it stays in the light file)")
     envmap.add_argument("-o", "--output", type=Path, default=Path("envmaps"), metavar="DIR",
@@ -986,7 +1019,7 @@ def _envmap(args: argparse.Namespace) -> None:
     from skyscatter.cli_progress import progress
 
     times = _time_steps(args)
-    atmosphere = api.load_atmosphere(args.atmosphere)
+    atmosphere = _with_ground(api.load_atmosphere(args.atmosphere), args.ground)
     api.sky_ephemeris(atmosphere, _observer(args, args.start))  # checks before the tables
     camera = _camera(args)
     objects = _sky_objects(args)
@@ -998,7 +1031,7 @@ def _envmap(args: argparse.Namespace) -> None:
             objects=objects, wavelengths_nm=args.wavelengths, solver=args.solver,
             options=options, image=api.ImageOptions(colour_space=args.colour_space),
             on_frame=lambda *_: bar.update(1), allow_large=args.allow_large,
-            clouds=_clouds(args))
+            clouds=_clouds(args), black_ground=args.ground == "black")
     print(f"wrote {len(index['maps'])} maps and index.json in {args.output}", file=sys.stderr)
 
 

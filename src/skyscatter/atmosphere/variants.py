@@ -2,8 +2,8 @@
 amount scaled ("a dustier Mars", "Earth without aerosol"), or one constituent's phase function
 replaced by a Henyey-Greenstein one ("Mars with HG dust").
 
-Public names: `only_constituents`, `scaled_constituent`, `with_hg_phase`, `load_variant`,
-`mars_hg_dust`.
+Public names: `only_constituents`, `scaled_constituent`, `with_hg_phase`,
+`with_ground_albedo`, `load_variant`, `mars_hg_dust`.
 """
 
 from __future__ import annotations
@@ -14,14 +14,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from skyscatter.atmosphere.config import load_atmosphere
+from skyscatter.atmosphere.config_ranges import FRACTION
 from skyscatter.atmosphere.model import Atmosphere, ConstituentOptics
 from skyscatter.atmosphere.profiles import ScaledProfile
 from skyscatter.checks import Bounds
 from skyscatter.errors import InputError
 from skyscatter.optics.phase import HenyeyGreensteinPhase
+from skyscatter.spectrum.tabulated import SpectralParameter
 
 __all__ = ["MARS_HG_DUST_G", "SCALE_FACTOR", "load_variant", "mars_hg_dust", "only_constituents",
-           "scaled_constituent", "with_hg_phase"]
+           "scaled_constituent", "with_ground_albedo", "with_hg_phase"]
 
 # A constituent's amount times 0 (removed) to 1e6: a million times any constituent's amount is
 # beyond every comparison; inf or NaN would reach the solvers as NaN optics.
@@ -91,6 +93,17 @@ def with_hg_phase(atmosphere: Atmosphere, name: str, g: float,
                     for c in atmosphere.constituents)
     return replace(atmosphere, constituents=changed,
                    name=label or f"{atmosphere.name}:{name}~hg({g:g})")
+
+
+def with_ground_albedo(atmosphere: Atmosphere, albedo: float,
+                       label: str | None = None) -> Atmosphere:
+    """`atmosphere` over a grey Lambertian ground of `albedo` (0 to 1) at every wavelength, in
+    place of its planet's, called `label` (default: 'NAME:ground=ALBEDO'). The ground lights
+    the sky too, so its tables are those of the new ground."""
+    albedo = FRACTION.check("the ground albedo", albedo)
+    planet = replace(atmosphere.planet, ground_albedo=SpectralParameter.constant(albedo))
+    return replace(atmosphere, planet=planet,
+                   name=label or f"{atmosphere.name}:ground={albedo:g}")
 
 
 def mars_hg_dust() -> Atmosphere:

@@ -11,7 +11,7 @@ pixel that contains its centre, so the image always carries the right solar flux
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -46,6 +46,7 @@ __all__ = [
     "orbit_viewpoint",
     "render_sky",
     "sky_image",
+    "without_ground",
     "sun_direction",
 ]
 
@@ -193,6 +194,16 @@ def render_sky(solver, camera: Camera, viewpoint: Viewpoint, sun_dir: np.ndarray
                        draw=sun_disk)
     return sky_image(spectral, directions, valid, viewpoint, profile,
                      sun=SunLight(sun, sun_dir, star.angular_radius_rad, sun_disk))
+
+
+def without_ground(image: SkyImage, camera: Camera, radius_m: float,
+                   bottom_radius_m: float) -> SkyImage:
+    """`image` (of `camera`, seen from `radius_m` [m] from the planet's centre) with black
+    wherever the view meets the planet (below the geometric horizon): the ground and the air in
+    front of it, for an environment map whose lower half the engine draws itself."""
+    directions, valid = camera.directions()
+    below = valid & (directions[..., 2] < horizon_cos_zenith(radius_m, bottom_radius_m))
+    return replace(image, spectral=np.where(below[..., None], 0.0, image.spectral))
 
 
 def camera_image(directions: np.ndarray, valid: np.ndarray, n_wavelengths: int,
