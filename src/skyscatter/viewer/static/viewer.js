@@ -2,10 +2,13 @@
 // frame (shaders/*.glsl, the GLSL twins of the Python renderer), asks the server for new
 // tables when a physical parameter changes (a preview first, then the full tables), and
 // places the sun by hand or from a date, time and place; clouds (shaders/clouds.glsl) from the
-// server's cloud message, moved by their wind over the clouds' time.
+// server's cloud message, moved by their wind over the clouds' time. Until the tables for the
+// current physical parameters arrive, the clear sky is drawn by the fast model (fast.js,
+// shaders/fast_model.glsl), made again in the browser at each change.
 import {apiFetch, apiJson} from "./api.js";
-import {decodeClouds, decodeTables, deleteClouds, deleteTables, fetchLayout, uploadClouds,
-        uploadTables} from "./tables.js";
+import {FastModel} from "./fast.js";
+import {decodeClouds, decodeFast, decodeTables, deleteClouds, deleteTables, fetchLayout,
+        uploadClouds, uploadTables} from "./tables.js";
 import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
 import {cameraBasis, coarseSpacing, dot, localFrame, mapFrame, pixelDirection, shadedStretch,
         sunDirection, toWorld} from "./geometry.js";
@@ -31,7 +34,13 @@ const PROGRAMS = {
   cloudy_stars: [[...LIBRARY.slice(0, 4), "shaders/clouds.glsl", "shaders/stars.vert"],
                  ["generated/constants.glsl", "shaders/camera.glsl", "shaders/stars.frag"], "#define CLOUDS\n"],
   composite: [[""], ["generated/constants.glsl", "shaders/tonemap.glsl", "shaders/composite.frag"]],
+  fast_transmittance: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_transmittance.frag"]],
+  fast_multiple: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_multiple.frag"]],
+  fast_sky_view: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_sky_view.frag"]],
+  fast_sky: [[""], [...CLOUDY, "shaders/fast_model.glsl", "shaders/main.frag"], "#define FAST_MODEL\n"],
 };
+// What the page says is on screen (state.model)
+const MODEL_LABELS = {fast: "fast model (Hillaire 2020)", tables: "precomputed tables"};
 const PREFIX = "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler3D;\n";
 const FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n";
 const METER_SIZE = [64, 36];  // the auto-exposure meter renders the view this small
@@ -93,6 +102,10 @@ class Viewer {
     this.programs = programs;
     this.state = state;
     this.tables = null;
+    this.tablesKey = null;  // the physical parameters of the tables (physicalKey)
+    this.fast = null;  // the fast model of the current atmosphere (FastModel)
+    this.fastDescriptions = new Map();  // atmosphere -> decoded description
+    this.model = null;  // "fast" or "tables": what draws the sky
     this.stars = null;
     this.frameTimes = [];
     this.locations = new Map();
@@ -121,6 +134,7 @@ class Viewer {
     deleteClouds(this.gl, this.clouds);
     this.clouds = uploadClouds(this.gl, decoded);
     this.cloudsVersion = (this.cloudsVersion || 0) + 1;
+    if (this.model === "fast" && !this.fastPossible() && this.tables) this.setModel("tables");
   }
 
   // The clouds' time [s] since their initial state: with a date, the seconds since J2000 (as
@@ -436,9 +450,76 @@ class Viewer {
   }
 
   // The camera and sun uniforms of the current state for a w x h image
+  // The header of what draws the sky (radii, the star)
+  header() {
+    return this.model === "fast" ? this.fast.header : this.tables.header;
+  }
+
+  // The physical parameters the picture depends on
+  physicalKey() {
+    const s = this.state;
+    return JSON.stringify([s.atmosphere, s.amounts, s.albedo]);
+  }
+
+  // Whether the fast model can draw this view: float render targets, and no clouds (their
+  // march needs the tables)
+  fastPossible() {
+    return this.floatTargets && this.clouds.header.n_layers === 0;
+  }
+
+  // Shows the state's physical parameters with the fast model at once, unless the tables
+  // already hold them: loads the atmosphere's description (once), makes the LUTs again and
+  // draws; records the change-to-image time (this.lastFastChange). Returns whether it drew.
+  async showFast() {
+    const s = this.state;
+    const key = this.physicalKey();
+    if (!this.fastPossible() || key === this.tablesKey) return false;
+    const started = performance.now();
+    if (!this.fastDescriptions.has(s.atmosphere)) {
+      const response = await apiFetch(`fast?atmosphere=${encodeURIComponent(s.atmosphere)}`);
+      if (!response.ok) throw new Error((await response.json().catch(() => ({error: response.statusText}))).error);
+      this.fastDescriptions.set(s.atmosphere, decodeFast(await response.arrayBuffer(), this.layout));
+    }
+    return this.applyFast(started);
+  }
+
+  // The fast model of the state's parameters on screen now (its description loaded)
+  applyFast(started = performance.now()) {
+    const s = this.state;
+    const key = this.physicalKey();
+    const decoded = this.fastDescriptions.get(s.atmosphere);
+    if (!decoded || !this.fastPossible() || key === this.tablesKey) return false;
+    if (!this.fast || this.fast.header !== decoded.header) {
+      if (this.fast) this.fast.delete();
+      this.fast = new FastModel(this, decoded);
+    }
+    const gl = this.gl;
+    const pixel = new Uint8Array(4);
+    this.fast.compute(s.amounts, s.albedo);
+    this.fastKey = key;
+    this.setModel("fast");
+    const view = this.viewUniforms(this.canvas.width || 1, this.canvas.height || 1);
+    this.fast.skyView(view.u_camera_position, view.u_sun_direction);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);  // waits for the LUTs
+    const luts = performance.now();
+    this.frame();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);  // waits for the frame
+    const shown = performance.now();
+    this.lastFastChange = {total_ms: shown - started, luts_ms: luts - started, draw_ms: shown - luts};
+    return true;
+  }
+
+  setModel(model) {
+    this.model = model;
+    this.modelVersion = (this.modelVersion || 0) + 1;
+    document.body.dataset.model = model;
+    const label = document.getElementById("model");
+    if (label) label.textContent = MODEL_LABELS[model];
+  }
+
   viewUniforms(width, height) {
     const s = this.state;
-    const radius = this.tables.header.bottom_radius_m;
+    const radius = this.header().bottom_radius_m;
     const frame = localFrame(s.lat * DEG, s.lon * DEG);
     const position = frame[2].map((v) => v * (radius + s.altitude_m));
     const siteFrame = localFrame(s.site_lat * DEG, s.site_lon * DEG);
@@ -500,6 +581,17 @@ class Viewer {
   // The sky pass into the bound framebuffer (w x h): output "display", "meter" or "exposed"
   drawSky(width, height, output) {
     const gl = this.gl;
+    if (this.model === "fast") {
+      const view = this.viewUniforms(width, height);
+      this.fast.skyView(view.u_camera_position, view.u_sun_direction);
+      gl.useProgram(this.programs.fast_sky);
+      gl.viewport(0, 0, width, height);
+      this.fast.bind("fast_sky", 0);
+      this.setUniforms("fast_sky", {...view, u_output: this.layout.outputs.indexOf(output)});
+      gl.bindVertexArray(this.fullScreen);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      return;
+    }
     const cloudy = this.clouds.header.n_layers > 0;
     const refined = cloudy && this.floatTargets;
     const program = refined ? "cloud_final" : cloudy ? "cloudy_sky" : "sky";
@@ -530,7 +622,7 @@ class Viewer {
     const frame = this.textureTargets("frame", width, height, 1, {format: gl.RGBA16F});  // blendable
     gl.bindFramebuffer(gl.FRAMEBUFFER, frame.framebuffer);
     this.drawSky(width, height, "exposed");
-    if (this.stars && this.stars.count) {
+    if (this.stars && this.stars.count && this.model === "tables") {  // their light's path: the tables
       const stars = this.clouds.header.n_layers > 0 ? "cloudy_stars" : "stars";
       const view = this.viewUniforms(width, height);
       gl.useProgram(this.programs[stars]);
@@ -567,13 +659,13 @@ class Viewer {
 
   // Draws a frame when the view changed since the last one (an idle page costs nothing)
   frame() {
-    if (!this.tables) return false;
+    if (!this.model) return false;
     this.resize();
     // what the picture depends on: the view, not the physical parameters (those act through
     // new tables, so a slider does not redraw the old ones while the server computes)
     const {amounts, albedo, atmosphere, quality, ...view} = this.state;
     const signature = JSON.stringify([view, this.tablesVersion, this.starsVersion, this.cloudsVersion,
-                                      this.canvas.width, this.canvas.height]);
+                                      this.modelVersion, this.canvas.width, this.canvas.height]);
     if (signature === this.drawn) return false;
     this.drawn = signature;
     const gl = this.gl;
@@ -607,7 +699,7 @@ class Viewer {
   // (twin of render.tonemap.night_adapted_exposure)
   meter() {
     const gl = this.gl;
-    const header = this.tables.header;
+    const header = this.header();
     const exposure = this.layout.exposure;
     if (this.state.altitude_m > header.top_radius_m - header.bottom_radius_m) {
       const lux = header.sun_irradiance_xyz[1];
@@ -726,8 +818,21 @@ async function main() {
   const viewer = new Viewer(canvas, layout, programs, state);
   canvas.classList.toggle("fixed-size", Boolean(state.width || state.height));
   let request = 0;
+  // A physical parameter changed (or the page starts): the fast model shows it at once, the
+  // tables of the server follow and take over
   const reload = async () => {
     const mine = ++request;
+    const key = viewer.physicalKey();
+    try {
+      if (await viewer.showFast() && mine === request) {
+        const fast = viewer.lastFastChange;
+        showStatus(`fast model: image ${fast.total_ms.toFixed(0)} ms after the change (LUTs ${fast.luts_ms.toFixed(0)} ms, ` +
+                   `draw ${fast.draw_ms.toFixed(0)} ms); computing the tables`);
+      }
+    } catch (error) {
+      showError(error.message);
+    }
+    if (mine !== request) return;
     const params = new URLSearchParams({atmosphere: state.atmosphere});
     if (state.albedo !== null) params.set("albedo", state.albedo);
     for (const [name, value] of Object.entries(state.amounts)) params.set(`amount_${name}`, value);
@@ -740,6 +845,8 @@ async function main() {
         if (mine !== request) return;
         const received = performance.now();
         viewer.setTables(decoded);
+        viewer.tablesKey = key;
+        viewer.setModel("tables");
         viewer.frame();
         viewer.gl.readPixels(0, 0, 1, 1, viewer.gl.RGBA, viewer.gl.UNSIGNED_BYTE, new Uint8Array(4));  // waits for the frame
         const shown = performance.now();
@@ -767,8 +874,17 @@ async function main() {
       showError(error.message);
     }
   };
-  window.skyscatter = {viewer, state, reload, sky, reloadClouds, benchmark: (n) => viewer.benchmark(n)};
-  const refreshControls = bindControls(viewer, description, reload, sky, reloadClouds);
+  // a slider moved: the fast model at once, the tables after a pause (a dragged slider asks
+  // the server for its last value only)
+  let pause = null;
+  const physicalChanged = () => {
+    viewer.applyFast();
+    clearTimeout(pause);
+    pause = setTimeout(reload, 150);
+  };
+  window.skyscatter = {viewer, state, reload, sky, reloadClouds, physicalChanged,
+                       benchmark: (n) => viewer.benchmark(n)};
+  const refreshControls = bindControls(viewer, description, reload, sky, reloadClouds, physicalChanged);
   // Frame times: the intervals between animation frames that drew (while the view moves)
   let previous = null;
   const loop = (time) => {
