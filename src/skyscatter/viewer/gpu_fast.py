@@ -46,10 +46,11 @@ FAST_WAVELENGTH_BINS = 8  # those of the preview tables (viewer.table_service.QU
 FAST_GROUP = 4  # wavelengths per RGBA texel: one pass of each LUT per group
 MAX_CONSTITUENTS = 8  # the shader's uniform arrays
 MAX_GROUPS = 4  # wavelength groups the page converts to XYZ (16 wavelengths)
-# The LUTs' sizes and the samples of their ray marches: Hillaire's (2020, "Implementation"),
-# but 64 directions of the sphere for the multiple-scattering LUT as there (8 x 8) and
-# FAST_TRANSMITTANCE_STEPS for the transmittance (docs/viewer.md, Instant changes, measured)
-FAST_SIZES = {"transmittance": (256, 64), "multiple": (32, 32), "sky_view": (192, 108)}
+# The LUTs' sizes and the samples of their ray marches, Hillaire's (64 directions for the
+# multiple scattering), and the sky's irradiance on the ground over the sun's cosine, ours
+# (fast_model.glsl)
+FAST_SIZES = {"transmittance": (256, 64), "multiple": (32, 32), "irradiance": (32, 1),
+              "sky_view": (192, 108)}
 FAST_STEPS = {"transmittance": 40, "multiple": 20, "sky_view": 32}
 FAST_MULTIPLE_DIRECTIONS = 64
 

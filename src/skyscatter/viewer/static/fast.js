@@ -1,12 +1,13 @@
 // The fast model on the GPU (shaders/fast_model.glsl; S. Hillaire, EGSR 2020,
 // doi:10.1111/cgf.14050): the transmittance and multiple-scattering LUTs made again from the
-// atmosphere's description (viewer/gpu_fast.py) whenever a physical parameter changes, the
+// atmosphere's description (viewer/gpu_fast.py) whenever a physical parameter changes (and
+// our LUT of the sky's irradiance on the ground), the
 // sky-view LUT whenever the camera's altitude or the sun moves; one pass per LUT and group of
 // four wavelengths, into a layer of an RGBA16F texture array (needs EXT_color_buffer_float).
 
 const UNITS = {u_fast_transmittance: 0, u_fast_multiple: 1, u_fast_sky_view: 2,
-               u_fast_density: 3, u_fast_phase: 4};
-const LUTS = ["transmittance", "multiple", "sky_view"];
+               u_fast_density: 3, u_fast_phase: 4, u_fast_irradiance: 5};
+const LUTS = ["transmittance", "multiple", "irradiance", "sky_view"];
 
 function dataTexture(gl, internal, format, width, height, data) {
   const texture = gl.createTexture();
@@ -148,6 +149,7 @@ export class FastModel {
     this.albedo = albedo;
     this.pass("transmittance", "fast_transmittance");
     this.pass("multiple", "fast_multiple");
+    this.pass("irradiance", "fast_irradiance");
     gl.bindFramebuffer(gl.FRAMEBUFFER, previous);
     this.version += 1;
     this.viewKey = null;

@@ -36,6 +36,7 @@ const PROGRAMS = {
   composite: [[""], ["generated/constants.glsl", "shaders/tonemap.glsl", "shaders/composite.frag"]],
   fast_transmittance: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_transmittance.frag"]],
   fast_multiple: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_multiple.frag"]],
+  fast_irradiance: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_irradiance.frag"]],
   fast_sky_view: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_sky_view.frag"]],
   fast_sky: [[""], [...CLOUDY, "shaders/fast_model.glsl", "shaders/main.frag"], "#define FAST_MODEL\n"],
 };
@@ -489,6 +490,7 @@ class Viewer {
     const key = this.physicalKey();
     const decoded = this.fastDescriptions.get(s.atmosphere);
     if (!decoded || !this.fastPossible() || key === this.tablesKey) return false;
+    if (key === this.fastKey && this.model === "fast") return false;  // on screen already
     if (!this.fast || this.fast.header !== decoded.header) {
       if (this.fast) this.fast.delete();
       this.fast = new FastModel(this, decoded);
@@ -732,6 +734,19 @@ class Viewer {
     return metered - nightCompensationEv(logAverage, exposure);
   }
 
+  // The luminance Y [cd m^-2] of the view at w x h as the sky pass computes it and whether
+  // each pixel looks up (output "meter": [Y, up] row-major from the bottom row), for tests
+  luminance(width, height) {
+    const gl = this.gl;
+    const target = this.textureTargets("luminance", width, height, 1);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, target.framebuffer);
+    this.drawSky(width, height, "meter");
+    const p = new Float32Array(width * height * 4);
+    gl.readPixels(0, 0, width, height, gl.RGBA, gl.FLOAT, p);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    return Array.from({length: width * height}, (_, i) => [p[4 * i], p[4 * i + 1]]);
+  }
+
   // Milliseconds per frame over n frames drawn back to back, each waited for (readPixels)
   benchmark(n) {
     const gl = this.gl;
@@ -823,6 +838,17 @@ async function main() {
   const reload = async () => {
     const mine = ++request;
     const key = viewer.physicalKey();
+    const params = new URLSearchParams({atmosphere: state.atmosphere});
+    if (state.albedo !== null) params.set("albedo", state.albedo);
+    for (const [name, value] of Object.entries(state.amounts)) params.set(`amount_${name}`, value);
+    const started = performance.now();
+    const qualities = state.quality === "full" ? ["preview", "full"] : [state.quality];
+    const fetchQuality = (quality) => {
+      params.set("quality", quality);
+      return loadTables(viewer, params.toString(), showProgress);
+    };
+    const first = fetchQuality(qualities[0]);  // the server starts while the page draws the fast model
+    first.catch(() => {});  // handled below
     try {
       if (await viewer.showFast() && mine === request) {
         const fast = viewer.lastFastChange;
@@ -832,16 +858,9 @@ async function main() {
     } catch (error) {
       showError(error.message);
     }
-    if (mine !== request) return;
-    const params = new URLSearchParams({atmosphere: state.atmosphere});
-    if (state.albedo !== null) params.set("albedo", state.albedo);
-    for (const [name, value] of Object.entries(state.amounts)) params.set(`amount_${name}`, value);
-    const started = performance.now();
-    const qualities = state.quality === "full" ? ["preview", "full"] : [state.quality];
-    for (const quality of qualities) {
-      params.set("quality", quality);
+    for (const [index, quality] of qualities.entries()) {
       try {
-        const decoded = await loadTables(viewer, params.toString(), showProgress);
+        const decoded = await (index === 0 ? first : fetchQuality(quality));
         if (mine !== request) return;
         const received = performance.now();
         viewer.setTables(decoded);

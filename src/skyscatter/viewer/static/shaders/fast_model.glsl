@@ -13,6 +13,7 @@
 uniform highp sampler2DArray u_fast_transmittance;  // RGBA16F, one layer per group
 uniform highp sampler2DArray u_fast_multiple;       // RGBA16F, Psi_ms per unit irradiance
 uniform highp sampler2DArray u_fast_sky_view;       // RGBA16F, radiance per unit irradiance
+uniform highp sampler2DArray u_fast_irradiance;     // RGBA16F, the sky's on the ground
 uniform highp sampler2D u_fast_density;  // R32F (n_z, n_c), density / its largest: texelFetch
 uniform highp sampler2D u_fast_phase;    // RGBA32F (PHASE_ROW, n_c * n_g) [sr^-1]: texelFetch
 uniform int u_fast_constituents;
@@ -88,6 +89,14 @@ vec4 fast_multiple_scattering(float r, float mu_s, int g) {
     return texture(u_fast_multiple, vec3(uv, float(g)));
 }
 
+// The sky's irradiance on the ground per unit irradiance of the star, of group g at sun cosine
+// mu_s (the LUT: x = (mu_s + 1) / 2)
+vec4 fast_ground_irradiance(float mu_s, int g) {
+    float u = texture_coord_from_unit_range(clamp(0.5 * (mu_s + 1.0), 0.0, 1.0),
+                                            FAST_IRRADIANCE_SIZE.x);
+    return texture(u_fast_irradiance, vec3(u, 0.5, float(g)));
+}
+
 // The radiance per unit irradiance of this group along the ray from (r, mu) (the ray's plane
 // holds the sun: mu_s at the start, nu = cos(view, sun)) up to the ground or the top, with
 // `steps` samples placed quadratically (dense near the camera, where a ground camera's air is
@@ -95,8 +104,8 @@ vec4 fast_multiple_scattering(float r, float mu_s, int g) {
 // isotropic 1 / 4 pi where `isotropic`), the multiple scattering sigma_s Psi_ms unless
 // `isotropic` (Hillaire's in-scattering), each segment integrated as exp(-sigma_e t) with its
 // source held constant. The ground, where the ray meets it: Lambertian, lit by the sun and,
-// unless `isotropic`, by the sky, taken as pi Psi_ms (an isotropic sky: our addition; the
-// paper lights the ground by the sun only). Also the transmittance along the ray (`through`)
+// unless `isotropic`, by the sky (the irradiance LUT, fast_irradiance.frag: our addition to
+// Hillaire's LUTs, which light the ground by the sun alone). Also the transmittance along the ray (`through`)
 // and, for the multiple-scattering pass, the integral of sigma_s T (`f_ms`).
 vec4 fast_march(float r, float mu, float mu_s, float nu, int steps, bool isotropic,
                 out vec4 through, out vec4 f_ms) {
@@ -143,7 +152,7 @@ vec4 fast_march(float r, float mu, float mu_s, float nu, int steps, bool isotrop
     if (ground) {
         float mu_s_g = clamp((r * mu_s + d * nu) / u_bottom_radius, -1.0, 1.0);
         vec4 light = fast_sunlight(u_bottom_radius, mu_s_g, u_fast_group) * max(mu_s_g, 0.0);
-        if (!isotropic) light += PI * fast_multiple_scattering(u_bottom_radius, mu_s_g, u_fast_group);
+        if (!isotropic) light += fast_ground_irradiance(mu_s_g, u_fast_group);
         radiance += through * u_fast_albedo / PI * light;
     }
     return radiance;
