@@ -163,6 +163,10 @@ def fast_model(page, server, frames: int) -> None:
                   "v.applyFast(); })()")
     ms = page.evaluate(f"window.skyscatter.benchmark({frames})")
     print(f"fast model, frame 1920x1080 perspective: {ms:8.1f} ms")
+    page.evaluate("(() => { const v = window.skyscatter.viewer; v.tablesKey = v.physicalKey(); "
+                  "v.setModel('tables'); })()")
+    ms = page.evaluate(f"window.skyscatter.benchmark({frames})")
+    print(f"tables (preview), frame 1920x1080 perspective, same page: {ms:8.1f} ms")
     for name, statement in (("aerosol", "state.amounts.aerosol = 2.0"),
                             ("aerosol", "state.amounts.aerosol = 0.5"),
                             ("ozone", "state.amounts.ozone = 1.5"),

@@ -70,24 +70,26 @@ export class FastModel {
     Object.values(this.framebuffers).flat().forEach((f) => gl.deleteFramebuffer(f));
   }
 
-  // The uniforms of every fast program: the atmosphere, this group's coefficients (each
-  // constituent's times its factor in `amounts`), the ground albedo (`albedo`, or the
-  // description's spectral one when null) and the star
-  uniforms(group) {
+  // The uniforms of every fast program: each group's coefficients (each constituent's times
+  // its factor in this.amounts) and ground albedo (this.albedo, or the description's spectral
+  // one when null)
+  uniforms() {
     const h = this.header;
-    const max = this.viewer.layout.fast.max_constituents;
-    const extinction = new Float32Array(4 * max);
-    const scattering = new Float32Array(4 * max);
-    h.names.forEach((name, c) => {
-      const factor = this.amounts[name] ?? 1;
-      for (let k = 0; k < 4; ++k) {
-        extinction[4 * c + k] = factor * h.extinction_m[c][4 * group + k];
-        scattering[4 * c + k] = factor * h.scattering_m[c][4 * group + k];
-      }
-    });
-    const albedo = [0, 1, 2, 3].map((k) => this.albedo ?? h.ground_albedo[4 * group + k]);
-    return {u_fast_extinction: extinction, u_fast_scattering: scattering, u_fast_albedo: albedo,
-            u_fast_group: group};
+    const {max_constituents: max, max_groups: groups} = this.viewer.layout.fast;
+    const extinction = new Float32Array(4 * max * groups);
+    const scattering = new Float32Array(4 * max * groups);
+    const albedo = new Float32Array(4 * groups);
+    for (let g = 0; g < this.groups; ++g) {
+      h.names.forEach((name, c) => {
+        const factor = this.amounts[name] ?? 1;
+        for (let k = 0; k < 4; ++k) {
+          extinction[4 * (g * max + c) + k] = factor * h.extinction_m[c][4 * g + k];
+          scattering[4 * (g * max + c) + k] = factor * h.scattering_m[c][4 * g + k];
+        }
+      });
+      for (let k = 0; k < 4; ++k) albedo[4 * g + k] = this.albedo ?? h.ground_albedo[4 * g + k];
+    }
+    return {extinction, scattering, albedo};
   }
 
   // Binds the LUTs and data (those not in `writing`) and sets the uniforms for `program`
@@ -105,10 +107,10 @@ export class FastModel {
       const location = this.viewer.uniform(program, name);
       if (location !== null) gl[setter](location, ...values);
     };
-    const u = this.uniforms(group);
-    set("u_fast_extinction", "uniform4fv", u.u_fast_extinction);
-    set("u_fast_scattering", "uniform4fv", u.u_fast_scattering);
-    set("u_fast_albedo", "uniform4fv", u.u_fast_albedo);
+    const u = this.uniforms();
+    set("u_fast_extinction", "uniform4fv", u.extinction);
+    set("u_fast_scattering", "uniform4fv", u.scattering);
+    set("u_fast_albedo", "uniform4fv", u.albedo);
     set("u_fast_group", "uniform1i", group);
     set("u_fast_groups", "uniform1i", this.groups);
     set("u_fast_constituents", "uniform1i", this.constituents);

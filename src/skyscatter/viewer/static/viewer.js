@@ -39,6 +39,8 @@ const PROGRAMS = {
   fast_irradiance: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_irradiance.frag"]],
   fast_sky_view: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_sky_view.frag"]],
   fast_sky: [[""], [...CLOUDY, "shaders/fast_model.glsl", "shaders/main.frag"], "#define FAST_MODEL\n"],
+  fast_space: [[""], [...CLOUDY, "shaders/fast_model.glsl", "shaders/main.frag"],
+               "#define FAST_MODEL\n#define FAST_SPACE\n"],
 };
 // What the page says is on screen (state.model)
 const MODEL_LABELS = {fast: "fast model (Hillaire 2020)", tables: "precomputed tables"};
@@ -586,10 +588,12 @@ class Viewer {
     if (this.model === "fast") {
       const view = this.viewUniforms(width, height);
       this.fast.skyView(view.u_camera_position, view.u_sun_direction);
-      gl.useProgram(this.programs.fast_sky);
+      const space = Math.hypot(...view.u_camera_position) > this.fast.header.top_radius_m;
+      const program = space ? "fast_space" : "fast_sky";
+      gl.useProgram(this.programs[program]);
       gl.viewport(0, 0, width, height);
-      this.fast.bind("fast_sky", 0);
-      this.setUniforms("fast_sky", {...view, u_output: this.layout.outputs.indexOf(output)});
+      this.fast.bind(program, 0);
+      this.setUniforms(program, {...view, u_output: this.layout.outputs.indexOf(output)});
       gl.bindVertexArray(this.fullScreen);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
       return;

@@ -17,7 +17,7 @@ void main() {
         float phi = GOLDEN_ANGLE * float(k);
         vec3 dir = vec3(s * cos(phi), s * sin(phi), mu);
         vec4 through, f_ms;
-        irradiance += mu * fast_march(u_bottom_radius, mu, mu_s, dot(dir, sun),
+        irradiance += mu * fast_march(u_bottom_radius, mu, mu_s, dot(dir, sun), u_fast_group,
                                       FAST_MULTIPLE_STEPS, false, through, f_ms);
     }
     frag_colour = irradiance * (2.0 * PI / float(FAST_MULTIPLE_DIRECTIONS));

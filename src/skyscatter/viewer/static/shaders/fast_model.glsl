@@ -21,9 +21,10 @@ uniform int u_fast_altitudes;
 uniform float u_fast_altitude_step;      // [m]
 uniform int u_fast_groups;
 uniform int u_fast_group;                // the group a LUT pass computes
-uniform vec4 u_fast_extinction[FAST_MAX_CONSTITUENTS];  // this group's, at density 1 [m^-1]
-uniform vec4 u_fast_scattering[FAST_MAX_CONSTITUENTS];
-uniform vec4 u_fast_albedo;              // this group's ground albedo
+// the coefficients at density 1 [m^-1] of constituent c in group g at g * MAX + c
+uniform vec4 u_fast_extinction[FAST_MAX_CONSTITUENTS * FAST_MAX_GROUPS];
+uniform vec4 u_fast_scattering[FAST_MAX_CONSTITUENTS * FAST_MAX_GROUPS];
+uniform vec4 u_fast_albedo[FAST_MAX_GROUPS];  // the ground albedo of each group
 uniform mat4x3 u_fast_to_xyz[FAST_MAX_GROUPS];  // XYZ of each group: C_wc E_w (columns w)
 uniform float u_fast_view_radius;        // sky-view pass: the camera's r [m] ...
 uniform float u_fast_view_mu_s;          // ... and the sun's cosine there
@@ -39,25 +40,23 @@ float fast_density(int c, float h) {
     return mix(low, high, f - float(i));
 }
 
-// extinction and scattering coefficients [m^-1] of this group at radius r
-void fast_medium(float r, out vec4 extinction, out vec4 scattering) {
-    extinction = vec4(0.0);
-    scattering = vec4(0.0);
+// extinction coefficient [m^-1] of group g at radius r
+vec4 fast_extinction(float r, int g) {
+    vec4 extinction = vec4(0.0);
     float h = r - u_bottom_radius;
     for (int c = 0; c < FAST_MAX_CONSTITUENTS; ++c) {
         if (c >= u_fast_constituents) break;
-        float n = fast_density(c, h);
-        extinction += n * u_fast_extinction[c];
-        scattering += n * u_fast_scattering[c];
+        extinction += fast_density(c, h) * u_fast_extinction[g * FAST_MAX_CONSTITUENTS + c];
     }
+    return extinction;
 }
 
-// phase function of constituent c for this group at cos(scattering angle) nu, linear in the
+// phase function of constituent c for group g at cos(scattering angle) nu, linear in the
 // angle between the PHASE_ROW samples (as sky.glsl's phase_value)
-vec4 fast_phase(int c, float nu) {
+vec4 fast_phase(int c, float nu, int g) {
     float f = acos(clamp(nu, -1.0, 1.0)) / PI * float(PHASE_ROW - 1);
     int i = min(int(f), PHASE_ROW - 2);
-    int row = c * u_fast_groups + u_fast_group;
+    int row = c * u_fast_groups + g;
     vec4 low = texelFetch(u_fast_phase, ivec2(i, row), 0);
     vec4 high = texelFetch(u_fast_phase, ivec2(i + 1, row), 0);
     return mix(low, high, f - float(i));
@@ -97,7 +96,7 @@ vec4 fast_ground_irradiance(float mu_s, int g) {
     return texture(u_fast_irradiance, vec3(u, 0.5, float(g)));
 }
 
-// The radiance per unit irradiance of this group along the ray from (r, mu) (the ray's plane
+// The radiance per unit irradiance of group g along the ray from (r, mu) (the ray's plane
 // holds the sun: mu_s at the start, nu = cos(view, sun)) up to the ground or the top, with
 // `steps` samples placed quadratically (dense near the camera, where a ground camera's air is
 // densest): the sun's single scattering with each constituent's phase function (or the
@@ -107,7 +106,7 @@ vec4 fast_ground_irradiance(float mu_s, int g) {
 // unless `isotropic`, by the sky (the irradiance LUT, fast_irradiance.frag: our addition to
 // Hillaire's LUTs, which light the ground by the sun alone). Also the transmittance along the ray (`through`)
 // and, for the multiple-scattering pass, the integral of sigma_s T (`f_ms`).
-vec4 fast_march(float r, float mu, float mu_s, float nu, int steps, bool isotropic,
+vec4 fast_march(float r, float mu, float mu_s, float nu, int g, int steps, bool isotropic,
                 out vec4 through, out vec4 f_ms) {
     bool ground = ray_intersects_ground(r, mu, u_bottom_radius);
     float d = ground ? distance_to_bottom_boundary(r, mu, u_bottom_radius)
@@ -115,7 +114,7 @@ vec4 fast_march(float r, float mu, float mu_s, float nu, int steps, bool isotrop
     vec4 phase[FAST_MAX_CONSTITUENTS];
     for (int c = 0; c < FAST_MAX_CONSTITUENTS; ++c) {
         if (c >= u_fast_constituents) break;
-        phase[c] = isotropic ? vec4(0.25 / PI) : fast_phase(c, nu);
+        phase[c] = isotropic ? vec4(0.25 / PI) : fast_phase(c, nu, g);
     }
     vec4 radiance = vec4(0.0);
     through = vec4(1.0);
@@ -131,17 +130,18 @@ vec4 fast_march(float r, float mu, float mu_s, float nu, int steps, bool isotrop
         float mu_s_t = clamp((r * mu_s + t * nu) / r_t, -1.0, 1.0);
         vec4 extinction = vec4(0.0);
         vec4 source = vec4(0.0);
-        vec4 sunlight = fast_sunlight(r_t, mu_s_t, u_fast_group);
+        vec4 sunlight = fast_sunlight(r_t, mu_s_t, g);
         vec4 scattering = vec4(0.0);
         float h = r_t - u_bottom_radius;
         for (int c = 0; c < FAST_MAX_CONSTITUENTS; ++c) {
             if (c >= u_fast_constituents) break;
             float n = fast_density(c, h);
-            extinction += n * u_fast_extinction[c];
-            scattering += n * u_fast_scattering[c];
-            source += n * u_fast_scattering[c] * phase[c] * sunlight;
+            int k = g * FAST_MAX_CONSTITUENTS + c;
+            extinction += n * u_fast_extinction[k];
+            scattering += n * u_fast_scattering[k];
+            source += n * u_fast_scattering[k] * phase[c] * sunlight;
         }
-        if (!isotropic) source += scattering * fast_multiple_scattering(r_t, mu_s_t, u_fast_group);
+        if (!isotropic) source += scattering * fast_multiple_scattering(r_t, mu_s_t, g);
         vec4 segment = exp(-extinction * dt);
         vec4 share = mix(vec4(dt), (1.0 - segment) / max(extinction, vec4(1e-30)),
                          greaterThan(extinction, vec4(0.0)));
@@ -151,9 +151,9 @@ vec4 fast_march(float r, float mu, float mu_s, float nu, int steps, bool isotrop
     }
     if (ground) {
         float mu_s_g = clamp((r * mu_s + d * nu) / u_bottom_radius, -1.0, 1.0);
-        vec4 light = fast_sunlight(u_bottom_radius, mu_s_g, u_fast_group) * max(mu_s_g, 0.0);
-        if (!isotropic) light += fast_ground_irradiance(mu_s_g, u_fast_group);
-        radiance += through * u_fast_albedo / PI * light;
+        vec4 light = fast_sunlight(u_bottom_radius, mu_s_g, g) * max(mu_s_g, 0.0);
+        if (!isotropic) light += fast_ground_irradiance(mu_s_g, g);
+        radiance += through * u_fast_albedo[g] / PI * light;
     }
     return radiance;
 }
@@ -172,7 +172,9 @@ vec2 fast_sky_view_uv(float r, float mu, float cos_phi, bool hits_ground) {
 }
 
 // The radiance [XYZ] towards `dir` from `origin` (world) with the sun towards `sun_dir`: from
-// the sky-view LUT inside the atmosphere, by a march per pixel from space (as Hillaire's)
+// the sky-view LUT inside the atmosphere; with FAST_SPACE (a camera above the atmosphere,
+// viewer.js "fast_space") by a march per pixel, as Hillaire's (a program of its own: the
+// march's code in the LUT's program would cost it registers, as the clouds' did)
 vec3 fast_sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir) {
     vec4 entry = enter_atmosphere(origin, dir);
     if (entry.w == 0.0) return vec3(0.0);
@@ -183,16 +185,16 @@ vec3 fast_sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir) {
     float mu_s = dot(up, sun_dir);
     float nu = dot(dir, sun_dir);
     vec3 radiance = vec3(0.0);
-    if (length(origin) > u_top_radius) {
-        r = min(r, u_top_radius);
-        for (int g = 0; g < FAST_MAX_GROUPS; ++g) {
-            if (g >= u_fast_groups) break;
-            vec4 through, f_ms;
-            radiance += u_fast_to_xyz[g] * fast_march(r, mu, mu_s, nu, FAST_SKY_VIEW_STEPS,
-                                                      false, through, f_ms);
-        }
-        return radiance;
+#ifdef FAST_SPACE
+    r = min(r, u_top_radius);
+    for (int g = 0; g < FAST_MAX_GROUPS; ++g) {
+        if (g >= u_fast_groups) break;
+        vec4 through, f_ms;
+        radiance += u_fast_to_xyz[g] * fast_march(r, mu, mu_s, nu, g, FAST_SKY_VIEW_STEPS,
+                                                  false, through, f_ms);
     }
+    return radiance;
+#endif
     r = clamp(r, u_bottom_radius, u_top_radius);
     float spread = sqrt(max((1.0 - mu * mu) * (1.0 - mu_s * mu_s), 0.0));
     float cos_phi = spread > SPREAD_MIN ? (nu - mu * mu_s) / spread : 1.0;

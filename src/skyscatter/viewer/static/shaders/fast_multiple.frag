@@ -22,8 +22,8 @@ void main() {
         float phi = GOLDEN_ANGLE * float(k);
         vec3 dir = vec3(s * cos(phi), s * sin(phi), mu);
         vec4 through, transfer;
-        second += fast_march(r, mu, mu_s, dot(dir, sun), FAST_MULTIPLE_STEPS, true, through,
-                             transfer);
+        second += fast_march(r, mu, mu_s, dot(dir, sun), u_fast_group, FAST_MULTIPLE_STEPS, true,
+                             through, transfer);
         f_ms += transfer;
     }
     second /= float(FAST_MULTIPLE_DIRECTIONS);

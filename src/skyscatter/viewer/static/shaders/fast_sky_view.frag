@@ -20,5 +20,6 @@ void main() {
     float mu = cos(theta);
     float nu = sin(theta) * sqrt(max(1.0 - mu_s * mu_s, 0.0)) * cos(phi) + mu * mu_s;
     vec4 through, f_ms;
-    frag_colour = fast_march(r, mu, mu_s, nu, FAST_SKY_VIEW_STEPS, false, through, f_ms);
+    frag_colour = fast_march(r, mu, mu_s, nu, u_fast_group, FAST_SKY_VIEW_STEPS, false, through,
+                             f_ms);
 }

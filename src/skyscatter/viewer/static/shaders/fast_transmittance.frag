@@ -18,9 +18,8 @@ void main() {
         float s = (float(i) + 1.0) / float(FAST_TRANSMITTANCE_STEPS);
         float t_high = d * s * s;
         float t = 0.5 * (t_low + t_high);
-        vec4 extinction, scattering;
-        fast_medium(sqrt(max(t * t + 2.0 * r * mu * t + r * r, 0.0)), extinction, scattering);
-        depth += extinction * (t_high - t_low);
+        float r_t = sqrt(max(t * t + 2.0 * r * mu * t + r * r, 0.0));
+        depth += fast_extinction(r_t, u_fast_group) * (t_high - t_low);
         t_low = t_high;
     }
     frag_colour = exp(-depth);
