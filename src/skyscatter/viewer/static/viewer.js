@@ -452,7 +452,6 @@ class Viewer {
     this.tablesVersion = (this.tablesVersion || 0) + 1;
   }
 
-  // The camera and sun uniforms of the current state for a w x h image
   // The header of what draws the sky (radii, the star)
   header() {
     return this.model === "fast" ? this.fast.header : this.tables.header;
@@ -521,6 +520,7 @@ class Viewer {
     if (label) label.textContent = MODEL_LABELS[model];
   }
 
+  // The camera and sun uniforms of the current state for a w x h image
   viewUniforms(width, height) {
     const s = this.state;
     const radius = this.header().bottom_radius_m;
