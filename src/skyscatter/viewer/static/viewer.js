@@ -837,6 +837,11 @@ async function main() {
   const viewer = new Viewer(canvas, layout, programs, state);
   canvas.classList.toggle("fixed-size", Boolean(state.width || state.height));
   let request = 0;
+  const showFastStatus = () => {
+    const fast = viewer.lastFastChange;
+    showStatus(`fast model: image ${fast.total_ms.toFixed(0)} ms after the change (LUTs ${fast.luts_ms.toFixed(0)} ms, ` +
+               `draw ${fast.draw_ms.toFixed(0)} ms); computing the tables`);
+  };
   // A physical parameter changed (or the page starts): the fast model shows it at once, the
   // tables of the server follow and take over
   const reload = async () => {
@@ -854,11 +859,7 @@ async function main() {
     const first = fetchQuality(qualities[0]);  // the server starts while the page draws the fast model
     first.catch(() => {});  // handled below
     try {
-      if (await viewer.showFast() && mine === request) {
-        const fast = viewer.lastFastChange;
-        showStatus(`fast model: image ${fast.total_ms.toFixed(0)} ms after the change (LUTs ${fast.luts_ms.toFixed(0)} ms, ` +
-                   `draw ${fast.draw_ms.toFixed(0)} ms); computing the tables`);
-      }
+      if (await viewer.showFast() && mine === request) showFastStatus();
     } catch (error) {
       showError(error.message);
     }
@@ -901,7 +902,7 @@ async function main() {
   // the server for its last value only)
   let pause = null;
   const physicalChanged = () => {
-    viewer.applyFast();
+    if (viewer.applyFast()) showFastStatus();
     clearTimeout(pause);
     pause = setTimeout(reload, 150);
   };
