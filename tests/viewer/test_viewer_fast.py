@@ -66,7 +66,8 @@ def test_fast_description_round_trip(viewer_url):
     atmosphere = service.atmosphere("earth")
     profile = fast_profile(atmosphere)
     header, arrays = decode_fast(service.fast_message("earth"))
-    extinction = arrays["density"].T.astype(np.float64) @ np.array(header["extinction_m"])
+    levels = arrays["density"].reshape(len(header["names"]), -1)[:, :header["altitudes"]]
+    extinction = levels.T.astype(np.float64) @ np.array(header["extinction_m"])
     expected = profile.density.T @ profile.extinction_per_density
     np.testing.assert_allclose(extinction, expected, rtol=1e-6, atol=1e-12)  # float32 density
     # the phase rows: constituent c, group g holds p_c at that group's wavelengths

@@ -14,9 +14,12 @@ GPU two passes per table instead of one.
 
 Message layout (`encode_fast`, read by `gpu_tables.unpack_message`): b"SKYF", version, JSON
 header, then float32 arrays:
-  density   (n_c, n_z)                  each constituent's density over the uniform altitudes
-                                        0 .. top (header "altitude_step_m"), divided by its
-                                        largest value ("density_scale")
+  density   (n_c * rows, PHASE_ROW)     each constituent's density over the uniform altitudes
+                                        0 .. top (header "altitude_step_m", "altitudes" levels),
+                                        divided by its largest value ("density_scale"); level i
+                                        of constituent c at (i % PHASE_ROW, c * rows +
+                                        i // PHASE_ROW) ("density_rows": a fog's 13 335 levels
+                                        fit in a texture this way)
   phase     (n_c * n_g, PHASE_ROW, 4)   p_c(theta_i), theta_i = pi i / (PHASE_ROW - 1), of
                                         constituent c at the four wavelengths of group g in
                                         row c * n_g + g (zeros for a constituent that does not
@@ -73,7 +76,10 @@ def fast_description(atmosphere: Atmosphere, profile: OpticalProfile,
     groups = n_wl // FAST_GROUP
     scale = np.max(profile.density, axis=1)
     scale = np.where(scale > 0.0, scale, 1.0)
-    density = (profile.density / scale[:, None]).astype(np.float32)
+    n_z = profile.density.shape[1]
+    rows = -(-n_z // PHASE_ROW)
+    density = np.zeros((n_c, rows * PHASE_ROW), dtype=np.float32)
+    density[:, :n_z] = profile.density / scale[:, None]
     nu = np.cos(np.linspace(0.0, np.pi, PHASE_ROW))
     phase = np.zeros((n_c, groups, PHASE_ROW, FAST_GROUP), dtype=np.float32)
     for c, function in enumerate(profile.phases):
@@ -86,6 +92,8 @@ def fast_description(atmosphere: Atmosphere, profile: OpticalProfile,
         "bottom_radius_m": float(profile.bottom_radius_m),
         "top_radius_m": float(profile.top_radius_m),
         "altitude_step_m": float(profile.altitudes_m[1] - profile.altitudes_m[0]),
+        "altitudes": int(n_z),
+        "density_rows": int(rows),
         "wavelengths_nm": [float(v) for v in profile.wavelengths_nm],
         "groups": groups,
         "names": list(profile.names),
@@ -97,7 +105,7 @@ def fast_description(atmosphere: Atmosphere, profile: OpticalProfile,
         "xyz_weights": weights.tolist(),
         **sun_header(profile, atmosphere.planet.star, weights),
     }
-    return header, {"density": density,
+    return header, {"density": density.reshape(n_c * rows, PHASE_ROW),
                     "phase": phase.reshape(n_c * groups, PHASE_ROW, FAST_GROUP)}
 
 

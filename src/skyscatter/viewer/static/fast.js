@@ -28,11 +28,10 @@ export class FastModel {
     this.header = decoded.header;
     const h = this.header;
     this.groups = h.groups;
-    const [nC, nZ] = decoded.arrays.density.shape;
-    this.constituents = nC;
-    this.altitudes = nZ;
+    const [densityRows, densityRow] = decoded.arrays.density.shape;
+    this.constituents = h.names.length;
     this.textures = {
-      u_fast_density: dataTexture(gl, gl.R32F, gl.RED, nZ, nC, decoded.arrays.density.data),
+      u_fast_density: dataTexture(gl, gl.R32F, gl.RED, densityRow, densityRows, decoded.arrays.density.data),
       u_fast_phase: dataTexture(gl, gl.RGBA32F, gl.RGBA, decoded.arrays.phase.shape[1],
                                 decoded.arrays.phase.shape[0], decoded.arrays.phase.data),
     };
@@ -114,7 +113,8 @@ export class FastModel {
     set("u_fast_group", "uniform1i", group);
     set("u_fast_groups", "uniform1i", this.groups);
     set("u_fast_constituents", "uniform1i", this.constituents);
-    set("u_fast_altitudes", "uniform1i", this.altitudes);
+    set("u_fast_altitudes", "uniform1i", h.altitudes);
+    set("u_fast_density_rows", "uniform1i", h.density_rows);
     set("u_fast_altitude_step", "uniform1f", h.altitude_step_m);
     set("u_fast_to_xyz", "uniformMatrix4x3fv", false, this.toXyz);
     set("u_bottom_radius", "uniform1f", h.bottom_radius_m);

@@ -14,10 +14,12 @@ uniform highp sampler2DArray u_fast_transmittance;  // RGBA16F, one layer per gr
 uniform highp sampler2DArray u_fast_multiple;       // RGBA16F, Psi_ms per unit irradiance
 uniform highp sampler2DArray u_fast_sky_view;       // RGBA16F, radiance per unit irradiance
 uniform highp sampler2DArray u_fast_irradiance;     // RGBA16F, the sky's on the ground
-uniform highp sampler2D u_fast_density;  // R32F (n_z, n_c), density / its largest: texelFetch
+uniform highp sampler2D u_fast_density;  // R32F, density / its largest, level i of constituent
+                                         // c at (i % PHASE_ROW, c * rows + i / PHASE_ROW)
 uniform highp sampler2D u_fast_phase;    // RGBA32F (PHASE_ROW, n_c * n_g) [sr^-1]: texelFetch
 uniform int u_fast_constituents;
 uniform int u_fast_altitudes;
+uniform int u_fast_density_rows;
 uniform float u_fast_altitude_step;      // [m]
 uniform int u_fast_groups;
 uniform int u_fast_group;                // the group a LUT pass computes
@@ -35,8 +37,10 @@ float fast_density(int c, float h) {
     if (f >= float(u_fast_altitudes - 1)) return 0.0;
     f = max(f, 0.0);
     int i = int(f);
-    float low = texelFetch(u_fast_density, ivec2(i, c), 0).r;
-    float high = texelFetch(u_fast_density, ivec2(i + 1, c), 0).r;
+    int row = c * u_fast_density_rows;
+    float low = texelFetch(u_fast_density, ivec2(i % PHASE_ROW, row + i / PHASE_ROW), 0).r;
+    float high = texelFetch(u_fast_density,
+                            ivec2((i + 1) % PHASE_ROW, row + (i + 1) / PHASE_ROW), 0).r;
     return mix(low, high, f - float(i));
 }
 
