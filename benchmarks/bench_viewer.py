@@ -16,6 +16,11 @@
    CLOUD_VIEW (the view of tests/viewer/test_viewer_clouds.py), preview tables, the clouds'
    own ray march in the fragment shader (shaders/clouds.glsl); the cloud message's size.
    `--clouds-only` skips 1-3.
+5. The fast model (Hillaire 2020 on the GPU, docs/viewer.md "Instant changes"): the time of
+   each of its LUT passes (all wavelength groups, each waited for with a readPixels; median
+   of --frames), its frame at 1920 x 1080, and the time from a parameter change to its image
+   (`viewer.lastFastChange`: the LUTs made again and a frame drawn). `--fast-only` runs only
+   this section.
 
 Run: PYTHONPATH=src python benchmarks/bench_viewer.py [--frames 5] [--chromium PATH]
 (needs Debian's chromium and `pip install playwright`; `make test` installs both.)
@@ -49,6 +54,8 @@ def main() -> None:
                         help="only the preview tables (no full Earth tables)")
     parser.add_argument("--clouds-only", action="store_true",
                         help="only the frame time with clouds (section 4)")
+    parser.add_argument("--fast-only", action="store_true",
+                        help="only the fast model (section 5)")
     parser.add_argument("--screenshot", default=None,
                         help="save the cumulus frame as this PNG (docs/images/viewer_clouds.png)")
     args = parser.parse_args()
@@ -60,6 +67,11 @@ def main() -> None:
         page = browser.new_page(viewport={"width": 1920, "height": 1080})
         page.set_default_timeout(900_000)
         renderer = None
+        fast_model(page, server, args.frames)
+        if args.fast_only:
+            browser.close()
+            server.shutdown()
+            return
         for clouds in CLOUD_PRESETS:
             start = time.perf_counter()
             page.goto(f"{server.url}&controls=0&quality=preview&width=1280&height=720"
@@ -123,6 +135,48 @@ def main() -> None:
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory of the server process: {peak:.0f} MiB")
     server.shutdown()
+
+
+FAST_PASSES = (("transmittance", "fast_transmittance"), ("multiple", "fast_multiple"),
+               ("irradiance", "fast_irradiance"), ("sky_view", "fast_sky_view"))
+
+
+def fast_model(page, server, frames: int) -> None:
+    """Section 5: the fast model's passes, frame and change-to-image time."""
+    page.goto(f"{server.url}&controls=0&quality=preview&width=1920&height=1080&{VIEW}")
+    page.wait_for_function("document.body.dataset.ready === '1'")
+    for lut, program in FAST_PASSES:
+        ms = page.evaluate(f"""() => {{ const v = window.skyscatter.viewer; const times = [];
+            const view = v.viewUniforms(1920, 1080);
+            const [p, sun] = [view.u_camera_position, view.u_sun_direction];
+            const r = Math.hypot(...p);
+            const muS = p.reduce((s, x, i) => s + x * sun[i], 0) / r;
+            for (let i = 0; i < {frames}; ++i) {{
+                const t0 = performance.now();
+                v.fast.pass('{lut}', '{program}', {{u_fast_view_radius: r, u_fast_view_mu_s: muS}});
+                v.fast.read('{lut}', 0);
+                times.push(performance.now() - t0); }}
+            v.gl.bindFramebuffer(v.gl.FRAMEBUFFER, null);
+            return times.sort((a, b) => a - b)[times.length >> 1]; }}""")
+        print(f"fast model, {lut:13s} LUT pass (all groups): {ms:8.1f} ms")
+    page.evaluate("(() => { const v = window.skyscatter.viewer; v.tablesKey = null; "
+                  "v.applyFast(); })()")
+    ms = page.evaluate(f"window.skyscatter.benchmark({frames})")
+    print(f"fast model, frame 1920x1080 perspective: {ms:8.1f} ms")
+    page.evaluate("(() => { const v = window.skyscatter.viewer; v.tablesKey = v.physicalKey(); "
+                  "v.setModel('tables'); })()")
+    ms = page.evaluate(f"window.skyscatter.benchmark({frames})")
+    print(f"tables (preview), frame 1920x1080 perspective, same page: {ms:8.1f} ms")
+    for name, statement in (("aerosol", "state.amounts.aerosol = 2.0"),
+                            ("aerosol", "state.amounts.aerosol = 0.5"),
+                            ("ozone", "state.amounts.ozone = 1.5"),
+                            ("albedo", "state.albedo = 0.3")):
+        change = page.evaluate("() => { const state = window.skyscatter.state; "
+                               f"{statement}; window.skyscatter.viewer.applyFast(); "
+                               "return window.skyscatter.viewer.lastFastChange; }")
+        print(f"parameter change ({name:7s} {statement.split('= ')[1]}) -> fast model's image "
+              f"(1920x1080): {change['total_ms']:.0f} ms (LUTs {change['luts_ms']:.0f} ms, "
+              f"frame {change['draw_ms']:.0f} ms)")
 
 
 if __name__ == "__main__":

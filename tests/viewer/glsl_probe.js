@@ -26,6 +26,8 @@ async ({inputs, radii, mu_s_min, sun_angle_share, sizes, radius_warp, radius_war
         scattering_u_mu_s(mu_s, R_b, R_t, MU_S_MIN, SUN_ANGLE_SHARE, N_MU_S), scattering_u_nu(nu, mu, mu_s))`,
     transmittance_irradiance: `vec4(transmittance_x_from_r_mu(r, mu, R_b, R_t),
         irradiance_x_from_r_mu_s(r, mu_s, R_b, R_t))`,
+    transmittance_inverse: `vec4(transmittance_r_mu_from_x(0.5 * (nu + 1.0), 0.5 * (mu_s + 1.0), R_b, R_t)
+        - vec2(R_b, 0.0), 0.0, 0.0)`,
     distances: `vec4(distance_to_top_boundary(r, mu, R_t),
         ray_intersects_ground(r, mu, R_b) ? distance_to_bottom_boundary(r, mu, R_b) : -1.0,
         ray_intersects_ground(r, mu, R_b) ? 1.0 : 0.0,

@@ -969,3 +969,19 @@ def test_the_viewer_adds_a_bounded_amount_to_the_cache(server, tmp_path, monkeyp
     status, _, second = request(server, "/api/tables?quality=full&albedo=0.2")
     assert status == 200 and second[:4] == b"SKYT" and second != first
     assert table_entries(tmp_path / "cache") == stored
+
+
+def test_fast_description_route(server):
+    """/api/fast: the fast model's description of an atmosphere, answered without the table
+    lock; unknown atmospheres and parameters are a JSON 400 naming them, no token a 403."""
+    from skyscatter.viewer.gpu_fast import decode_fast
+    status, headers, body = request(server, "/api/fast?atmosphere=earth")
+    assert status == 200 and headers["Content-Type"] == "application/octet-stream"
+    header, arrays = decode_fast(body)
+    assert header["names"] == ["air", "ozone", "aerosol"] and header["altitudes"] == 2001
+    status, _, body = request(server, "/api/fast?atmosphere=venus-of-nowhere")
+    assert status == 400 and "venus-of-nowhere" in json.loads(body)["error"]
+    status, _, body = request(server, "/api/fast?atmosphere=earth&amount_air=2")
+    assert status == 400 and "amount_air" in json.loads(body)["error"]
+    status, _, _ = request(server, "/api/fast?atmosphere=earth", headers={TOKEN_HEADER: "x"})
+    assert status == 403

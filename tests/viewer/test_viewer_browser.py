@@ -151,7 +151,8 @@ def _python_mappings(inputs: np.ndarray, bottom: float, top: float, mu_s_min: fl
                      sun_angle_share: float, sizes: tuple[int, int, int],
                      radius_warp: np.ndarray) -> dict[str, np.ndarray]:
     n_r, n_mu, n_mu_s = sizes
-    rows = {"scattering_uvwz": [], "transmittance_irradiance": [], "distances": []}
+    rows = {"scattering_uvwz": [], "transmittance_irradiance": [], "distances": [],
+            "transmittance_inverse": []}
     for r, mu, mu_s, nu in inputs:
         ground = tp.ray_intersects_ground(r, mu, bottom)
         rows["scattering_uvwz"].append(
@@ -161,6 +162,9 @@ def _python_mappings(inputs: np.ndarray, bottom: float, top: float, mu_s_min: fl
         rows["transmittance_irradiance"].append(
             tp.transmittance_x_from_r_mu(r, mu, bottom, top)
             + tp.irradiance_x_from_r_mu_s(r, mu_s, bottom, top))
+        r_x, mu_x = tp.transmittance_r_mu_from_x(0.5 * (nu + 1.0), 0.5 * (mu_s + 1.0), bottom,
+                                                 top)
+        rows["transmittance_inverse"].append((r_x - bottom, mu_x, 0.0, 0.0))
         rows["distances"].append((
             tp.distance_to_top_boundary(r, mu, top),
             tp.distance_to_bottom_boundary(r, mu, bottom) if ground else -1.0,
@@ -212,6 +216,12 @@ def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii, layer
                                atol=3e-4)
     np.testing.assert_allclose(gl["transmittance_irradiance"],
                                expected["transmittance_irradiance"], rtol=0, atol=3e-4)
+    # the fast model's inverse of the transmittance mapping (nu and mu_s as x_mu and x_r):
+    # altitudes within float32's 0.5 m of r, mu within float32's cancellation near the top
+    np.testing.assert_allclose(gl["transmittance_inverse"][:, 0],
+                               expected["transmittance_inverse"][:, 0], rtol=0, atol=2.0)
+    np.testing.assert_allclose(gl["transmittance_inverse"][:, 1],
+                               expected["transmittance_inverse"][:, 1], rtol=0, atol=2e-4)
     np.testing.assert_array_equal(gl["distances"][:, 2], expected["distances"][:, 2])
     # distances: float32 rounding of r (0.5 m) and of the square root's argument
     np.testing.assert_allclose(gl["distances"][:, :2], expected["distances"][:, :2],

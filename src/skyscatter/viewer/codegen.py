@@ -41,6 +41,16 @@ from skyscatter.transport.clouds import REFINE_TOLERANCE
 from skyscatter.transport.table_parameterisation import SPREAD_MIN
 from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS
 from skyscatter.viewer.gpu_clouds import CLOUD_FORMAT_VERSION, CLOUD_LAYOUT, CLOUD_MAGIC
+from skyscatter.viewer.gpu_fast import (
+    FAST_FORMAT_VERSION,
+    FAST_GROUP,
+    FAST_MAGIC,
+    FAST_MULTIPLE_DIRECTIONS,
+    FAST_SIZES,
+    FAST_STEPS,
+    MAX_CONSTITUENTS,
+    MAX_GROUPS,
+)
 from skyscatter.viewer.gpu_tables import (
     FORMAT_VERSION,
     LAYOUT,
@@ -132,7 +142,8 @@ def constants_glsl() -> str:
                                     "transport/table_parameterisation.py, transport/tables.py, "
                                     "spectrum/colour.py, atmosphere/_cloud_sampling.py, "
                                     "transport/_cloud_kernels.py, "
-                                    "transport/air_shadows.py, transport/clouds.py"),
+                                    "transport/air_shadows.py, transport/clouds.py, "
+                                    "viewer/gpu_fast.py"),
              *table_constant_lines(),
              f"#define SUN_DISK_SAMPLES {SUN_DISK_SAMPLES}",
              f"const float SPLAT_PIXELS = {float(SPLAT_PIXELS)!r};",
@@ -145,7 +156,19 @@ def constants_glsl() -> str:
     lines += [f"#define OUTPUT_{name.upper()} {i}" for i, name in enumerate(OUTPUTS)]
     lines.append(f"const float HALF_MAX = {HALF_MAX!r};  // largest float16 of the frame target")
     lines += _cloud_lines()
+    lines += _fast_lines()
     return "\n".join(lines) + "\n"
+
+
+def _fast_lines() -> list[str]:
+    """The fast model's part of constants.glsl (viewer/gpu_fast.py)."""
+    lines = [f"#define FAST_MAX_CONSTITUENTS {MAX_CONSTITUENTS}",
+             f"#define FAST_MAX_GROUPS {MAX_GROUPS}",
+             f"#define FAST_MULTIPLE_DIRECTIONS {FAST_MULTIPLE_DIRECTIONS}"]
+    for name, (width, height) in FAST_SIZES.items():
+        lines.append(f"const vec2 FAST_{name.upper()}_SIZE = vec2({width}.0, {height}.0);")
+    lines += [f"#define FAST_{name.upper()}_STEPS {value}" for name, value in FAST_STEPS.items()]
+    return lines
 
 
 def _shadow_map_layout() -> dict:
@@ -161,7 +184,8 @@ def _shadow_map_layout() -> dict:
 def layout_json() -> str:
     """The table message's format, for the JavaScript decoder."""
     return json.dumps({"generated_by": "skyscatter.viewer.codegen from viewer/gpu_tables.py, "
-                                       "viewer/gpu_clouds.py, atmosphere/_cloud_sampling.py",
+                                       "viewer/gpu_fast.py, viewer/gpu_clouds.py, "
+                                       "atmosphere/_cloud_sampling.py",
                        "magic": MAGIC.decode(), "format_version": FORMAT_VERSION,
                        "phase_row": PHASE_ROW, "sun_disk_samples": SUN_DISK_SAMPLES,
                        "max_tables": MAX_TABLES, "operators": list(OPERATORS),
@@ -175,6 +199,11 @@ def layout_json() -> str:
                                     "dark_scene_key": _DARK_SCENE_KEY,
                                     "daylight_log_average_cd_m2": _DAYLIGHT_LOG_AVERAGE_CD_M2,
                                     "ev100_range": list(EV100_RANGE)},
+                       "fast": {"magic": FAST_MAGIC.decode(),
+                                "format_version": FAST_FORMAT_VERSION,
+                                "group": FAST_GROUP, "max_groups": MAX_GROUPS,
+                                "max_constituents": MAX_CONSTITUENTS,
+                                "sizes": {k: list(v) for k, v in FAST_SIZES.items()}},
                        "clouds": {"magic": CLOUD_MAGIC.decode(),
                                   "format_version": CLOUD_FORMAT_VERSION,
                                   "columns": cloud_columns(),

@@ -44,8 +44,6 @@ offsets and with the dtypes the header gives:
 
 from __future__ import annotations
 
-import json
-import struct
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,7 +52,7 @@ from skyscatter.atmosphere.cloud_config import Clouds
 from skyscatter.atmosphere.cloud_field import cloud_field
 from skyscatter.spectrum.colour import cmf_weights
 from skyscatter.transport.clouds import ground_shade, kernel_arrays
-from skyscatter.viewer.gpu_tables import unpack_message
+from skyscatter.viewer.gpu_tables import pack_message, unpack_message
 
 __all__ = ["CLOUD_FORMAT_VERSION", "CLOUD_LAYOUT", "CLOUD_MAGIC", "GpuClouds", "decode_clouds",
            "encode_clouds", "gpu_clouds"]
@@ -126,18 +124,7 @@ def gpu_clouds(clouds: Clouds, bottom_radius_m: float, wavelengths_nm: np.ndarra
 
 def encode_clouds(gpu: GpuClouds) -> bytes:
     """The binary message of `gpu` (module docstring)."""
-    offsets, blobs, position = {}, [], 0
-    for name, array in gpu.arrays.items():
-        dtype = "float16" if array.dtype == np.float16 else "float32"
-        blob = array.astype("<f2" if dtype == "float16" else "<f4", copy=False).tobytes()
-        offsets[name] = {"offset": position, "shape": list(array.shape), "dtype": dtype}
-        blobs.append(blob)
-        position += len(blob)
-    header = dict(gpu.header, arrays=offsets)
-    text = json.dumps(header, separators=(",", ":")).encode()
-    text += b" " * (-(len(text) + 12) % 4)  # arrays start 4-byte aligned (typed-array views)
-    return b"".join([CLOUD_MAGIC, struct.pack("<II", CLOUD_FORMAT_VERSION, len(text)), text,
-                     *blobs])
+    return pack_message((CLOUD_MAGIC, CLOUD_FORMAT_VERSION), gpu.header, gpu.arrays)
 
 
 def decode_clouds(message: bytes) -> GpuClouds:

@@ -53,7 +53,7 @@ from skyscatter.transport.tables import AtmosphereTables, is_identity_warp
 
 __all__ = ["FORMAT_VERSION", "GpuTables", "LAYOUT", "MAGIC", "MAX_TABLES", "PHASE_ROW",
            "SUN_DISK_SAMPLES", "channel_tables", "decode", "encode", "gpu_tables",
-           "scaled_float16"]
+           "pack_message", "scaled_float16", "sun_header", "unpack_message"]
 
 MAGIC = b"SKYT"
 FORMAT_VERSION = 2  # 2: the header holds the radius warp
@@ -145,8 +145,6 @@ def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
     n_t, n_r, n_mu, n_nu, n_mu_s, _ = scattering.shape
     phase_rows = channels["phase"].shape[0] // (n_t - 1)
     albedo = channels["ground_albedo"]
-    cos_limb = np.linspace(0.0, 1.0, SUN_DISK_SAMPLES)
-    disk = star.disk_radiance(profile.wavelengths_nm, cos_limb) @ weights
     arrays, scales = {}, {}
     for name in ("transmittance", "irradiance", "phase"):
         arrays[name], scales[name] = scaled_float16(channels[name])
@@ -176,26 +174,45 @@ def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
         "phase_rows": int(phase_rows),
         "scales": scales,
         "ground_albedo_xyz": [float(v) for v in albedo],
-        "sun_irradiance_xyz": [float(v) for v in channels["sun_irradiance"]],
-        "sun_angular_radius_rad": float(profile.sun_angular_radius_rad),
-        "sun_solid_angle_sr": float(star.solid_angle_sr),
-        "sun_disk_xyz": [[float(v) for v in row] for row in disk],
+        **sun_header(profile, star, weights),
     }
     return GpuTables(header, arrays)
 
 
+def sun_header(profile: OpticalProfile, star: Star, weights: np.ndarray) -> dict:
+    """The star as the viewer draws it, in the channels of `weights` (n_wl, 3): its
+    irradiance at the top ("sun_irradiance_xyz"), angular radius, solid angle and the
+    limb-darkened disk radiance at SUN_DISK_SAMPLES cosines of the limb angle."""
+    cos_limb = np.linspace(0.0, 1.0, SUN_DISK_SAMPLES)
+    disk = star.disk_radiance(profile.wavelengths_nm, cos_limb) @ weights
+    sun = np.asarray(profile.toa_irradiance, dtype=np.float64) @ weights
+    return {"sun_irradiance_xyz": [float(v) for v in sun],
+            "sun_angular_radius_rad": float(profile.sun_angular_radius_rad),
+            "sun_solid_angle_sr": float(star.solid_angle_sr),
+            "sun_disk_xyz": [[float(v) for v in row] for row in disk]}
+
+
 def encode(gpu: GpuTables) -> bytes:
     """The binary message of `gpu` (module docstring)."""
+    return pack_message((MAGIC, FORMAT_VERSION), gpu.header, gpu.arrays)
+
+
+def pack_message(magic_and_version: tuple[bytes, int], header: dict,
+                 arrays: dict[str, np.ndarray]) -> bytes:
+    """The binary message `unpack_message` reads: the magic, the version, the JSON header with
+    each array's offset, shape and dtype (float16 arrays as float16, the rest as float32), then
+    the arrays, little-endian, the first 4-byte aligned (typed-array views in JavaScript)."""
+    magic, version = magic_and_version
     offsets, blobs, position = {}, [], 0
-    for name, array in gpu.arrays.items():
-        blob = array.astype("<f2", copy=False).tobytes()
-        offsets[name] = {"offset": position, "shape": list(array.shape), "dtype": "float16"}
+    for name, array in arrays.items():
+        dtype = "float16" if array.dtype == np.float16 else "float32"
+        blob = array.astype("<f2" if dtype == "float16" else "<f4", copy=False).tobytes()
+        offsets[name] = {"offset": position, "shape": list(array.shape), "dtype": dtype}
         blobs.append(blob)
         position += len(blob)
-    header = dict(gpu.header, arrays=offsets)
-    text = json.dumps(header, separators=(",", ":")).encode()
-    text += b" " * (-(len(text) + 12) % 4)  # arrays start 4-byte aligned (Uint16Array views)
-    return b"".join([MAGIC, struct.pack("<II", FORMAT_VERSION, len(text)), text, *blobs])
+    text = json.dumps(dict(header, arrays=offsets), separators=(",", ":")).encode()
+    text += b" " * (-(len(text) + 12) % 4)
+    return b"".join([magic, struct.pack("<II", version, len(text)), text, *blobs])
 
 
 def decode(message: bytes) -> GpuTables:

@@ -12,6 +12,8 @@ Routes (GET and HEAD only; anything else 405):
                         bad parameter, 409 when a newer request of the same client superseded
                         it, 429 when too many wait
   /api/progress         the table computation under way
+  /api/fast?atmosphere  the compact description of an atmosphere for the page's fast model
+                        (Hillaire 2020 on the GPU), binary (`gpu_fast.encode_fast`)
   /api/clouds?clouds&atmosphere
                         cloud layers offered by name (a preset or the --clouds file), binary
                         (`gpu_clouds.encode_clouds`); 400 for a name not offered
@@ -448,6 +450,14 @@ class Handler(BaseHTTPRequestHandler):
             self._send(HTTPStatus.OK, message, "application/octet-stream")
         elif route == "/api/progress":
             self._json(HTTPStatus.OK, service.progress)
+        elif route == "/api/fast":
+            unknown = sorted(set(query) - {"atmosphere"})
+            if unknown:
+                raise InputError(f"unknown parameter {unknown[0]!r}; known: atmosphere",
+                                 key=unknown[0])
+            self._send(HTTPStatus.OK,
+                       service.fast_message(query.get("atmosphere", service.default)),
+                       "application/octet-stream")
         elif route == "/api/sky":
             self._json(HTTPStatus.OK, self._sky(query))
         else:

@@ -51,6 +51,7 @@ from skyscatter.spectrum.grid import DEFAULT_WAVELENGTH_BINS, wavelength_grid
 from skyscatter.transport.cache import TableCache
 from skyscatter.transport.table_store import cached_tables
 from skyscatter.transport.tables import AtmosphereTables, TableResolution
+from skyscatter.viewer.gpu_fast import encode_fast, fast_description, fast_profile
 from skyscatter.viewer.gpu_tables import encode, gpu_tables
 
 __all__ = ["BusyError", "QUALITIES", "SupersededError", "TableRequest", "TableService",
@@ -147,6 +148,7 @@ class TableService:
         self._latest: dict[str, int] = {}  # client -> its newest request's generation
         self._waiting = 0
         self._messages: OrderedDict[TableRequest, bytes] = OrderedDict()
+        self._fast: dict[str, bytes] = {}
         self.progress = {"busy": False, "stage": "", "done": 0, "total": 0, "label": ""}
 
     def atmosphere(self, name: str) -> Atmosphere:
@@ -209,6 +211,17 @@ class TableService:
             planet = replace(atmosphere.planet, ground_albedo=SpectralParameter((request.albedo,)))
             atmosphere = replace(atmosphere, planet=planet)
         return atmosphere
+
+    def fast_message(self, name: str) -> bytes:
+        """The fast model's description of atmosphere `name` at its configured amounts
+        (`gpu_fast`; the page applies the factors and the albedo itself), made once: no
+        table computation, so it is answered without waiting for the table lock."""
+        if name not in self._fast:
+            atmosphere = self.atmosphere(name)
+            with cache_directory_override(self.directory):
+                profile = fast_profile(atmosphere)
+            self._fast[name] = encode_fast(*fast_description(atmosphere, profile, name))
+        return self._fast[name]
 
     def tables(self, request: TableRequest, client: str = "") -> bytes:
         """The encoded GPU tables of `request` (`gpu_tables.encode`), computed unless in

@@ -121,14 +121,15 @@ function placeSun(state, dir) {
 // Binds the panel (unless controls=0), the mouse, the keys and the automatic exposure; returns a
 // function that shows a state changed elsewhere. Without the panel the view still follows the
 // mouse, the keys and the meter (kiosk and dome use).
-export function bindControls(viewer, description, reload, sky, reloadClouds) {
+export function bindControls(viewer, description, reload, sky, reloadClouds, physicalChanged) {
   const state = viewer.state;
   document.getElementById("panel").hidden = !state.controls;
-  const refresh = state.controls ? bindPanel(viewer, description, reload, sky, reloadClouds) : () => {};
+  const refresh = state.controls ? bindPanel(viewer, description, reload, sky, reloadClouds, physicalChanged)
+                                 : () => {};
   bindPointer(viewer, refresh);
   let frames = 0;
   setInterval(() => {
-    if (state.auto_exposure && viewer.tables && frames++ % 2 === 0) {
+    if (state.auto_exposure && viewer.model && frames++ % 2 === 0) {
       const metered = viewer.meter();
       if (metered !== null) state.ev100 = metered;
     }
@@ -138,7 +139,7 @@ export function bindControls(viewer, description, reload, sky, reloadClouds) {
 }
 
 // The panel's widgets; returns a function that shows the state in them
-function bindPanel(viewer, description, reload, sky, reloadClouds) {
+function bindPanel(viewer, description, reload, sky, reloadClouds, physicalChanged) {
   const state = viewer.state;
   const byId = (id) => document.getElementById(id);
   // Atmosphere
@@ -150,8 +151,7 @@ function bindPanel(viewer, description, reload, sky, reloadClouds) {
   }
   select.value = state.atmosphere;
   const physical = byId("physical");
-  let timer = null;
-  const changed = () => { clearTimeout(timer); timer = setTimeout(reload, 150); };
+  const changed = physicalChanged;  // the fast model at once, the tables after a pause
   const buildPhysical = () => {
     physical.replaceChildren();
     const entry = atmosphereOf(description, state.atmosphere);

@@ -12,6 +12,12 @@ export function decodeTables(buffer, layout) {
   return unpackMessage(buffer, layout.magic, layout.format_version, "table");
 }
 
+// {header, arrays: {name: {shape, data: Float32Array}}} of the fast model's description
+// (viewer/gpu_fast.py)
+export function decodeFast(buffer, layout) {
+  return unpackMessage(buffer, layout.fast.magic, layout.fast.format_version, "fast model");
+}
+
 // {header, arrays: {name: {shape, data}}} of a binary message (viewer/gpu_tables.py
 // unpack_message): magic, version and header length, the JSON header, then the arrays at its
 // offsets, float16 as Uint16Array unless the entry's dtype says float32

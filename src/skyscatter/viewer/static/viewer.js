@@ -2,10 +2,13 @@
 // frame (shaders/*.glsl, the GLSL twins of the Python renderer), asks the server for new
 // tables when a physical parameter changes (a preview first, then the full tables), and
 // places the sun by hand or from a date, time and place; clouds (shaders/clouds.glsl) from the
-// server's cloud message, moved by their wind over the clouds' time.
+// server's cloud message, moved by their wind over the clouds' time. Until the tables for the
+// current physical parameters arrive, the clear sky is drawn by the fast model (fast.js,
+// shaders/fast_model.glsl), made again in the browser at each change.
 import {apiFetch, apiJson} from "./api.js";
-import {decodeClouds, decodeTables, deleteClouds, deleteTables, fetchLayout, uploadClouds,
-        uploadTables} from "./tables.js";
+import {FastModel} from "./fast.js";
+import {decodeClouds, decodeFast, decodeTables, deleteClouds, deleteTables, fetchLayout,
+        uploadClouds, uploadTables} from "./tables.js";
 import {bindControls, readUrlState, showError, showProgress, showStatus} from "./controls.js";
 import {cameraBasis, coarseSpacing, dot, localFrame, mapFrame, pixelDirection, shadedStretch,
         sunDirection, toWorld} from "./geometry.js";
@@ -31,7 +34,16 @@ const PROGRAMS = {
   cloudy_stars: [[...LIBRARY.slice(0, 4), "shaders/clouds.glsl", "shaders/stars.vert"],
                  ["generated/constants.glsl", "shaders/camera.glsl", "shaders/stars.frag"], "#define CLOUDS\n"],
   composite: [[""], ["generated/constants.glsl", "shaders/tonemap.glsl", "shaders/composite.frag"]],
+  fast_transmittance: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_transmittance.frag"]],
+  fast_multiple: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_multiple.frag"]],
+  fast_irradiance: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_irradiance.frag"]],
+  fast_sky_view: [[""], [...LIBRARY, "shaders/fast_model.glsl", "shaders/fast_sky_view.frag"]],
+  fast_sky: [[""], [...CLOUDY, "shaders/fast_model.glsl", "shaders/main.frag"], "#define FAST_MODEL\n"],
+  fast_space: [[""], [...CLOUDY, "shaders/fast_model.glsl", "shaders/main.frag"],
+               "#define FAST_MODEL\n#define FAST_SPACE\n"],
 };
+// What the page says is on screen (state.model)
+const MODEL_LABELS = {fast: "fast model (Hillaire 2020)", tables: "precomputed tables"};
 const PREFIX = "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler3D;\n";
 const FULL_SCREEN = "in vec2 position;\nvoid main() { gl_Position = vec4(position, 0.0, 1.0); }\n";
 const METER_SIZE = [64, 36];  // the auto-exposure meter renders the view this small
@@ -93,6 +105,10 @@ class Viewer {
     this.programs = programs;
     this.state = state;
     this.tables = null;
+    this.tablesKey = null;  // the physical parameters of the tables (physicalKey)
+    this.fast = null;  // the fast model of the current atmosphere (FastModel)
+    this.fastDescriptions = new Map();  // atmosphere -> decoded description
+    this.model = null;  // "fast" or "tables": what draws the sky
     this.stars = null;
     this.frameTimes = [];
     this.locations = new Map();
@@ -121,6 +137,7 @@ class Viewer {
     deleteClouds(this.gl, this.clouds);
     this.clouds = uploadClouds(this.gl, decoded);
     this.cloudsVersion = (this.cloudsVersion || 0) + 1;
+    if (this.model === "fast" && !this.fastPossible() && this.tables) this.setModel("tables");
   }
 
   // The clouds' time [s] since their initial state: with a date, the seconds since J2000 (as
@@ -435,10 +452,78 @@ class Viewer {
     this.tablesVersion = (this.tablesVersion || 0) + 1;
   }
 
+  // The header of what draws the sky (radii, the star)
+  header() {
+    return this.model === "fast" ? this.fast.header : this.tables.header;
+  }
+
+  // The physical parameters the picture depends on
+  physicalKey() {
+    const s = this.state;
+    return JSON.stringify([s.atmosphere, s.amounts, s.albedo]);
+  }
+
+  // Whether the fast model can draw this view: float render targets, and no clouds (their
+  // march needs the tables)
+  fastPossible() {
+    return this.floatTargets && this.clouds.header.n_layers === 0;
+  }
+
+  // Shows the state's physical parameters with the fast model at once, unless the tables
+  // already hold them: loads the atmosphere's description (once), makes the LUTs again and
+  // draws; records the change-to-image time (this.lastFastChange). Returns whether it drew.
+  async showFast() {
+    const s = this.state;
+    const key = this.physicalKey();
+    if (!this.fastPossible() || key === this.tablesKey) return false;
+    const started = performance.now();
+    if (!this.fastDescriptions.has(s.atmosphere)) {
+      const response = await apiFetch(`fast?atmosphere=${encodeURIComponent(s.atmosphere)}`);
+      if (!response.ok) throw new Error((await response.json().catch(() => ({error: response.statusText}))).error);
+      this.fastDescriptions.set(s.atmosphere, decodeFast(await response.arrayBuffer(), this.layout));
+    }
+    return this.applyFast(started);
+  }
+
+  // The fast model of the state's parameters on screen now (its description loaded)
+  applyFast(started = performance.now()) {
+    const s = this.state;
+    const key = this.physicalKey();
+    const decoded = this.fastDescriptions.get(s.atmosphere);
+    if (!decoded || !this.fastPossible() || key === this.tablesKey) return false;
+    if (key === this.fastKey && this.model === "fast") return false;  // on screen already
+    if (!this.fast || this.fast.header !== decoded.header) {
+      if (this.fast) this.fast.delete();
+      this.fast = new FastModel(this, decoded);
+    }
+    const gl = this.gl;
+    const pixel = new Uint8Array(4);
+    this.fast.compute(s.amounts, s.albedo);
+    this.fastKey = key;
+    this.setModel("fast");
+    const view = this.viewUniforms(this.canvas.width || 1, this.canvas.height || 1);
+    this.fast.skyView(view.u_camera_position, view.u_sun_direction);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);  // waits for the LUTs
+    const luts = performance.now();
+    this.frame();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);  // waits for the frame
+    const shown = performance.now();
+    this.lastFastChange = {total_ms: shown - started, luts_ms: luts - started, draw_ms: shown - luts};
+    return true;
+  }
+
+  setModel(model) {
+    this.model = model;
+    this.modelVersion = (this.modelVersion || 0) + 1;
+    document.body.dataset.model = model;
+    const label = document.getElementById("model");
+    if (label) label.textContent = MODEL_LABELS[model];
+  }
+
   // The camera and sun uniforms of the current state for a w x h image
   viewUniforms(width, height) {
     const s = this.state;
-    const radius = this.tables.header.bottom_radius_m;
+    const radius = this.header().bottom_radius_m;
     const frame = localFrame(s.lat * DEG, s.lon * DEG);
     const position = frame[2].map((v) => v * (radius + s.altitude_m));
     const siteFrame = localFrame(s.site_lat * DEG, s.site_lon * DEG);
@@ -500,6 +585,19 @@ class Viewer {
   // The sky pass into the bound framebuffer (w x h): output "display", "meter" or "exposed"
   drawSky(width, height, output) {
     const gl = this.gl;
+    if (this.model === "fast") {
+      const view = this.viewUniforms(width, height);
+      this.fast.skyView(view.u_camera_position, view.u_sun_direction);
+      const space = Math.hypot(...view.u_camera_position) > this.fast.header.top_radius_m;
+      const program = space ? "fast_space" : "fast_sky";
+      gl.useProgram(this.programs[program]);
+      gl.viewport(0, 0, width, height);
+      this.fast.bind(program, 0);
+      this.setUniforms(program, {...view, u_output: this.layout.outputs.indexOf(output)});
+      gl.bindVertexArray(this.fullScreen);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      return;
+    }
     const cloudy = this.clouds.header.n_layers > 0;
     const refined = cloudy && this.floatTargets;
     const program = refined ? "cloud_final" : cloudy ? "cloudy_sky" : "sky";
@@ -530,7 +628,7 @@ class Viewer {
     const frame = this.textureTargets("frame", width, height, 1, {format: gl.RGBA16F});  // blendable
     gl.bindFramebuffer(gl.FRAMEBUFFER, frame.framebuffer);
     this.drawSky(width, height, "exposed");
-    if (this.stars && this.stars.count) {
+    if (this.stars && this.stars.count && this.model === "tables") {  // their light's path: the tables
       const stars = this.clouds.header.n_layers > 0 ? "cloudy_stars" : "stars";
       const view = this.viewUniforms(width, height);
       gl.useProgram(this.programs[stars]);
@@ -567,13 +665,13 @@ class Viewer {
 
   // Draws a frame when the view changed since the last one (an idle page costs nothing)
   frame() {
-    if (!this.tables) return false;
+    if (!this.model) return false;
     this.resize();
     // what the picture depends on: the view, not the physical parameters (those act through
     // new tables, so a slider does not redraw the old ones while the server computes)
     const {amounts, albedo, atmosphere, quality, ...view} = this.state;
     const signature = JSON.stringify([view, this.tablesVersion, this.starsVersion, this.cloudsVersion,
-                                      this.canvas.width, this.canvas.height]);
+                                      this.modelVersion, this.canvas.width, this.canvas.height]);
     if (signature === this.drawn) return false;
     this.drawn = signature;
     const gl = this.gl;
@@ -607,7 +705,7 @@ class Viewer {
   // (twin of render.tonemap.night_adapted_exposure)
   meter() {
     const gl = this.gl;
-    const header = this.tables.header;
+    const header = this.header();
     const exposure = this.layout.exposure;
     if (this.state.altitude_m > header.top_radius_m - header.bottom_radius_m) {
       const lux = header.sun_irradiance_xyz[1];
@@ -638,6 +736,19 @@ class Viewer {
     const logAverage = Math.exp(sum / count);
     const metered = Math.log2(logAverage * exposure.iso_speed / exposure.meter_calibration_k);
     return metered - nightCompensationEv(logAverage, exposure);
+  }
+
+  // The luminance Y [cd m^-2] of the view at w x h as the sky pass computes it and whether
+  // each pixel looks up (output "meter": [Y, up] row-major from the bottom row), for tests
+  luminance(width, height) {
+    const gl = this.gl;
+    const target = this.textureTargets("luminance", width, height, 1);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, target.framebuffer);
+    this.drawSky(width, height, "meter");
+    const p = new Float32Array(width * height * 4);
+    gl.readPixels(0, 0, width, height, gl.RGBA, gl.FLOAT, p);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    return Array.from({length: width * height}, (_, i) => [p[4 * i], p[4 * i + 1]]);
   }
 
   // Milliseconds per frame over n frames drawn back to back, each waited for (readPixels)
@@ -726,20 +837,40 @@ async function main() {
   const viewer = new Viewer(canvas, layout, programs, state);
   canvas.classList.toggle("fixed-size", Boolean(state.width || state.height));
   let request = 0;
+  const showFastStatus = () => {
+    const fast = viewer.lastFastChange;
+    showStatus(`fast model: image ${fast.total_ms.toFixed(0)} ms after the change (LUTs ${fast.luts_ms.toFixed(0)} ms, ` +
+               `draw ${fast.draw_ms.toFixed(0)} ms); computing the tables`);
+  };
+  // A physical parameter changed (or the page starts): the fast model shows it at once, the
+  // tables of the server follow and take over
   const reload = async () => {
     const mine = ++request;
+    const key = viewer.physicalKey();
     const params = new URLSearchParams({atmosphere: state.atmosphere});
     if (state.albedo !== null) params.set("albedo", state.albedo);
     for (const [name, value] of Object.entries(state.amounts)) params.set(`amount_${name}`, value);
     const started = performance.now();
     const qualities = state.quality === "full" ? ["preview", "full"] : [state.quality];
-    for (const quality of qualities) {
+    const fetchQuality = (quality) => {
       params.set("quality", quality);
+      return loadTables(viewer, params.toString(), showProgress);
+    };
+    const first = fetchQuality(qualities[0]);  // the server starts while the page draws the fast model
+    first.catch(() => {});  // handled below
+    try {
+      if (await viewer.showFast() && mine === request) showFastStatus();
+    } catch (error) {
+      showError(error.message);
+    }
+    for (const [index, quality] of qualities.entries()) {
       try {
-        const decoded = await loadTables(viewer, params.toString(), showProgress);
+        const decoded = await (index === 0 ? first : fetchQuality(quality));
         if (mine !== request) return;
         const received = performance.now();
         viewer.setTables(decoded);
+        viewer.tablesKey = key;
+        viewer.setModel("tables");
         viewer.frame();
         viewer.gl.readPixels(0, 0, 1, 1, viewer.gl.RGBA, viewer.gl.UNSIGNED_BYTE, new Uint8Array(4));  // waits for the frame
         const shown = performance.now();
@@ -767,8 +898,17 @@ async function main() {
       showError(error.message);
     }
   };
-  window.skyscatter = {viewer, state, reload, sky, reloadClouds, benchmark: (n) => viewer.benchmark(n)};
-  const refreshControls = bindControls(viewer, description, reload, sky, reloadClouds);
+  // a slider moved: the fast model at once, the tables after a pause (a dragged slider asks
+  // the server for its last value only)
+  let pause = null;
+  const physicalChanged = () => {
+    if (viewer.applyFast()) showFastStatus();
+    clearTimeout(pause);
+    pause = setTimeout(reload, 150);
+  };
+  window.skyscatter = {viewer, state, reload, sky, reloadClouds, physicalChanged,
+                       benchmark: (n) => viewer.benchmark(n)};
+  const refreshControls = bindControls(viewer, description, reload, sky, reloadClouds, physicalChanged);
   // Frame times: the intervals between animation frames that drew (while the view moves)
   let previous = null;
   const loop = (time) => {

@@ -4,8 +4,9 @@
 // compiled only where CLOUDS is defined: present in a clear frame's program, it cost that frame
 // its registers (2.2 times its GPU time). With CLOUDS_REFINED (viewer.js "cloud_final") the
 // clouds come from the adaptive refinement's textures (L = T L_behind + A), else each pixel
-// marches them ("cloudy_sky", without float render targets). u_camera_position and
-// u_sun_direction (world) are declared in clouds.glsl.
+// marches them ("cloudy_sky", without float render targets). With FAST_MODEL (viewer.js
+// "fast_sky") the clear sky comes from the fast model's LUTs (fast_model.glsl) instead of the
+// tables. u_camera_position and u_sun_direction (world) are declared in clouds.glsl.
 
 uniform float u_exposure;        // exposure_scale(EV100, compensation)
 uniform int u_operator;
@@ -63,10 +64,16 @@ void main() {
     uint index = row * uint(u_resolution.x) + uint(gl_FragCoord.x);
     vec3 radiance = clouds_in_front(dir, u_sun_direction,
                                     radiance_behind_clouds(dir, u_sun_direction), 1e30, index);
+#elif defined(FAST_MODEL)
+    vec3 radiance = fast_sky_radiance(u_camera_position, dir, u_sun_direction);
 #else
     vec3 radiance = sky_radiance(u_camera_position, dir, u_sun_direction, 1.0);
 #endif
+#ifdef FAST_MODEL
+    vec3 transmittance = fast_sun_transmittance(u_camera_position, u_sun_direction);
+#else
     vec3 transmittance = sun_transmittance(u_camera_position, u_sun_direction);
+#endif
     if (any(greaterThan(transmittance, vec3(0.0)))) {
         vec3 sun_local = transpose(u_local_to_world) * u_sun_direction;
         vec3 disk = sun_disk(gl_FragCoord.xy, local.xyz, sun_local, transmittance);

@@ -124,3 +124,15 @@ vec2 irradiance_x_from_r_mu_s(float r, float mu_s, float bottom_radius, float to
     float x_r = (r - bottom_radius) / (top_radius - bottom_radius);
     return vec2(clamp(0.5 * (mu_s + 1.0), 0.0, 1.0), clamp(x_r, 0.0, 1.0));
 }
+
+// twin of transmittance_r_mu_from_x: (r, mu) of (x_mu, x_r)
+vec2 transmittance_r_mu_from_x(float x_mu, float x_r, float bottom_radius, float top_radius) {
+    float big_h = horizon_distance(top_radius, bottom_radius);
+    float rho = big_h * x_r;
+    float r = sqrt(rho * rho + bottom_radius * bottom_radius);
+    float d_min = top_radius - r;
+    float d_max = rho + big_h;
+    float d = d_min + x_mu * (d_max - d_min);
+    if (d <= 0.0) return vec2(r, 1.0);
+    return vec2(r, clamp((big_h - rho) * (big_h + rho) / (2.0 * r * d) - d / (2.0 * r), -1.0, 1.0));
+}
