@@ -285,6 +285,21 @@ def check_render_cost(camera: Camera, wavelengths_nm: Sequence[float] | None = N
                n_wl, solver=solver, n_samples=n_samples, allow_large=allow_large)
 
 
+def _checked_engine(atmosphere: Atmosphere, camera: Camera, wavelengths_nm: Sequence[float] | None,
+                    solver: str, options: SolverOptions | None, *, allow_large: bool,
+                    clouds: Clouds | None, frames: int = 1) -> Solver:
+    """The solver of a render of `frames` images by `camera`, after the checks that come
+    before any work: the wavelengths, the cost (`check_render_cost`), clouds only with the
+    table solver ("lut")."""
+    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
+    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
+                      allow_large=allow_large, frames=frames)
+    if clouds is not None and solver != "lut":
+        raise InputError("clouds need the table solver (--solver lut)", key="solver",
+                         value=solver, allowed="lut")
+    return load_solver(atmosphere, wavelengths, solver, options)
+
+
 def _check_atmosphere(atmosphere: Atmosphere) -> None:
     checked_instance("atmosphere", atmosphere, Atmosphere, "an Atmosphere",
                      ", e.g. load_atmosphere('earth')")
@@ -328,10 +343,9 @@ def render(atmosphere: Atmosphere, camera: Camera, sun_zenith_deg: float,
     if orbit_latitude_deg is not None:
         LATITUDE_DEG.check("orbit_latitude_deg", orbit_latitude_deg)
         ANGLE_DEG.check("orbit_longitude_deg", orbit_longitude_deg)
-    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
-    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
-                      allow_large=allow_large)
-    engine = load_solver(atmosphere, wavelengths, solver, options)
+    # clouds are checked with their field (`_cloud_field`)
+    engine = _checked_engine(atmosphere, camera, wavelengths_nm, solver, options,
+                             allow_large=allow_large, clouds=None)
     viewpoint = viewpoint_at(altitude_m, engine.profile.bottom_radius_m, orbit_latitude_deg,
                              orbit_longitude_deg)
     return render_sky(engine, camera, viewpoint, sun, atmosphere.planet.star, progress=progress,
@@ -427,13 +441,8 @@ def render_at(atmosphere: Atmosphere, camera: Camera, observer: Observer,
     _check_observer(observer)
     if orbit_altitude_m is not None:
         ALTITUDE_M.check("orbit_altitude_m", orbit_altitude_m)
-    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
-    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
-                      allow_large=allow_large)
-    if clouds is not None and solver != "lut":
-        raise InputError("clouds need the table solver (--solver lut)", key="solver",
-                         value=solver, allowed="lut")
-    engine = load_solver(atmosphere, wavelengths, solver, options)
+    engine = _checked_engine(atmosphere, camera, wavelengths_nm, solver, options,
+                             allow_large=allow_large, clouds=clouds)
     return _render_at(engine, atmosphere, camera, observer, objects or SkyObjects(), progress,
                       orbit_altitude_m, ground, clouds)
 
@@ -523,13 +532,8 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
                          f"{frames_dir}, which is replaced as a whole", key="video_path",
                          value=str(video_path))
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
-    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
-    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
-                      allow_large=allow_large, frames=len(times))
-    if clouds is not None and solver != "lut":
-        raise InputError("clouds need the table solver (--solver lut)", key="solver",
-                         value=solver, allowed="lut")
-    engine = load_solver(atmosphere, wavelengths, solver, options)
+    engine = _checked_engine(atmosphere, camera, wavelengths_nm, solver, options,
+                             allow_large=allow_large, clouds=clouds, frames=len(times))
     objects = objects or SkyObjects()
     frames_dir = Path(frames_dir)
 
@@ -838,13 +842,8 @@ def environment_series(atmosphere: Atmosphere, camera: Camera,
         check_mip_chain(camera, mips, out_dir / f"sky_00001{suffix}", image.exr_content)
     check_writable_folder(out_dir, ENVMAP_NAME)
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
-    wavelengths = _checked_wavelength_list(wavelengths_nm, False)
-    check_render_cost(camera, wavelengths, solver, n_samples=_samples(options),
-                      allow_large=allow_large, frames=len(times))
-    if clouds is not None and solver != "lut":
-        raise InputError("clouds need the table solver (--solver lut)", key="solver",
-                         value=solver, allowed="lut")
-    engine = load_solver(atmosphere, wavelengths, solver, options)
+    engine = _checked_engine(atmosphere, camera, wavelengths_nm, solver, options,
+                             allow_large=allow_large, clouds=clouds, frames=len(times))
     entries = []
     with staged_outputs() as stage:
         folder = stage.folder(out_dir)

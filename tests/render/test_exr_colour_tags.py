@@ -9,6 +9,7 @@ import struct
 import numpy as np
 import pytest
 
+from exr_header import exr_header
 from skyscatter import api
 
 # Reference: the primaries and whites as their standards publish them (CIE xy): IEC 61966-2-1
@@ -24,24 +25,6 @@ PUBLISHED = {
 }
 
 
-def _header_attributes(path) -> dict[str, tuple[str, bytes]]:
-    """name -> (type, value bytes) of a single-part OpenEXR file's header: the magic number
-    20000630 and a version field, then attributes (name NUL, type NUL, int32 size, value) up to
-    an empty name ("OpenEXR File Layout", openexr.com)."""
-    data = path.read_bytes()
-    assert struct.unpack_from("<i", data, 0)[0] == 20000630
-    position, attributes = 8, {}
-    while data[position] != 0:
-        name_end = data.index(b"\0", position)
-        type_end = data.index(b"\0", name_end + 1)
-        size = struct.unpack_from("<i", data, type_end + 1)[0]
-        start = type_end + 5
-        attributes[data[position:name_end].decode()] = (data[name_end + 1:type_end].decode(),
-                                                        data[start:start + size])
-        position = start + size
-    return attributes
-
-
 @pytest.fixture(scope="module")
 def image():
     return api.render(api.load_atmosphere("earth"), api.FisheyeCamera(8), 40.0,
@@ -52,7 +35,7 @@ def image():
 def test_an_rgb_exr_names_its_primaries_and_white(image, tmp_path, space):
     path = tmp_path / f"{space}.exr"
     api.save_image(image, exr_path=path, colour_space=space)
-    attributes = _header_attributes(path)
+    attributes, _ = exr_header(path.read_bytes())
     kind, value = attributes["chromaticities"]
     assert kind == "chromaticities"
     np.testing.assert_allclose(struct.unpack("<8f", value), PUBLISHED[space], atol=1e-4)
@@ -63,5 +46,5 @@ def test_an_rgb_exr_names_its_primaries_and_white(image, tmp_path, space):
 def test_a_spectral_exr_claims_no_primaries(image, tmp_path):
     path = tmp_path / "spectral.exr"
     api.save_image(image, exr_path=path, exr_content="spectral")
-    attributes = _header_attributes(path)
+    attributes, _ = exr_header(path.read_bytes())
     assert "chromaticities" not in attributes and "whiteLuminance" not in attributes

@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import skyscatter
+from exr_header import exr_header
 from skyscatter import api
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.transport.table_store import cached_tables
@@ -87,16 +88,7 @@ def read_exr(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     compression, decoded from the file layout ("OpenEXR File Layout", openexr.com: header,
     offset table, chunks of 16 scanlines of zlib data de-interleaved and delta-decoded)."""
     data = path.read_bytes()
-    assert struct.unpack_from("<i", data, 0)[0] == 20000630
-    position, attributes = 8, {}
-    while data[position] != 0:
-        name_end = data.index(b"\0", position)
-        type_end = data.index(b"\0", name_end + 1)
-        size, = struct.unpack_from("<i", data, type_end + 1)
-        attributes[data[position:name_end].decode()] = (
-            data[name_end + 1:type_end].decode(), data[type_end + 5:type_end + 5 + size])
-        position = type_end + 5 + size
-    position += 1
+    attributes, position = exr_header(data)
     channels, raw = [], attributes["channels"][1]
     while raw[0] != 0:
         name, raw = raw.split(b"\0", 1)

@@ -105,6 +105,26 @@ def _unit(dirs: ArrayLike) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class _SquareMap:
+    """What the whole-sphere maps on `size` x `size` squares share (sphere, paraboloid and
+    octahedral maps): the checked size, an image one square high and, unless a map sets it
+    otherwise, one wide."""
+
+    size: int
+
+    def __post_init__(self) -> None:
+        _check_size("size", self.size)
+
+    @property
+    def width(self) -> int:
+        return self.size
+
+    @property
+    def height(self) -> int:
+        return self.size
+
+
+@dataclass(frozen=True)
 class FisheyeCamera:
     """Equidistant all-sky camera looking at the zenith; image `size` x `size` pixels.
 

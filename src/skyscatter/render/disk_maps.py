@@ -36,7 +36,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["disk_coordinates", "disk_pixel_solid_angles", "disk_valid_mask"]
+__all__ = ["disk_coordinates", "disk_pixel_solid_angles", "disk_points", "disk_valid_mask"]
 
 EdgeIntegral = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
@@ -49,6 +49,15 @@ def disk_coordinates(size: int, offset_x: float = 0.5,
     px = ((cells + offset_x) / size * 2.0 - 1.0)[None, :]
     py = (1.0 - (cells + offset_y) / size * 2.0)[:, None]
     return px, py
+
+
+def disk_points(size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """p_x, p_y and |p|, each (size, size), of the pixel centres, those outside the unit disk
+    moved in to its rim along their azimuth (the rim direction they look along)."""
+    px, py = np.broadcast_arrays(*disk_coordinates(size))
+    rho = np.hypot(px, py)
+    shrink = 1.0 / np.maximum(rho, 1.0)
+    return px * shrink, py * shrink, rho * shrink
 
 
 def disk_valid_mask(size: int) -> np.ndarray:

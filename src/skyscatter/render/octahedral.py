@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skyscatter.render.camera import _check_size, _unit
+from skyscatter.render.camera import _SquareMap, _unit
+from skyscatter.render.disk_maps import disk_coordinates  # p of the square [-1, 1]^2
 
 __all__ = ["OctahedralCamera"]
 
@@ -39,33 +40,12 @@ def _unfolded(px: np.ndarray, py: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class OctahedralCamera:
+class OctahedralCamera(_SquareMap):
     """The whole sphere on a `size` x `size` octahedral map (module docstring)."""
-
-    size: int
-
-    def __post_init__(self) -> None:
-        _check_size("size", self.size)
-
-    @property
-    def width(self) -> int:
-        return self.size
-
-    @property
-    def height(self) -> int:
-        return self.size
-
-    def _coordinates(self, offset_x: float, offset_y: float) -> tuple[np.ndarray, np.ndarray]:
-        """p_x (1, w) across and p_y (h, 1) up at a fraction (offset_x, offset_y) into the
-        pixels."""
-        cells = np.arange(self.size)
-        px = ((cells + offset_x) / self.size * 2.0 - 1.0)[None, :]
-        py = (1.0 - (cells + offset_y) / self.size * 2.0)[:, None]
-        return px, py
 
     def directions(self) -> tuple[np.ndarray, np.ndarray]:
         """Unit view directions (h, w, 3) in ENU and an all-True mask (h, w)."""
-        q = _unfolded(*np.broadcast_arrays(*self._coordinates(0.5, 0.5)))
+        q = _unfolded(*np.broadcast_arrays(*disk_coordinates(self.size)))
         return q / np.linalg.norm(q, axis=-1, keepdims=True), self.valid_mask()
 
     def valid_mask(self) -> np.ndarray:
@@ -88,7 +68,8 @@ class OctahedralCamera:
         omega = np.zeros((self.size, self.size))
         for a in range(_SUBSAMPLES):
             for b in range(_SUBSAMPLES):
-                px, py = self._coordinates((a + 0.5) / _SUBSAMPLES, (b + 0.5) / _SUBSAMPLES)
+                px, py = disk_coordinates(self.size, (a + 0.5) / _SUBSAMPLES,
+                                          (b + 0.5) / _SUBSAMPLES)
                 q = _unfolded(*np.broadcast_arrays(px, py))
                 omega += area / np.linalg.norm(q, axis=-1) ** 3
         return omega

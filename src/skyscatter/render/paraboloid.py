@@ -9,12 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skyscatter.render.camera import _check_size, _unit
-from skyscatter.render.disk_maps import (
-    disk_coordinates,
-    disk_pixel_solid_angles,
-    disk_valid_mask,
-)
+from skyscatter.render.camera import _SquareMap, _unit
+from skyscatter.render.disk_maps import disk_pixel_solid_angles, disk_points, disk_valid_mask
 
 __all__ = ["ParaboloidCamera"]
 
@@ -26,29 +22,18 @@ def _paraboloid_edge(c: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class ParaboloidCamera:
+class ParaboloidCamera(_SquareMap):
     """The whole sphere on two `size` x `size` paraboloid maps side by side, upper hemisphere
     left, lower right (render.disk_maps)."""
-
-    size: int
-
-    def __post_init__(self) -> None:
-        _check_size("size", self.size)
 
     @property
     def width(self) -> int:
         return 2 * self.size
 
-    @property
-    def height(self) -> int:
-        return self.size
-
     def directions(self) -> tuple[np.ndarray, np.ndarray]:
         """Unit view directions (h, w, 3) in ENU and the pixels that reach into a disk."""
-        px, py = np.broadcast_arrays(*disk_coordinates(self.size))
-        rho = np.hypot(px, py)
-        shrink = 1.0 / np.maximum(rho, 1.0)
-        px, py, rho2 = px * shrink, py * shrink, (rho * shrink) ** 2
+        px, py, rho = disk_points(self.size)
+        rho2 = rho ** 2
         upper = np.stack([2.0 * px, 2.0 * py, 1.0 - rho2], axis=-1) / (1.0 + rho2)[..., None]
         lower = upper * np.array([1.0, 1.0, -1.0])
         return np.concatenate([upper, lower], axis=1), self.valid_mask()

@@ -8,12 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skyscatter.render.camera import _check_size, _unit
-from skyscatter.render.disk_maps import (
-    disk_coordinates,
-    disk_pixel_solid_angles,
-    disk_valid_mask,
-)
+from skyscatter.render.camera import _SquareMap, _unit
+from skyscatter.render.disk_maps import disk_pixel_solid_angles, disk_points, disk_valid_mask
 
 __all__ = ["SphereMapCamera"]
 
@@ -24,28 +20,12 @@ def _uniform_edge(c: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class SphereMapCamera:
+class SphereMapCamera(_SquareMap):
     """The whole sphere on a `size` x `size` sphere map (render.disk_maps)."""
-
-    size: int
-
-    def __post_init__(self) -> None:
-        _check_size("size", self.size)
-
-    @property
-    def width(self) -> int:
-        return self.size
-
-    @property
-    def height(self) -> int:
-        return self.size
 
     def directions(self) -> tuple[np.ndarray, np.ndarray]:
         """Unit view directions (h, w, 3) in ENU and the pixels that reach into the disk."""
-        px, py = np.broadcast_arrays(*disk_coordinates(self.size))
-        rho = np.hypot(px, py)
-        shrink = 1.0 / np.maximum(rho, 1.0)
-        px, py, rho = px * shrink, py * shrink, rho * shrink
+        px, py, rho = disk_points(self.size)
         across = 2.0 * np.sqrt(1.0 - rho * rho)
         return (np.stack([px * across, py * across, 1.0 - 2.0 * rho * rho], axis=-1),
                 self.valid_mask())

@@ -19,10 +19,14 @@ from numba import njit, prange
 
 from skyscatter.transport._kernels import (
     density_at,
+    radius_along,
+    ray_segment,
     sample_distance,
     sample_total,
     split_sample_count,
     sun_columns,
+    sun_cosines,
+    view_end,
 )
 from skyscatter.transport.geometry import (
     atmosphere_segment,
@@ -122,7 +126,7 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
                     for s in range(sample_total(m1, m2, n_samples)):
                         t = sample_distance(s, r, mu, t_start, t_end, n_samples, t_split, m1,
                                             m2)
-                        radius = math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
+                        radius = radius_along(r, mu, t)
                         mu_s = (r * mu_s0 + t * nu) / radius
                         density_at(radius - bottom_radius, h_step, density, dens)
                         dt = t - t_prev
@@ -201,14 +205,10 @@ def march_rays(origins, directions, max_distances, sun_direction, n_samples, bot
             p = i if phase_scattering.shape[0] > 1 else 0
             ox, oy, oz = origins[o, 0], origins[o, 1], origins[o, 2]
             dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-            r = math.sqrt(ox * ox + oy * oy + oz * oz)
-            mu = (ox * dx + oy * dy + oz * dz) / r
-            mu_s0 = (ox * sun_direction[0] + oy * sun_direction[1] + oz * sun_direction[2]) / r
-            nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
-            t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
-            if max_distances[i] < t_end:
-                t_end = max(max_distances[i], t_start)
-                hits_ground = False
+            r, mu, t_start, t_end, hits_ground = ray_segment(ox, oy, oz, dx, dy, dz,
+                                                             bottom_radius, top_radius)
+            mu_s0, nu = sun_cosines(ox, oy, oz, r, dx, dy, dz, sun_direction)
+            t_end, hits_ground = view_end(t_start, t_end, hits_ground, max_distances[i])
             view_column[:] = 0.0
             integrand_prev[:] = 0.0
             radius = r
@@ -218,7 +218,7 @@ def march_rays(origins, directions, max_distances, sun_direction, n_samples, bot
                 t_prev = 0.0
                 for s in range(sample_total(m1, m2, n_samples)):
                     t = sample_distance(s, r, mu, t_start, t_end, n_samples, t_split, m1, m2)
-                    radius = math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
+                    radius = radius_along(r, mu, t)
                     mu_s = (r * mu_s0 + t * nu) / radius
                     density_at(radius - bottom_radius, h_step, density, dens)
                     dt = t - t_prev

@@ -117,6 +117,12 @@ def sample_total(m1, m2, n_samples):
 
 
 @njit(cache=True)
+def radius_along(r, mu, t):
+    """Radius [m] at distance t [m] along the ray (r, mu)."""
+    return math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
+
+
+@njit(cache=True)
 def columns_along_segment(r, mu, t_start, t_end, n_samples, bottom_radius, h_step, density,
                           out):
     """Column densities [density x m] of each constituent along the ray (r, mu) between
@@ -133,7 +139,7 @@ def columns_along_segment(r, mu, t_start, t_end, n_samples, bottom_radius, h_ste
     t_prev = 0.0
     for j in range(total):
         t = sample_distance(j, r, mu, t_start, t_end, n_samples, t_split, m1, m2)
-        radius = math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
+        radius = radius_along(r, mu, t)
         density_at(radius - bottom_radius, h_step, density, current)
         if j > 0:
             dt = t - t_prev
@@ -183,6 +189,53 @@ def sun_columns(r, mu_s, bottom_radius, top_radius, table, out):
                   + a * ((1.0 - b) * table[c, i + 1, j] + b * table[c, i + 1, j + 1]))
 
 
+@njit(cache=True)
+def ray_segment(ox, oy, oz, dx, dy, dz, bottom_radius, top_radius):
+    """(r, mu, t_start, t_end, hits_ground) of the ray from the point o along the unit
+    direction d: its radius [m] and zenith cosine at o and its part inside the atmosphere
+    (`geometry.atmosphere_segment`)."""
+    r = math.sqrt(ox * ox + oy * oy + oz * oz)
+    mu = (ox * dx + oy * dy + oz * dz) / r
+    t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+    return r, mu, t_start, t_end, hits_ground
+
+
+@njit(cache=True)
+def sun_cosines(ox, oy, oz, r, dx, dy, dz, sun_direction):
+    """(mu_s, nu): the sun's zenith cosine at the point o (radius r) and the cosine between
+    the direction d and the sun, both unit."""
+    mu_s = (ox * sun_direction[0] + oy * sun_direction[1] + oz * sun_direction[2]) / r
+    nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
+    return mu_s, nu
+
+
+@njit(cache=True)
+def view_end(t_start, t_end, hits_ground, max_distance):
+    """(t_end, hits_ground) of a view ray that stops after `max_distance` [m] (inf: where it
+    leaves the atmosphere or meets the ground): one stopped short does not reach the ground."""
+    if max_distance < t_end:
+        return max(max_distance, t_start), False
+    return t_end, hits_ground
+
+
+@njit(cache=True)
+def path_end(t_end, hits_ground, distance):
+    """(blocked, t_end) of a path `distance` [m] long (inf: towards a light source) along a
+    ray whose part in the atmosphere ends at t_end: blocked when the ground comes before the
+    path's end, else where the path leaves the air or ends."""
+    if hits_ground and distance > t_end * (1.0 + 1e-12):
+        return True, t_end
+    return False, min(t_end, distance)
+
+
+@njit(cache=True)
+def single_scattering_outputs(n_ray, n_c, n_wl):
+    """The arrays a single-scattering march fills, before any ray: inscatter (n_ray, n_c, n_wl)
+    zeros, transmittance (n_ray, n_wl) ones, ground (n_ray, n_wl) zeros (`single_scattering`
+    has their meaning)."""
+    return np.zeros((n_ray, n_c, n_wl)), np.ones((n_ray, n_wl)), np.zeros((n_ray, n_wl))
+
+
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loop
 
 
@@ -202,9 +255,7 @@ def single_scattering(origins, directions, max_distances, sun_direction, n_sampl
     """
     n_ray = origins.shape[0]
     n_c, n_wl = extinction.shape
-    inscatter = np.zeros((n_ray, n_c, n_wl))
-    transmittance = np.ones((n_ray, n_wl))
-    ground = np.zeros((n_ray, n_wl))
+    inscatter, transmittance, ground = single_scattering_outputs(n_ray, n_c, n_wl)
     n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
         view_column = np.empty(n_c)
@@ -217,14 +268,10 @@ def single_scattering(origins, directions, max_distances, sun_direction, n_sampl
         for i in range(block * RAYS_PER_BLOCK, min(n_ray, (block + 1) * RAYS_PER_BLOCK)):
             ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
             dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-            r = math.sqrt(ox * ox + oy * oy + oz * oz)
-            mu = (ox * dx + oy * dy + oz * dz) / r
-            mu_s0 = (ox * sun_direction[0] + oy * sun_direction[1] + oz * sun_direction[2]) / r
-            nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
-            t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
-            if max_distances[i] < t_end:
-                t_end = max(max_distances[i], t_start)
-                hits_ground = False
+            r, mu, t_start, t_end, hits_ground = ray_segment(ox, oy, oz, dx, dy, dz,
+                                                             bottom_radius, top_radius)
+            mu_s0, nu = sun_cosines(ox, oy, oz, r, dx, dy, dz, sun_direction)
+            t_end, hits_ground = view_end(t_start, t_end, hits_ground, max_distances[i])
             if t_end <= t_start:
                 if hits_ground:  # standing on the ground, looking down: the lit ground
                     sun_fraction = sun_visible_fraction(r, mu_s0, bottom_radius,
@@ -247,7 +294,7 @@ def single_scattering(origins, directions, max_distances, sun_direction, n_sampl
             mu_s = mu_s0
             for j in range(total):
                 t = sample_distance(j, r, mu, t_start, t_end, n_samples, t_split, m1, m2)
-                radius = math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
+                radius = radius_along(r, mu, t)
                 density_at(radius - bottom_radius, h_step, density, dens)
                 dt = t - t_prev
                 if j > 0:
@@ -293,16 +340,14 @@ def transmittance_rays(origins, directions, distances, n_samples, bottom_radius,
     n_c, n_wl = extinction.shape
     result = np.ones((n_ray, n_wl))
     for i in prange(n_ray):
-        ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
-        r = math.sqrt(ox * ox + oy * oy + oz * oz)
-        mu = (ox * directions[i, 0] + oy * directions[i, 1] + oz * directions[i, 2]) / r
-        t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
-        blocked = hits_ground and distances[i] > t_end * (1.0 + 1e-12)
+        r, mu, t_start, t_end, hits_ground = ray_segment(
+            origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0], directions[i, 1],
+            directions[i, 2], bottom_radius, top_radius)
+        blocked, t_end = path_end(t_end, hits_ground, distances[i])
         if blocked:
             for w in range(n_wl):
                 result[i, w] = 0.0
             continue
-        t_end = min(t_end, distances[i])
         if t_end <= t_start:
             continue
         column = np.empty(n_c)

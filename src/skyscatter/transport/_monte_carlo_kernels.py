@@ -35,12 +35,12 @@ from numba import njit, prange
 from skyscatter.transport._kernels import (
     columns_along_segment,
     density_at,
+    ray_segment,
     sample_distance,
     sample_total,
     split_sample_count,
 )
 from skyscatter.transport.geometry import (
-    atmosphere_segment,
     distance_to_sphere,
     horizon_cos_zenith,
     sun_visible_fraction,
@@ -304,9 +304,8 @@ def free_flight(ox, oy, oz, dx, dy, dz, w, bottom_radius, top_radius, h_step, de
     """(state, point) after a free flight from o along d by delta tracking (module doc):
     SCATTER and the collision point, GROUND and the ground point, or LEAVE."""
     n_c = density.shape[0]
-    r = math.sqrt(ox * ox + oy * oy + oz * oz)
-    mu = (ox * dx + oy * dy + oz * dz) / r
-    t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+    _, _, t_start, t_end, hits_ground = ray_segment(ox, oy, oz, dx, dy, dz, bottom_radius,
+                                                    top_radius)
     if t_end <= t_start and not hits_ground:
         return LEAVE, ox, oy, oz  # misses the atmosphere
     t = t_start
@@ -432,9 +431,8 @@ def view_ray_nodes(origins, directions, sun, n_intervals, bottom_radius, top_rad
     for i in prange(n_ray):
         ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        r = math.sqrt(ox * ox + oy * oy + oz * oz)
-        mu = (ox * dx + oy * dy + oz * dz) / r
-        t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+        r, mu, t_start, t_end, hits_ground = ray_segment(ox, oy, oz, dx, dy, dz, bottom_radius,
+                                                         top_radius)
         hits[i] = hits_ground
         t_nodes[i, 0] = t_end  # the ground hit of a ray with no length (observer on the ground)
         if t_end <= t_start:

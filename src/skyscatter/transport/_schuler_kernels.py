@@ -14,10 +14,15 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from skyscatter.transport._kernels import density_at
+from skyscatter.transport._kernels import (
+    density_at,
+    path_end,
+    ray_segment,
+    single_scattering_outputs,
+)
 from skyscatter.transport._table_common_kernels import table_ray_distances
 from skyscatter.transport.chapman import LAYER, exponential_column, layer_column
-from skyscatter.transport.geometry import atmosphere_segment, sun_visible_fraction
+from skyscatter.transport.geometry import sun_visible_fraction
 
 
 @njit(cache=True, inline="always")
@@ -72,9 +77,8 @@ def _march_ray(ox, oy, oz, dx, dy, dz, sun_direction, n_samples, bottom_radius, 
     ground (n_wl,); scratch = (samples, columns (4, n_c), densities, t_sun, t_view, previous)."""
     samples, cols, dens, t_sun, t_view, previous = scratch
     n_c, n_wl = extinction.shape
-    r = math.sqrt(ox * ox + oy * oy + oz * oz)
-    mu = (ox * dx + oy * dy + oz * dz) / r
-    t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
+    _, _, t_start, t_end, hits_ground = ray_segment(ox, oy, oz, dx, dy, dz, bottom_radius,
+                                                    top_radius)
     if t_end <= t_start and not hits_ground:  # misses the atmosphere
         return
     sign = -1.0 if hits_ground else 1.0
@@ -134,9 +138,7 @@ def single_scattering(origins, directions, sun_direction, n_samples, bottom_radi
     `chapman.ColumnModel` arrays."""
     n_ray = directions.shape[0]
     n_c, n_wl = extinction.shape
-    inscatter = np.zeros((n_ray, n_c, n_wl))
-    transmittance = np.ones((n_ray, n_wl))
-    ground = np.zeros((n_ray, n_wl))
+    inscatter, transmittance, ground = single_scattering_outputs(n_ray, n_c, n_wl)
     n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
         scratch = (np.empty(n_samples + 1), np.empty((4, n_c)), np.empty(n_c), np.empty(n_wl),
@@ -162,14 +164,13 @@ def transmittance_rays(origins, directions, distances, bottom_radius, top_radius
     for i in prange(n_ray):
         ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        r = math.sqrt(ox * ox + oy * oy + oz * oz)
-        mu = (ox * dx + oy * dy + oz * dz) / r
-        t_start, t_end, hits_ground = atmosphere_segment(r, mu, bottom_radius, top_radius)
-        if hits_ground and distances[i] > t_end * (1.0 + 1e-12):
+        _, _, t_start, t_end, hits_ground = ray_segment(ox, oy, oz, dx, dy, dz, bottom_radius,
+                                                        top_radius)
+        blocked, t_end = path_end(t_end, hits_ground, distances[i])
+        if blocked:
             for w in range(n_wl):
                 result[i, w] = 0.0
             continue
-        t_end = min(t_end, distances[i])
         if t_end <= t_start:
             continue
         sign = -1.0 if hits_ground else 1.0

@@ -15,12 +15,11 @@ from numba import njit, prange
 from skyscatter.transport._table_common_kernels import phase_values
 from skyscatter.transport._table_lookup_kernels import (
     RAYS_PER_BLOCK,
-    _enter_atmosphere,
-    ray_start,
     scattering_corners,
     scattering_lookup,
     transmittance_along,
     transmittance_to_top,
+    view_ray_start,
 )
 from skyscatter.transport.geometry import sun_visible_fraction
 from skyscatter.transport.table_parameterisation import distance_to_bottom_boundary
@@ -50,17 +49,11 @@ def sky_radiance_rays(origins, directions, sun_direction, geometry, single, size
         scratch = np.empty(n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_ray, (block + 1) * RAYS_PER_BLOCK)):
             out[i, :] = 0.0
-            dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-            norm = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if not norm > 0.0:
-                continue
-            dx, dy, dz = dx / norm, dy / norm, dz / norm
-            x, y, z, _, inside = _enter_atmosphere(origins[i, 0], origins[i, 1], origins[i, 2],
-                                                   dx, dy, dz, top_radius)
+            inside, r, mu, mu_s, nu, hits_ground = view_ray_start(
+                origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0], directions[i, 1],
+                directions[i, 2], sun_direction, bottom_radius, top_radius)
             if not inside:
                 continue
-            r, mu, mu_s, nu, hits_ground = ray_start(x, y, z, dx, dy, dz, sun_direction,
-                                                     bottom_radius, top_radius)
             phase_values(phase_table, nu, weights)
             value[:] = 0.0
             i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from skyscatter.transport._kernels import column_below, density_at
+from skyscatter.transport._kernels import column_below, density_at, radius_along
 from skyscatter.transport._table_common_kernels import (
     corner_sum,
     fast_acos,
@@ -213,8 +213,7 @@ ALONG_RAY_PIECES = 4
 @njit(cache=True)
 def _ray_radius(r, mu, t, bottom_radius, top_radius):
     """Radius [m] at distance t along the ray (r, mu), inside the atmosphere's bounds."""
-    radius = math.sqrt(max(r * r + t * t + 2.0 * r * mu * t, 0.0))
-    return min(max(radius, bottom_radius), top_radius)
+    return min(max(radius_along(r, mu, t), bottom_radius), top_radius)
 
 
 @njit(cache=True)

@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from skyscatter.transport._kernels import density_at
+from skyscatter.transport._kernels import density_at, sun_cosines
 from skyscatter.transport._table_common_kernels import (
     corner_sum,
     fast_acos,
@@ -950,17 +950,11 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
             for w in range(n_wl):
                 out[i, w] = 0.0
             o = 0 if single_origin else i
-            dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-            norm = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if not norm > 0.0:
-                continue
-            dx, dy, dz = dx / norm, dy / norm, dz / norm
-            x, y, z, _, inside = _enter_atmosphere(origins[o, 0], origins[o, 1], origins[o, 2],
-                                                   dx, dy, dz, top_radius)
+            inside, r, mu, mu_s, nu, hits_ground = view_ray_start(
+                origins[o, 0], origins[o, 1], origins[o, 2], directions[i, 0], directions[i, 1],
+                directions[i, 2], sun_direction, bottom_radius, top_radius)
             if not inside:
                 continue
-            r, mu, mu_s, nu, hits_ground = ray_start(x, y, z, dx, dy, dz, sun_direction,
-                                                     bottom_radius, top_radius)
             phase_values(phase_table, nu, weights)
             marched = exact_single_weight(mu_s)
             for k in range(n_s * n_wl):
@@ -1037,10 +1031,26 @@ def ray_start(x, y, z, dx, dy, dz, sun_direction, bottom_radius, top_radius):
     atmosphere, r clamped to the tables' range."""
     r = math.sqrt(x * x + y * y + z * z)
     mu = (x * dx + y * dy + z * dz) / r
-    mu_s = (x * sun_direction[0] + y * sun_direction[1] + z * sun_direction[2]) / r
-    nu = dx * sun_direction[0] + dy * sun_direction[1] + dz * sun_direction[2]
+    mu_s, nu = sun_cosines(x, y, z, r, dx, dy, dz, sun_direction)
     r = min(max(r, bottom_radius), top_radius)
     return r, mu, mu_s, nu, ray_intersects_ground(r, mu, bottom_radius)
+
+
+@njit(cache=True, inline="always")
+def view_ray_start(ox, oy, oz, dx, dy, dz, sun_direction, bottom_radius, top_radius):
+    """(inside, r, mu, mu_s, nu, hits_ground) of the view ray from o along d (any length,
+    normalised here) where it starts in the atmosphere (`_enter_atmosphere`, `ray_start`);
+    inside False, and no light, for a zero direction or a ray that misses the atmosphere."""
+    norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if not norm > 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0, False
+    dx, dy, dz = dx / norm, dy / norm, dz / norm
+    x, y, z, _, inside = _enter_atmosphere(ox, oy, oz, dx, dy, dz, top_radius)
+    if not inside:
+        return False, 0.0, 0.0, 0.0, 0.0, False
+    r, mu, mu_s, nu, hits_ground = ray_start(x, y, z, dx, dy, dz, sun_direction, bottom_radius,
+                                             top_radius)
+    return True, r, mu, mu_s, nu, hits_ground
 
 
 @njit(cache=True)

@@ -25,6 +25,7 @@ __all__ = [
     "horizon_cos_zenith",
     "horizontal_towards",
     "local_frame_directions",
+    "segment_rays",
     "sun_visible_fraction",
     "towards_visible_sun",
 ]
@@ -177,3 +178,15 @@ def broadcast_rays(position: ArrayLike, directions: ArrayLike, normalise: bool =
     origins = np.broadcast_to(origins, shape + (3,))
     return (np.ascontiguousarray(origins.reshape(-1, 3)),
             np.ascontiguousarray(dirs.reshape(-1, 3)), shape)
+
+
+def segment_rays(position: ArrayLike, points: ArrayLike
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, ...]]:
+    """(origins, directions, lengths, S) of the segments from `position` [m] to `points`
+    (..., 3) [m], broadcast and flattened as `broadcast_rays`: unit directions (n, 3) (any
+    for a segment of no length) and lengths (n,) [m]."""
+    origins, targets, shape = broadcast_rays(position, points, normalise=False)
+    offsets = targets - origins
+    lengths = np.linalg.norm(offsets, axis=1)
+    directions = np.ascontiguousarray(offsets / np.where(lengths > 0, lengths, 1.0)[:, None])
+    return origins, directions, lengths, shape

@@ -45,6 +45,7 @@ from skyscatter.transport.geometry import (
     broadcast_rays,
     horizon_cos_zenith,
     horizontal_towards,
+    segment_rays,
 )
 from skyscatter.transport.single_scattering import hemisphere_irradiance
 from skyscatter.transport.transmittance import ray_marched_transmittance
@@ -155,11 +156,7 @@ class HillaireSolver:
         the observer at `position` and `points` (..., 3) [m]: the segment marched with the
         sky's source (single scattering + sigma_s Psi_ms), `LutSolver.aerial_perspective`
         has the meaning."""
-        origins, targets, shape = broadcast_rays(position, points, normalise=False)
-        offsets = targets - origins
-        distances = np.linalg.norm(offsets, axis=1)
-        directions = np.ascontiguousarray(offsets / np.where(distances > 0, distances,
-                                                             1.0)[:, None])
+        origins, directions, distances, shape = segment_rays(position, points)
         inscattered, transmittance = self._march(origins, directions, distances,
                                                  _unit(sun_direction), False, None)
         n_wl = self.profile.n_wavelengths

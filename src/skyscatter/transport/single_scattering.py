@@ -19,6 +19,7 @@ from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.transport import _kernels
 from skyscatter.transport.geometry import (
     broadcast_rays,
+    segment_rays,
     sun_visible_fraction,
     towards_visible_sun,
 )
@@ -68,11 +69,7 @@ class SingleScatteringSolver:
         """(inscattered [W m^-2 sr^-1 nm^-1], transmittance [-]) between `position` and
         `points` (..., 3) [m], each (..., n_wl): single scattering of the air in between,
         ray marched (`LutSolver.aerial_perspective` has the meaning)."""
-        origins, targets, shape = broadcast_rays(position, points, normalise=False)
-        offsets = targets - origins
-        distances = np.linalg.norm(offsets, axis=1)
-        directions = np.ascontiguousarray(offsets / np.where(distances > 0, distances,
-                                                             1.0)[:, None])
+        origins, directions, distances, shape = segment_rays(position, points)
         inscattered, transmittance = self._march(origins, directions, distances,
                                                  sun_direction, False, None)
         n_wl = self.profile.n_wavelengths
