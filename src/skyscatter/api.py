@@ -1124,12 +1124,15 @@ def compare_techniques(output_dir: str | Path, solvers: Sequence[str] | None = N
     cached in `cache_dir` (default: `default_cache_directory()`) unless `use_cache` is False.
     InputError, before any work, for an unknown solver or atmosphere, bad angles or paths, or
     an output folder that cannot be written."""
+    seed = checked_integer("seed", seed, 0, 2**32 - 1)
+    if paths is not None:
+        paths = checked_integer("paths", paths, 100, 1_000_000)
     plan = comparison_plan(quick, solvers, atmospheres, sun_zeniths_deg, paths=paths)
     for spec in plan.atmospheres:
         load_variant(spec)  # a misspelt atmosphere fails now, not after the first one's work
     check_writable_file(Path(output_dir) / "report.md")
     return run_comparison(plan, output_dir, cache=TableCache(cache_dir) if use_cache else None,
-                          seed=checked_integer("seed", seed, 0, 2**32 - 1), log=log, step=step)
+                          seed=seed, log=log, step=step)
 
 
 def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0, *,

@@ -92,14 +92,19 @@ def fisheye_figure(result, spec: str, atmosphere: Atmosphere, solvers: dict, out
         rgb = display_rgb8(xyz_to_rgb(xyz[n]), images[n].valid, ev100, 0.0, "aces")
         axes[0][k].imshow(rgb)
         axes[0][k].set_title(n, fontsize=9)
+        for row in (0, 1):
+            axes[row][k].set_axis_off()
+        if k == 0:
+            continue  # below the reference: the colour scale
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = np.log2(xyz[n][..., 1] / xyz[names[0]][..., 1])
         shown = axes[1][k].imshow(np.where(images[n].valid, ratio, np.nan), cmap="RdBu_r",
                                   vmin=-LOG2_RANGE, vmax=LOG2_RANGE)
-        axes[1][k].set_title(f"log2(Y / Y_{names[0]})" if k else "reference", fontsize=8)
-        for row in (0, 1):
-            axes[row][k].set_axis_off()
-    figure.colorbar(shown, ax=axes[1][-1], shrink=0.8, label="log2(Y / Y_ref)")
+        axes[1][k].set_title(f"log2(Y / Y_{names[0]})", fontsize=8)
+    if len(names) > 1:
+        scale = axes[1][0].inset_axes([0.1, 0.45, 0.8, 0.08])
+        figure.colorbar(shown, cax=scale, orientation="horizontal",
+                        label=f"log2(Y / Y_{names[0]}): -1 half, +1 double")
     index = plan.atmospheres.index(spec)
     name = save_figure(figure, output_dir, f"compare_fisheye_{index}.png")
     return Figure(name, f"{spec}, sun {plan.frame_sun_zenith_deg:g} deg from the zenith (south "

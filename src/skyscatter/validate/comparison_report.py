@@ -178,7 +178,8 @@ def _cost_table(result) -> Table:
     return Table(f"Cost: CPU (wall) time to build each solver and answer its first ray, and of "
                  f"a 1920 x 1080 panorama ({frame} pixels timed, sun zenith "
                  f"{plan.frame_sun_zenith_deg:g} deg, {result.wavelengths_nm.size} bands), peak "
-                 "memory traced by tracemalloc over both (numpy arrays; numba's own not traced)",
+                 "memory traced by tracemalloc over both (numpy arrays; numba's own not traced)."
+                 " The first run on a machine also compiles the kernels: time a second run",
                  ["solver", "atmosphere", "precompute CPU (wall)", "frame CPU (wall)",
                   "peak traced [MiB]"], rows)
 
