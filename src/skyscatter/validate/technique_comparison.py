@@ -108,6 +108,7 @@ class ComparisonPlan:
                        time is the precompute time) rather than load them from the cache
     target_relative_error  by day in forward-peaked media, the Monte Carlo adds paths up to this
                        relative standard error (`lut_vs_montecarlo.reference_solver`); None: not
+    quick              the reduced plan of the tests (`--quick`)
     """
 
     solvers: tuple[str, ...]
@@ -141,7 +142,7 @@ def comparison_plan(quick: bool = False, solvers: Sequence[str] | None = None,
                     paths: int | None = None) -> ComparisonPlan:
     """The standard plan (11 view zeniths 0-85 deg x 5 azimuths 0-180 deg, 8 bands, 4000 /
     10 000 paths by day / in twilight, a 1920 x 1080 frame, tables afresh) or the `quick` one
-    (4 x 3 directions, 2 bands, 2000 / 6000 paths, a 384 x 216 frame scaled x 25, tables from
+    (4 x 3 directions, 2 bands, 2000 / 5000 paths, a 384 x 216 frame scaled x 25, tables from
     the cache); `paths` replaces the daytime paths (twilight: 2.5 x). InputError for an
     unknown solver, a sun zenith outside 0-180 deg or paths outside 100-10^6."""
     names = tuple(DEFAULT_SOLVERS if solvers is None else solvers)
