@@ -12,7 +12,7 @@ from PIL import Image
 from skyscatter.cli import main
 
 IMAGES = Path(__file__).resolve().parents[1] / "images"
-SOLVERS = ("lut", "schuler", "bruneton-simplified", "cie", "preetham")
+SOLVERS = ("lut", "hillaire", "schuler", "bruneton-simplified", "cie", "preetham")
 SIZE = 240
 
 

@@ -45,7 +45,7 @@ from skyscatter.atmosphere.cloud_field import CloudField, cloud_field
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
 from skyscatter.atmosphere.gas import describe_gas
 from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS, Atmosphere
-from skyscatter.atmosphere.variants import with_ground_albedo
+from skyscatter.atmosphere.variants import load_variant, with_ground_albedo
 from skyscatter.checks import (
     ALTITUDE_M,
     ANGLE_DEG,
@@ -131,6 +131,11 @@ from skyscatter.transport.solvers import (
 from skyscatter.validate.report import ValidationSettings
 from skyscatter.validate.suite import CASES as VALIDATION_CASES
 from skyscatter.validate.suite import run_suite as run_validation
+from skyscatter.validate.technique_comparison import (
+    ComparisonResult,
+    comparison_plan,
+    run_comparison,
+)
 from skyscatter.viewer import server as viewer_server_module
 from skyscatter.viewer.server import ViewerServer, make_server
 from skyscatter.viewer.sky_message import sky_message
@@ -169,6 +174,7 @@ __all__ = [
     "SolverOptions",
     "SphereMapCamera",
     "check_image_options",
+    "compare_techniques",
     "check_mip_chain",
     "check_render_cost",
     "demo_mountains",
@@ -1098,6 +1104,34 @@ def export_tables(atmosphere: Atmosphere, folder: str | Path, output_format: str
     check_writable_folder(folder, EXPORT_FILES)
     solver = load_solver(atmosphere, wavelengths_nm, "lut", options)
     return write_exported_tables(solver.tables, solver.profile, folder, settings)
+
+
+def compare_techniques(output_dir: str | Path, solvers: Sequence[str] | None = None,
+                       atmospheres: Sequence[str] | None = None,
+                       sun_zeniths_deg: Sequence[float] | None = None, *, quick: bool = False,
+                       paths: int | None = None, cache_dir: str | Path | None = None,
+                       use_cache: bool = True, seed: int = 0,
+                       log: Callable[[str], None] = print,
+                       step: Callable[[int, int, str], None] | None = None
+                       ) -> ComparisonResult:
+    """Compare `solvers` (default: every one but "montecarlo" and "single") with the Monte Carlo
+    reference on `atmospheres` (presets, configs or NAME:CONSTITUENT*FACTOR variants; default
+    earth, earth:aerosol*4, mars-physical) at `sun_zeniths_deg` (default 0, 30, 60, 80, 94) and
+    write report.md, results.json and PNG figures into `output_dir`
+    (`validate.technique_comparison`). `quick`: a few directions, 2 bands, few paths; `paths`:
+    Monte Carlo paths per direction and band by day. The tables and the Monte Carlo means are
+    cached in `cache_dir` (default: `default_cache_directory()`) unless `use_cache` is False.
+    InputError, before any work, for an unknown solver or atmosphere, bad angles or paths, or
+    an output folder that cannot be written."""
+    seed = checked_integer("seed", seed, 0, 2**32 - 1)
+    if paths is not None:
+        paths = checked_integer("paths", paths, 100, 1_000_000)
+    plan = comparison_plan(quick, solvers, atmospheres, sun_zeniths_deg, paths=paths)
+    for spec in plan.atmospheres:
+        load_variant(spec)  # a misspelt atmosphere fails now, not after the first one's work
+    check_writable_file(Path(output_dir) / "report.md")
+    return run_comparison(plan, output_dir, cache=TableCache(cache_dir) if use_cache else None,
+                          seed=seed, log=log, step=step)
 
 
 def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", port: int = 0, *,

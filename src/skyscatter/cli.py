@@ -1,4 +1,5 @@
-"""Command line: `skyscatter render | timelapse | radiance | precompute | validate | presets`
+"""Command line: `skyscatter render | timelapse | radiance | precompute | validate | compare |
+presets`
 (and `completion`, from `cli_completion`).
 Thin: parse,
 call the library, print.
@@ -681,6 +682,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_cache_arguments(validate)
     validate.set_defaults(run=_validate)
 
+    _add_compare_command(commands)
+
     cache = commands.add_parser(
         "cache", help="list, size or clear the cache of precomputed tables",
         description="Inspect or empty the cache of precomputed tables (scattering tables, Mie "
@@ -710,6 +713,68 @@ def build_parser() -> argparse.ArgumentParser:
     _add_completion_command(commands)
     _add_quiet_arguments(parser, commands)
     return parser
+
+
+def _add_compare_command(commands: argparse._SubParsersAction) -> None:
+    compare = commands.add_parser(
+        "compare", help="compare the sky models with the Monte Carlo reference: errors, "
+        "time, memory, renders",
+        description="Run several solvers over the same atmospheres and sun zenith angles and "
+        "write report.md, results.json and PNG figures into the output directory: per "
+        "solver, atmosphere, sun zenith and band the relative radiance error against the "
+        "Monte Carlo reference (median, 95th percentile) on a grid of view directions from "
+        "the ground, the luminance and chromaticity error, the precompute time, the CPU time "
+        "of a 1920 x 1080 frame, the peak memory, fisheye renders side by side with error "
+        "images, and what each solver cannot do. A solver outside its domain for a case "
+        "shows n/a (domain). The Monte Carlo means are cached, so a rerun is fast. "
+        "docs/techniques.md shows a run.")
+    compare.add_argument("--solvers", type=_name_list, default=None, metavar="LIST",
+                         help="comma-separated solvers (default: all but montecarlo, the "
+                         "reference, and single: lut,hillaire,schuler,bruneton-simplified,"
+                         "cie,preetham)")
+    compare.add_argument("--atmospheres", type=_name_list, default=None, metavar="LIST",
+                         help="comma-separated presets, TOML files or NAME:CONSTITUENT*FACTOR "
+                         "variants (default: earth,earth:aerosol*4,mars-physical - clear "
+                         "Earth, a hazy Earth with 4 x the aerosol, dusty Mars)")
+    compare.add_argument("--sun-zeniths", type=_number_list(checks.ZENITH_DEG), default=None,
+                         metavar="DEG,...", help="sun zenith angles in degrees, above 90 in "
+                         "twilight (default 0,30,60,80,94)")
+    compare.add_argument("--quick", action="store_true",
+                         help="a small run for tests: 10 directions, 2 bands, 2000 paths, a "
+                         "384 x 216 frame scaled to 1920 x 1080, tables from the cache")
+    compare.add_argument("--paths", type=_whole(100, 1_000_000), default=None,
+                         help="Monte Carlo paths per direction and band with the sun up (2.5 x "
+                         "below the horizon; default 4000, --quick 2000)")
+    compare.add_argument("-o", "--output", type=Path, default=Path("comparison"), metavar="DIR",
+                         help="where the report goes (default: ./comparison)")
+    compare.add_argument("--seed", type=_whole(0, 2**32 - 1), default=0,
+                         help="seed of the Monte Carlo paths (default 0)")
+    _add_cache_arguments(compare)
+    compare.set_defaults(run=_compare)
+
+
+def _compare(args: argparse.Namespace) -> None:
+    from skyscatter import api
+    from skyscatter.cli_progress import progress
+
+    if args.output.exists() and not args.output.is_dir():
+        raise InputError(f"--output {args.output} is a file; give a directory",
+                         key="output", value=str(args.output))
+
+    def log(message: str) -> None:
+        print(f"skyscatter: {message}", file=sys.stderr, flush=True)
+
+    with progress(0, "comparing", unit="case") as bar:
+        def step(done: int, total: int, label: str) -> None:
+            bar.total = total
+            bar.set_postfix_str(label, refresh=False)
+            bar.update(done - bar.n)
+        result = api.compare_techniques(
+            args.output, args.solvers, args.atmospheres, args.sun_zeniths, quick=args.quick,
+            paths=args.paths, cache_dir=args.cache_dir, use_cache=not args.no_cache,
+            seed=args.seed, log=log, step=step)
+    print(f"report: {result.files[0]}, results: {result.files[1]}, "
+          f"{len(result.files) - 2} figures")
 
 
 def _add_completion_command(commands: argparse._SubParsersAction) -> None:
@@ -1457,7 +1522,7 @@ def _validate(args: argparse.Namespace) -> int:
 
 # the commands whose first run compiles kernels (`compile_ahead`)
 COMPILING_COMMANDS = frozenset({"render", "timelapse", "radiance", "irradiance", "precompute",
-                                "view", "validate", "export-tables"})
+                                "view", "validate", "export-tables", "compare"})
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -21,9 +21,9 @@ from skyscatter.validate.lut_vs_montecarlo import (
     _checks,
     _peaked_note,
     _plan,
-    _reference,
     aureole_grid,
     compare_solvers,
+    reference_solver,
     sky_grid,
 )
 from skyscatter.validate.report import ValidationSettings
@@ -168,17 +168,19 @@ def test_the_standard_plan_covers_the_forward_peaked_media_by_day_and_quick_stay
 def test_the_reference_adds_paths_only_for_forward_peaked_media_by_day():
     profile = api.load_atmosphere("mars-costa").optical_profile([550.0], monochromatic=True)
     standard = {"seed": 1, "target_relative_error": _plan(False).target_relative_error}
-    peaked = _reference(profile, "mars-physical", 30.0, 1000, **standard)
+    peaked = reference_solver(profile, "mars-physical", 30.0, 1000, **standard)
     assert peaked.target_relative_error == PEAKED_TARGET_ERROR
     assert peaked.max_samples == PEAKED_MAX_FACTOR * 1000
     assert peaked.sun_sampling_probability > 0.0
-    storm = _reference(profile, "mars-dust-storm", 30.0, 1000, **standard)
+    storm = reference_solver(profile, "mars-dust-storm", 30.0, 1000, **standard)
     assert storm.sun_sampling_probability == 0.0 and storm.target_relative_error is None
-    assert _reference(profile, "mars-physical", 94.0, 1000, **standard
-                      ).target_relative_error is None
-    assert _reference(profile, "mars-costa", 30.0, 1000, **standard).target_relative_error is None
+    assert reference_solver(profile, "mars-physical", 94.0, 1000, **standard
+                            ).target_relative_error is None
+    assert reference_solver(profile, "mars-costa", 30.0, 1000, **standard
+                            ).target_relative_error is None
     quick = {"seed": 1, "target_relative_error": _plan(True).target_relative_error}
-    assert _reference(profile, "mars-physical", 30.0, 1000, **quick).target_relative_error is None
+    assert reference_solver(profile, "mars-physical", 30.0, 1000, **quick
+                            ).target_relative_error is None
 
 
 def test_mars_hg_dust_keeps_the_dust_and_its_phase_has_the_asymmetry_g():

@@ -25,7 +25,7 @@ sideways, reported apart from the sky grid. The goal of issue 17
 not checked.
 
 Public names: `SkyGrid`, `sky_grid`, `aureole_grid`, `SolverComparison`, `compare_solvers`,
-`run`.
+`reference_solver`, `run`.
 """
 
 from __future__ import annotations
@@ -54,7 +54,8 @@ from skyscatter.validate.report import (
     format_percent,
 )
 
-__all__ = ["SkyGrid", "SolverComparison", "aureole_grid", "compare_solvers", "run", "sky_grid"]
+__all__ = ["SkyGrid", "SolverComparison", "aureole_grid", "compare_solvers", "reference_solver",
+           "run", "sky_grid"]
 
 KEY = "lut-vs-montecarlo"
 MEDIAN_LIMIT = 0.02  # issue 4: median |relative error| per band, Earth, sun zenith <= 80 deg
@@ -286,8 +287,8 @@ def _paths(plan: _Plan, sun_zenith_deg: float) -> int:
     return plan.twilight_paths
 
 
-def _reference(profile, atmosphere: str, sun_zenith_deg: float, paths: int, *, seed: int,
-               target_relative_error: float | None) -> MonteCarloSolver:
+def reference_solver(profile, atmosphere: str, sun_zenith_deg: float, paths: int, *, seed: int,
+                     target_relative_error: float | None) -> MonteCarloSolver:
     """The Monte Carlo solver of one case: by day in forward-peaked media with paths added
     towards `target_relative_error` (if any), in thick media without sampling towards the
     sun and without added paths."""
@@ -333,7 +334,7 @@ def run(settings: ValidationSettings) -> CaseResult:
         settings.log(f"{atmosphere.name}: tables ({atmosphere.scattering_orders} orders)")
         tables = table_solver(atmosphere, profile, settings)
         for sun_zenith in plan.sun_zeniths_deg(atmosphere):
-            mc = _reference(profile, atmosphere.name, sun_zenith, _paths(plan, sun_zenith),
+            mc = reference_solver(profile, atmosphere.name, sun_zenith, _paths(plan, sun_zenith),
                             seed=settings.seed,
                             target_relative_error=plan.target_relative_error)
             grid = plan.grid.joined(aureole_grid(sun_zenith)) if sun_zenith < 90.0 else plan.grid
