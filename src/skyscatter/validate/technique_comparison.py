@@ -16,8 +16,8 @@ arrays; numba's own allocations are not traced). A solver that refuses a case (i
 reason.
 
 The Monte Carlo means are kept in the cache (`disk_cache.TableCache`, atomic .npz entries) under
-a key of the optical profile, sun zenith, view grid, paths, seed and package version, so a
-rerun traces no path again.
+a key of the optical profile, sun zenith, view grid, paths, seed, package version and the
+Monte Carlo code's fingerprint, so a rerun traces no path again.
 
 Public names: `ComparisonPlan`, `comparison_plan`, `MethodCase`, `MethodCost`,
 `ComparisonResult`, `run_comparison`, `DEFAULT_SOLVERS`, `DEFAULT_ATMOSPHERES`,
@@ -40,11 +40,13 @@ from skyscatter import __version__
 from skyscatter.atmosphere.model import Atmosphere, OpticalProfile
 from skyscatter.atmosphere.variants import load_variant
 from skyscatter.errors import InputError
+from skyscatter.jit_cache import kernel_cache_folder
 from skyscatter.render.camera import EquirectangularCamera
 from skyscatter.render.scene import ground_viewpoint, render_sky
 from skyscatter.spectrum.colour import spectral_to_xyz, xy_chromaticity
 from skyscatter.spectrum.grid import wavelength_grid
 from skyscatter.transport.cache import profile_fingerprint
+from skyscatter.transport.code_fingerprint import code_fingerprint
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import (
@@ -235,6 +237,16 @@ class ComparisonResult:
     files: list[Path] = field(default_factory=list)
 
 
+def _monte_carlo_code(profile: OpticalProfile) -> str:
+    """Fingerprint of the Monte Carlo code that traces `profile` (its call graph and the
+    classes of its phase functions, as the tables' cache keys theirs): a changed tracer makes
+    new references, with or without a new version."""
+    phases = sorted({(type(phase).__module__, type(phase).__name__)
+                     for phase in profile.phases if phase is not None})
+    return code_fingerprint((("skyscatter.transport.monte_carlo", "MonteCarloSolver"),
+                             *phases), (kernel_cache_folder(),))
+
+
 def _reference_key(profile: OpticalProfile, sun_zenith_deg: float, grid: SkyGrid, paths: int,
                    seed: int, target: float | None) -> tuple[str, dict]:
     """(cache key, metadata) of one Monte Carlo reference."""
@@ -242,7 +254,8 @@ def _reference_key(profile: OpticalProfile, sun_zenith_deg: float, grid: SkyGrid
                 "profile": profile_fingerprint(profile), "sun_zenith_deg": sun_zenith_deg,
                 "view_zenith_deg": grid.view_zenith_deg.tolist(),
                 "azimuth_deg": grid.azimuth_deg.tolist(), "paths": paths, "seed": seed,
-                "target_relative_error": target, "version": __version__}
+                "target_relative_error": target, "version": __version__,
+                "code": _monte_carlo_code(profile)}
     digest = hashlib.sha256(json.dumps(metadata, sort_keys=True).encode()).hexdigest()
     return f"montecarlo-{digest[:32]}", metadata
 
