@@ -42,7 +42,10 @@ def test_notebook_runs_in_a_kernel(monkeypatch):
         [source, *filter(None, [os.environ.get("PYTHONPATH")])]))
     monkeypatch.setenv("MPLBACKEND", "module://matplotlib_inline.backend_inline")
     notebook = nbformat.read(NOTEBOOK, as_version=4)
+    # iopub_timeout: on a loaded machine a plot's PNG can reach the client seconds after the
+    # cell's reply; nbclient's default (4 s) would drop it silently
     client = nbclient.NotebookClient(notebook, timeout=600, kernel_name="python3",
+                                     iopub_timeout=120, raise_on_iopub_timeout=True,
                                      resources={"metadata": {"path": str(NOTEBOOK.parent)}})
     client.execute()  # raises CellExecutionError, with the cell and its traceback, on error
     code = [cell for cell in notebook.cells if cell.cell_type == "code"]

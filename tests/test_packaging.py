@@ -132,3 +132,12 @@ def test_wheel_and_sdist_carry_the_package_and_its_files(tmp_path):
     images = re.findall(r"\]\((docs/images/[^)]+)\)", (ROOT / "README.md").read_text())
     assert images and set(images) <= members
     assert {"LICENSE", "Makefile", "tests/conftest.py", "docs/notebook.ipynb"} <= members
+
+
+def test_the_api_imports_no_plotting():
+    """matplotlib is [validate]'s, imported where a report draws: importing the api must not
+    load it (nor pick its Agg backend, which would silence a notebook's inline plots)."""
+    program = "import sys, skyscatter.api; print('matplotlib' in sys.modules)"
+    result = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
+                            check=True)
+    assert result.stdout.strip() == "False"

@@ -34,7 +34,7 @@ import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
@@ -131,11 +131,6 @@ from skyscatter.transport.solvers import (
 from skyscatter.validate.report import ValidationSettings
 from skyscatter.validate.suite import CASES as VALIDATION_CASES
 from skyscatter.validate.suite import run_suite as run_validation
-from skyscatter.validate.technique_comparison import (
-    ComparisonResult,
-    comparison_plan,
-    run_comparison,
-)
 from skyscatter.viewer import server as viewer_server_module
 from skyscatter.viewer.server import ViewerServer, make_server
 from skyscatter.viewer.sky_message import sky_message
@@ -143,6 +138,9 @@ from skyscatter.viewer.table_export import OWNED as EXPORT_FILES
 from skyscatter.viewer.table_export import ExportedTables, ExportSettings
 from skyscatter.viewer.table_export import export_tables as write_exported_tables
 from skyscatter.viewer.table_service import TableService
+
+if TYPE_CHECKING:  # imported when called: it imports matplotlib (with its Agg backend)
+    from skyscatter.validate.technique_comparison import ComparisonResult
 
 __all__ = [
     "COLOUR_RANGE_NM",
@@ -1123,6 +1121,7 @@ def compare_techniques(output_dir: str | Path, solvers: Sequence[str] | None = N
     cached in `cache_dir` (default: `default_cache_directory()`) unless `use_cache` is False.
     InputError, before any work, for an unknown solver or atmosphere, bad angles or paths, or
     an output folder that cannot be written."""
+    from skyscatter.validate.technique_comparison import comparison_plan, run_comparison
     seed = checked_integer("seed", seed, 0, 2**32 - 1)
     if paths is not None:
         paths = checked_integer("paths", paths, 100, 1_000_000)
