@@ -5,19 +5,11 @@
 // sky-view LUT whenever the camera's altitude or the sun moves; one pass per LUT and group of
 // four wavelengths, into a layer of an RGBA16F texture array (needs EXT_color_buffer_float).
 
+import {floatTexture} from "./tables.js";
+
 const UNITS = {u_fast_transmittance: 0, u_fast_multiple: 1, u_fast_sky_view: 2,
                u_fast_density: 3, u_fast_phase: 4, u_fast_irradiance: 5};
 const LUTS = ["transmittance", "multiple", "irradiance", "sky_view"];
-
-function dataTexture(gl, internal, format, width, height, data) {
-  const texture = gl.createTexture();
-  gl.bindTexture(gl.TEXTURE_2D, texture);
-  gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
-  gl.texImage2D(gl.TEXTURE_2D, 0, internal, width, height, 0, format, gl.FLOAT, data);
-  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
-  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
-  return texture;
-}
 
 export class FastModel {
   // `viewer`: its gl, programs, uniform locations and full-screen triangle; `decoded`: the
@@ -31,8 +23,8 @@ export class FastModel {
     const [densityRows, densityRow] = decoded.arrays.density.shape;
     this.constituents = h.names.length;
     this.textures = {
-      u_fast_density: dataTexture(gl, gl.R32F, gl.RED, densityRow, densityRows, decoded.arrays.density.data),
-      u_fast_phase: dataTexture(gl, gl.RGBA32F, gl.RGBA, decoded.arrays.phase.shape[1],
+      u_fast_density: floatTexture(gl, gl.R32F, gl.RED, densityRow, densityRows, decoded.arrays.density.data),
+      u_fast_phase: floatTexture(gl, gl.RGBA32F, gl.RGBA, decoded.arrays.phase.shape[1],
                                 decoded.arrays.phase.shape[0], decoded.arrays.phase.data),
     };
     this.framebuffers = {};

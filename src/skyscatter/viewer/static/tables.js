@@ -123,7 +123,8 @@ export function decodeClouds(buffer, layout) {
   return unpackMessage(buffer, layout.clouds.magic, layout.clouds.format_version, "cloud");
 }
 
-function floatTexture(gl, internal, format, width, height, data) {
+// A float texture of `data`, sampled texel by texel (no filtering)
+export function floatTexture(gl, internal, format, width, height, data) {
   const texture = gl.createTexture();
   gl.bindTexture(gl.TEXTURE_2D, texture);
   gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
