@@ -115,22 +115,25 @@ def _pair(median: float, p95: float, digits: int = 1) -> str:
     return f"{format_percent(median, digits)} / {format_percent(p95, digits)}"
 
 
+def _case_rows(result, atmosphere: str, n_cells: int, cells) -> list[list[str]]:
+    """A row per case of `atmosphere`: solver, sun zenith, then `cells(case)` (n_cells), or
+    NOT_IN_DOMAIN in each where the solver refused the case."""
+    return [[case.solver, f"{case.sun_zenith_deg:g}",
+             *([NOT_IN_DOMAIN] * n_cells if case.comparison is None else cells(case))]
+            for case in result.cases if case.atmosphere == atmosphere]
+
+
+def _summary_cells(case) -> list[str]:
+    c = case.comparison
+    worst = [float(np.nanmax(v)) if np.any(np.isfinite(v)) else float("nan")
+             for v in (c.percentile(50.0), c.percentile(95.0))]
+    chroma = _percentiles(case.chromaticity_error)
+    return [_pair(*worst), _pair(*_percentiles(case.luminance_error)),
+            f"{chroma[0]:.4f} / {chroma[1]:.4f}", format_percent(float(np.nanmax(c.noise)), 1)]
+
+
 def _summary_table(result, atmosphere: str) -> Table:
-    rows = []
-    for case in result.cases:
-        if case.atmosphere != atmosphere:
-            continue
-        head = [case.solver, f"{case.sun_zenith_deg:g}"]
-        c = case.comparison
-        if c is None:
-            rows.append(head + [NOT_IN_DOMAIN] * 4)
-            continue
-        worst = [float(np.nanmax(v)) if np.any(np.isfinite(v)) else float("nan")
-                 for v in (c.percentile(50.0), c.percentile(95.0))]
-        chroma = _percentiles(case.chromaticity_error)
-        rows.append(head + [_pair(*worst), _pair(*_percentiles(case.luminance_error)),
-                            f"{chroma[0]:.4f} / {chroma[1]:.4f}",
-                            format_percent(float(np.nanmax(c.noise)), 1)])
+    rows = _case_rows(result, atmosphere, 4, _summary_cells)
     return Table(f"{atmosphere}: median / 95th percentile over the view grid of the relative "
                  "error against the Monte Carlo reference, L / L_MC - 1 (radiance, the worst "
                  "band's) and Y / Y_MC - 1 (luminance), in absolute value, and of the distance "
@@ -140,17 +143,9 @@ def _summary_table(result, atmosphere: str) -> Table:
 
 
 def _band_table(result, atmosphere: str) -> Table:
-    rows = []
-    for case in result.cases:
-        if case.atmosphere != atmosphere:
-            continue
-        head = [case.solver, f"{case.sun_zenith_deg:g}"]
-        c = case.comparison
-        if c is None:
-            rows.append(head + [NOT_IN_DOMAIN] * result.wavelengths_nm.size)
-            continue
-        rows.append(head + [_pair(m, p) for m, p in zip(c.percentile(50.0), c.percentile(95.0),
-                                                        strict=True)])
+    rows = _case_rows(result, atmosphere, result.wavelengths_nm.size, lambda case: [
+        _pair(m, p) for m, p in zip(case.comparison.percentile(50.0),
+                                    case.comparison.percentile(95.0), strict=True)])
     return Table(f"{atmosphere}: median / 95th percentile of |L / L_MC - 1| per band",
                  ["solver", "sun zenith [deg]"]
                  + [f"{w:.0f} nm" for w in result.wavelengths_nm], rows)
