@@ -197,9 +197,11 @@ def test_the_sky_view_table_adds_little_to_marching_every_ray(monkeypatch, sun_z
     # HG 0.8 haze), read from the 192 x 108 sky-view table against the same solver marching
     # each ray. Measured on Earth's preset (HG 0.65) at 256 x 256 fisheye pixels: median 3e-4,
     # 95th percentile <= 1.7e-3, at most 5e-3 by day and 1.5e-2 in twilight (the Earth's
-    # shadow by the horizon); here 95th percentile <= 1.8e-3, at most 1.5e-2 by day (next to
-    # the sun, in the haze's sharper peak) and 2.6e-2 in twilight. Tolerances: 95th
-    # percentile 3e-3, at most 4e-2.
+    # shadow by the horizon); here 95th percentile <= 2.2e-3, at most 1.5e-2 by day (next to
+    # the sun, in the haze's sharper peak) and 4.7e-2 in twilight (the Earth's shadow 4.5 deg
+    # above the horizon opposite the sun, between rows: 2.6e-2 when Psi_ms, read linearly
+    # between sun zenith cosines 0.065 apart, smeared it). Tolerances: 95th percentile 3e-3,
+    # at most 6e-2.
     solver = HillaireSolver(exponential_earth())
     rng = np.random.default_rng(5)
     views = local_frame_directions(np.arccos(rng.uniform(0.0, 1.0, 4000)),
@@ -211,7 +213,7 @@ def test_the_sky_view_table_adds_little_to_marching_every_ray(monkeypatch, sun_z
     monkeypatch.setattr(hillaire, "SKY_VIEW_MIN_RAYS", 10**9)
     marched = solver.sky_radiance(ground, views, sun)
     error = np.abs(from_table / marched - 1.0)
-    assert np.percentile(error, 95) < 3e-3 and error.max() < 4e-2
+    assert np.percentile(error, 95) < 3e-3 and error.max() < 6e-2
 
 
 @pytest.fixture(scope="module")

@@ -63,9 +63,9 @@ MULTIPLE_SCATTERING_SIZE = (32, 32)  # (altitude, mu_s)
 # Gauss-Legendre zenith cosines on each side of the horizon x azimuths: 64 directions
 MULTIPLE_SCATTERING_DIRECTIONS = (4, 8)
 MULTIPLE_SCATTERING_SAMPLES = 32  # intervals per ray of the multiple-scattering table
-# Psi_ms [sr^-1] below which its log is clamped: Psi_ms is 0 in the full shadow of the
-# night side, ~1e-2 by day
-LOG_FLOOR = 1e-30
+# log Psi_ms where Psi_ms = 0 (the night side's full shadow; ~1e-2 sr^-1 by day): exp of it,
+# and of anything interpolated towards it, underflows to 0 or to ~1e-170 of its neighbour
+ZERO_LOG = -800.0
 SKY_VIEW_SIZE = (108, 192)  # (latitude, azimuth from the sun)
 # One observer inside the atmosphere with at least this many rays reads the sky-view table
 # (which costs as much as its 20 736 rays marched); fewer rays are marched one by one.
@@ -199,7 +199,8 @@ class HillaireSolver:
         p = self.profile
         radiance = np.empty((directions.shape[0], p.n_wavelengths))
         transmittance = np.empty_like(radiance)
-        log_psi = np.log(np.maximum(self.multiple_scattering, LOG_FLOOR))
+        psi = self.multiple_scattering
+        log_psi = np.log(psi, out=np.full_like(psi, ZERO_LOG), where=psi > 0.0)
         for start in range(0, directions.shape[0], CHUNK_RAYS):
             stop = min(start + CHUNK_RAYS, directions.shape[0])
             chunk_origins = origins if origins.shape[0] == 1 else origins[start:stop]
