@@ -119,25 +119,53 @@ def shell():
     return homogeneous_shell(2e-5, albedo=0.3, single_scattering_albedo=0.9)
 
 
-@pytest.mark.parametrize(("i_h", "j_mu_s"), [(0, 31), (0, 16), (4, 16), (10, 24), (20, 17)])
+@pytest.mark.parametrize(("i_h", "j_mu_s"), [(0, 31), (0, 19), (16, 19), (22, 27), (26, 21)])
 def test_multiple_scattering_table_is_the_papers_geometric_sum(shell, i_h, j_mu_s):
-    # Nodes of the 32 x 32 table from the ground to 6.5 km, the sun from the zenith to 1.8 deg
+    # Nodes of the 32 x 32 table from the ground to 7 km, the sun from the zenith to 2 deg
     # above the horizon, against the reference's 192 x 64 directions and 64 Gauss nodes per
     # ray in closed form. The table's own quadrature is the paper's budget, 64 directions (4
     # Gauss zenith cosines on each side of the horizon x 8 azimuths) and 32 intervals per ray:
-    # measured within 2.9 % for f_ms and 5.9 % for L_2nd and Psi_ms = L_2nd / (1 - f_ms) (the
-    # worst at 6.5 km with the sun 5.6 deg high). Tolerances 4 % and 8 %. (At the top node,
-    # where the rays just below the horizontal cross the whole shell, f_ms is 12 % off; in a
-    # real atmosphere sigma_s ~ 0 there.)
+    # measured within 3.2 % for f_ms and 6.2 % for L_2nd and Psi_ms = L_2nd / (1 - f_ms) (the
+    # worst at 7 km with the sun 6.6 deg high).
+    # Tolerances 4 % and 8 %. (At the top node, where the rays just below the horizontal cross
+    # the whole shell, f_ms is 12 % off; in a real atmosphere sigma_s ~ 0 there. With the sun
+    # at or below the node's horizontal, 6.5 km up, L_2nd is 25-37 % off: its light comes
+    # from the lit air by the horizon, which 4 zenith cosines resolve coarsely; 8 per side
+    # take it to 5-19 %, yet move Earth's twilight sky 2 % further from the Monte Carlo
+    # reference, docs/techniques.md.)
     solver = HillaireSolver(shell)
-    n_h, n_mu_s = MULTIPLE_SCATTERING_SIZE
-    r = shell.bottom_radius_m + (shell.top_radius_m - shell.bottom_radius_m) * i_h / (n_h - 1)
-    mu_s = -1.0 + 2.0 * j_mu_s / (n_mu_s - 1)
+    r = solver.multiple_scattering_radii[i_h]
+    mu_s = solver.multiple_scattering_sun_cosines[j_mu_s]
     second, f_ms = shell_multiple_scattering(shell, r, mu_s)
+    print(f"h {r - shell.bottom_radius_m:.0f} mu_s {mu_s:.4f}: f_ms "
+          f"{np.abs(solver.f_ms[i_h, j_mu_s] / f_ms - 1).max():.4f}, L_2nd "
+          f"{np.abs(solver.second_order[i_h, j_mu_s] / second - 1).max():.4f}")
     np.testing.assert_allclose(solver.f_ms[i_h, j_mu_s], f_ms, rtol=0.04)
     np.testing.assert_allclose(solver.second_order[i_h, j_mu_s], second, rtol=0.08)
     np.testing.assert_allclose(solver.multiple_scattering[i_h, j_mu_s], second / (1 - f_ms),
                                rtol=0.08)
+
+
+def test_the_multiple_scattering_nodes_invert_the_lookup_coordinates():
+    # The nodes (`multiple_scattering_nodes`) must sit at the lookup's x = k / 31 on both axes
+    # (`multiple_scattering_coordinates`), or every lookup reads a shifted table; and they
+    # crowd where they should: altitude rows 0.1 km apart at the ground, sun columns within
+    # 0.035 of each other between the sun setting for the ground (mu_s = 0) and for the top
+    # (Earth: mu_s = -0.175, the sun 10 deg below the horizon). Round-off tolerance 1e-12.
+    profile = load_atmosphere("earth").optical_profile([550.0])
+    solver = HillaireSolver(profile)
+    radii, cosines = solver.multiple_scattering_radii, solver.multiple_scattering_sun_cosines
+    n_h, n_mu_s = MULTIPLE_SCATTERING_SIZE
+    for k in range(max(n_h, n_mu_s)):
+        x_h, x_mu = _hillaire_kernels.multiple_scattering_coordinates(
+            radii[min(k, n_h - 1)], cosines[min(k, n_mu_s - 1)], profile.bottom_radius_m,
+            profile.top_radius_m, solver._mu_s_centre)
+        assert abs(x_h - min(k, n_h - 1) / (n_h - 1)) < 1e-12
+        assert abs(x_mu - min(k, n_mu_s - 1) / (n_mu_s - 1)) < 1e-12
+    assert radii[1] - radii[0] < 150.0 and radii[0] == profile.bottom_radius_m
+    assert cosines[0] == -1.0 and cosines[-1] == 1.0
+    setting = (cosines > -0.175) & (cosines < 0.0)
+    assert setting.sum() >= 6 and np.diff(cosines[setting]).max() < 0.035
 
 
 def test_multiple_scattering_kernel_converges_to_the_papers_formula(shell):
@@ -149,7 +177,8 @@ def test_multiple_scattering_kernel_converges_to_the_papers_formula(shell):
     solver = HillaireSolver(shell)
     gauss_x, gauss_w = np.polynomial.legendre.leggauss(16)
     psi, second, f_ms = _hillaire_kernels.multiple_scattering_table(
-        3, 9, gauss_x, gauss_w, 32, 128, shell.bottom_radius_m, shell.top_radius_m, 50.0,
+        shell.bottom_radius_m + np.array([0.0, 5000.0, 10_000.0]), np.linspace(-1.0, 1.0, 9),
+        gauss_x, gauss_w, 32, 128, shell.bottom_radius_m, shell.top_radius_m, 50.0,
         shell.density, shell.extinction_per_density, shell.scattering_per_density,
         solver.transmittance_columns, shell.ground_albedo, 0.0)
     for i in (0, 1):
@@ -168,9 +197,11 @@ def test_the_sky_view_table_adds_little_to_marching_every_ray(monkeypatch, sun_z
     # HG 0.8 haze), read from the 192 x 108 sky-view table against the same solver marching
     # each ray. Measured on Earth's preset (HG 0.65) at 256 x 256 fisheye pixels: median 3e-4,
     # 95th percentile <= 1.7e-3, at most 5e-3 by day and 1.5e-2 in twilight (the Earth's
-    # shadow by the horizon); here 95th percentile <= 1.8e-3, at most 1.5e-2 by day (next to
-    # the sun, in the haze's sharper peak) and 2.6e-2 in twilight. Tolerances: 95th
-    # percentile 3e-3, at most 4e-2.
+    # shadow by the horizon); here 95th percentile <= 2.2e-3, at most 1.5e-2 by day (next to
+    # the sun, in the haze's sharper peak) and 4.7e-2 in twilight (the Earth's shadow 4.5 deg
+    # above the horizon opposite the sun, between rows: 2.6e-2 when Psi_ms, read linearly
+    # between sun zenith cosines 0.065 apart, smeared it). Tolerances: 95th percentile 3e-3,
+    # at most 6e-2.
     solver = HillaireSolver(exponential_earth())
     rng = np.random.default_rng(5)
     views = local_frame_directions(np.arccos(rng.uniform(0.0, 1.0, 4000)),
@@ -182,7 +213,7 @@ def test_the_sky_view_table_adds_little_to_marching_every_ray(monkeypatch, sun_z
     monkeypatch.setattr(hillaire, "SKY_VIEW_MIN_RAYS", 10**9)
     marched = solver.sky_radiance(ground, views, sun)
     error = np.abs(from_table / marched - 1.0)
-    assert np.percentile(error, 95) < 3e-3 and error.max() < 4e-2
+    assert np.percentile(error, 95) < 3e-3 and error.max() < 6e-2
 
 
 @pytest.fixture(scope="module")
@@ -196,8 +227,20 @@ def earth_solvers():
     return HillaireSolver(profile), LutSolver(profile, tables=tables)
 
 
+def difference_from_tables(hillaire_solver, lut, sun_zenith_deg: float) -> np.ndarray:
+    """|L_hillaire / L_lut - 1| (49, 3) from the ground: 7 view zeniths (0-89 deg) x 7
+    azimuths from the sun (0-180 deg)."""
+    zenith, azimuth = np.meshgrid([0.0, 20.0, 40.0, 60.0, 75.0, 85.0, 89.0],
+                                  np.linspace(0.0, 180.0, 7), indexing="ij")
+    views = local_frame_directions(zenith * DEG, azimuth * DEG)
+    sun = local_frame_directions(sun_zenith_deg * DEG, 0.0)
+    ground = np.array([0.0, 0.0, lut.profile.bottom_radius_m])
+    return np.abs(hillaire_solver.sky_radiance(ground, views, sun)
+                  / lut.sky_radiance(ground, views, sun) - 1.0)
+
+
 # sun zenith [deg] -> (median, 95th percentile) of |L_hillaire / L_lut - 1| allowed
-AGAINST_TABLES = {0.0: (0.03, 0.095), 45.0: (0.056, 0.16), 80.0: (0.076, 0.265)}
+AGAINST_TABLES = {0.0: (0.036, 0.09), 45.0: (0.056, 0.155), 80.0: (0.065, 0.245)}
 
 
 @pytest.mark.slow
@@ -205,21 +248,37 @@ AGAINST_TABLES = {0.0: (0.03, 0.095), 45.0: (0.056, 0.16), 80.0: (0.076, 0.265)}
 def test_earth_sky_is_near_the_bruneton_tables(earth_solvers, sun_zenith_deg):
     # 7 view zeniths (0-89 deg) x 7 azimuths from the sun (0-180 deg), 3 wavelengths, from the
     # ground. Measured |relative difference|, median / 95th percentile / max: sun at the
-    # zenith 2.6 / 7.9 / 8.1 %, at 45 deg 4.7 / 13.2 / 17.3 %, at 80 deg 6.4 / 22.0 / 29.5 %,
+    # zenith 3.0 / 7.5 / 8.8 %, at 45 deg 4.7 / 12.8 / 16.2 %, at 80 deg 5.4 / 20.3 / 28.1 %,
     # the Hillaire sky the darker by the horizon. The cause is the paper's approximation of
     # orders >= 2 (isotropic phase functions, laterally uniform light): the same comparison
-    # with an isotropic aerosol gives 95th percentiles of 2.6 / 4.2 / 7.9 %, and air alone on
-    # a black ground 4.1 / 3.7 / 4.5 %, while the single scattering agrees with the "single"
-    # solver within 0.1 %. Tolerances: the measured median and 95th percentile plus ~20 %.
-    hillaire_solver, lut = earth_solvers
-    zenith, azimuth = np.meshgrid([0.0, 20.0, 40.0, 60.0, 75.0, 85.0, 89.0],
-                                  np.linspace(0.0, 180.0, 7), indexing="ij")
-    views = local_frame_directions(zenith * DEG, azimuth * DEG)
-    sun = local_frame_directions(sun_zenith_deg * DEG, 0.0)
-    ground = np.array([0.0, 0.0, lut.profile.bottom_radius_m])
-    error = np.abs(hillaire_solver.sky_radiance(ground, views, sun)
-                   / lut.sky_radiance(ground, views, sun) - 1.0)
+    # with an isotropic aerosol gave 95th percentiles of 2.6 / 4.2 / 7.9 %, and air alone on
+    # a black ground 4.1 / 3.7 / 4.5 % (with the paper's uniform table), while the single
+    # scattering agrees with the "single" solver within 0.1 %. Tolerances: the measured
+    # median and 95th percentile plus ~20 %.
+    error = difference_from_tables(*earth_solvers, sun_zenith_deg)
     median, p95 = AGAINST_TABLES[sun_zenith_deg]
+    print(f"sun {sun_zenith_deg}: median {np.median(error):.4f}, "
+          f"p95 {np.percentile(error, 95):.4f}, max {error.max():.4f}")
+    assert np.median(error) < median and np.percentile(error, 95) < p95
+
+
+# sun zenith [deg] -> (median, 95th percentile) of |L_hillaire / L_lut - 1| allowed
+TWILIGHT_AGAINST_TABLES = {94.0: (0.085, 0.43), 96.0: (0.145, 0.65)}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sun_zenith_deg", list(TWILIGHT_AGAINST_TABLES))
+def test_earth_twilight_sky_is_near_the_bruneton_tables(earth_solvers, sun_zenith_deg):
+    # The views and wavelengths of the daytime test with the sun 4 and 6 deg below the
+    # horizon, where Psi_ms falls by orders of magnitude between sun zenith cosines a few
+    # hundredths apart. Measured median / 95th percentile: 7.0 / 36.0 % at 94 deg and
+    # 12.1 / 54.0 % at 96 deg; the paper's 32 columns uniform in mu_s, read linearly, gave
+    # 64 / 209 % and 20.5 / 53 % (the sky up to 3.7 times too bright). The rest is the
+    # method's: against the Monte Carlo reference at 94 deg (docs/techniques.md) Hillaire is
+    # 12.7 % off in the median (14.3 % with a converged table of 1001 sun columns), "lut"
+    # 5.1 %. Tolerances: the measured values plus ~20 %.
+    error = difference_from_tables(*earth_solvers, sun_zenith_deg)
+    median, p95 = TWILIGHT_AGAINST_TABLES[sun_zenith_deg]
     print(f"sun {sun_zenith_deg}: median {np.median(error):.4f}, "
           f"p95 {np.percentile(error, 95):.4f}, max {error.max():.4f}")
     assert np.median(error) < median and np.percentile(error, 95) < p95

@@ -56,27 +56,53 @@ def sunlight(r, mu_s, bottom_radius, top_radius, sun_table, extinction, sun_angu
 
 
 @njit(cache=True)
-def multiple_scattering_at(r, mu_s, bottom_radius, top_radius, ms_table, out):
-    """Psi_ms (n_wl,) at radius r and sun zenith cosine mu_s, bilinear in the table's nodes
-    (altitude fraction i / (n_h - 1), mu_s = -1 + 2 j / (n_mu - 1))."""
-    n_h, n_mu = ms_table.shape[0], ms_table.shape[1]
-    fh = min(max((r - bottom_radius) / (top_radius - bottom_radius), 0.0), 1.0) * (n_h - 1)
-    fm = min(max(0.5 * (mu_s + 1.0), 0.0), 1.0) * (n_mu - 1)
+def multiple_scattering_coordinates(r, mu_s, bottom_radius, top_radius, mu_s_centre):
+    """(x_h, x_mu) in [0, 1] of radius r and sun zenith cosine mu_s in the multiple-scattering
+    table, whose nodes are x = k / (n - 1) on each axis (`hillaire.multiple_scattering_nodes`
+    inverts this): x_h = sqrt(h / H), rows crowded at the ground where the air is densest;
+    x_mu = x_c +- (1 - x_c or x_c) sqrt(|mu_s - c| / (1 - c or 1 + c)), x_c = (1 + c) / 2,
+    columns crowded at c = `mu_s_centre`, where Psi_ms falls by orders of magnitude as the
+    Earth's shadow rises through the air (the sun just below the horizon)."""
+    h = min(max((r - bottom_radius) / (top_radius - bottom_radius), 0.0), 1.0)
+    mu = min(max(mu_s, -1.0), 1.0)
+    c = mu_s_centre
+    x_c = 0.5 * (1.0 + c)
+    if mu >= c:
+        x_mu = x_c + (1.0 - x_c) * math.sqrt((mu - c) / (1.0 - c))
+    else:
+        x_mu = x_c - x_c * math.sqrt((c - mu) / (1.0 + c))
+    return math.sqrt(h), x_mu
+
+
+@njit(cache=True)
+def multiple_scattering_at(r, mu_s, bottom_radius, top_radius, log_ms_table, mu_s_centre,
+                           out):
+    """Psi_ms (n_wl,) at radius r and sun zenith cosine mu_s: exp of the bilinear
+    interpolation of `log_ms_table` (log Psi_ms at the nodes of
+    `multiple_scattering_coordinates`). In log, as Psi_ms falls by orders of magnitude
+    between neighbouring nodes in twilight, where linear interpolation follows the brighter
+    one."""
+    n_h, n_mu = log_ms_table.shape[0], log_ms_table.shape[1]
+    x_h, x_mu = multiple_scattering_coordinates(r, mu_s, bottom_radius, top_radius,
+                                                mu_s_centre)
+    fh = x_h * (n_h - 1)
+    fm = x_mu * (n_mu - 1)
     i = min(int(fh), n_h - 2)
     j = min(int(fm), n_mu - 2)
     a = fh - i
     b = fm - j
     for w in range(out.shape[0]):
-        out[w] = ((1.0 - a) * ((1.0 - b) * ms_table[i, j, w] + b * ms_table[i, j + 1, w])
-                  + a * ((1.0 - b) * ms_table[i + 1, j, w] + b * ms_table[i + 1, j + 1, w]))
+        out[w] = math.exp(
+            (1.0 - a) * ((1.0 - b) * log_ms_table[i, j, w] + b * log_ms_table[i, j + 1, w])
+            + a * ((1.0 - b) * log_ms_table[i + 1, j, w] + b * log_ms_table[i + 1, j + 1, w]))
 
 
 @njit(parallel=True, cache=True)
-def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
+def multiple_scattering_table(radius_nodes, mu_s_nodes, gauss_x, gauss_w, n_phi, n_samples,
                               bottom_radius, top_radius, h_step, density, extinction,
                               scattering, sun_table, albedo, sun_angular_radius):
-    """(psi, second, f_ms), each (n_h, n_mu_s, n_wl): Hillaire 2020 eqs. 5-9 at the nodes of
-    `multiple_scattering_at`, for a unit sun irradiance.
+    """(psi, second, f_ms), each (n_h, n_mu_s, n_wl): Hillaire 2020 eqs. 5-9 at the nodes
+    `radius_nodes` [m] x `mu_s_nodes` (sun zenith cosines), for a unit sun irradiance.
 
     second = int_4pi L'(x, -w) p_u dw, L' the light scattered once towards x by an isotropic
     phase function, sunlit ground included (eq. 5-6); f_ms = int_4pi L_f(x, -w) p_u dw with
@@ -89,13 +115,15 @@ def multiple_scattering_table(n_h, n_mu_s, gauss_x, gauss_w, n_phi, n_samples,
     azimuths phi and -phi see the same light and only those in (0, pi) are marched, with
     twice the weight."""
     n_c, n_wl = extinction.shape
+    n_mu_s = mu_s_nodes.size
+    n_h = radius_nodes.size
     second = np.zeros((n_h, n_mu_s, n_wl))
     f_ms = np.zeros((n_h, n_mu_s, n_wl))
     for cell in prange(n_h * n_mu_s):
         i = cell // n_mu_s
         j = cell % n_mu_s
-        r = bottom_radius + (top_radius - bottom_radius) * i / (n_h - 1)
-        mu_s0 = -1.0 + 2.0 * j / (n_mu_s - 1)
+        r = radius_nodes[i]
+        mu_s0 = mu_s_nodes[j]
         sin_s = math.sqrt(max(1.0 - mu_s0 * mu_s0, 0.0))
         dens = np.empty(n_c)
         column = np.empty(n_c)
@@ -175,7 +203,8 @@ RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loop
 @njit(parallel=True, cache=True)
 def march_rays(origins, directions, max_distances, sun_direction, n_samples, bottom_radius,
                top_radius, h_step, density, extinction, scattering, phase_scattering,
-               sun_table, ms_table, albedo, sun_angular_radius, with_ground):
+               sun_table, log_ms_table, mu_s_centre, albedo, sun_angular_radius,
+               with_ground):
     """(radiance, transmittance), each (n_ray, n_wl), per unit sun irradiance, along rays that
     end where they leave the atmosphere, at the ground or after `max_distances` [m]
     (Hillaire 2020 eq. 1 with the source of eq. 10):
@@ -185,7 +214,8 @@ def march_rays(origins, directions, max_distances, sun_direction, n_samples, bot
             + [ground, `with_ground`] T(x, g) albedo / pi T_sun(g) V(g) max(mu_s(g), 0)
 
     `phase_scattering` (n_ray or 1, n_c, n_wl) holds beta_s,c p_c(nu) of each ray
-    (per unit density), `ms_table` Psi_ms (`multiple_scattering_table`)."""
+    (per unit density), `log_ms_table` log Psi_ms (`multiple_scattering_table`) on the nodes
+    of `multiple_scattering_coordinates` with `mu_s_centre`."""
     n_ray = directions.shape[0]
     n_c, n_wl = extinction.shape
     radiance = np.zeros((n_ray, n_wl))
@@ -227,8 +257,8 @@ def march_rays(origins, directions, max_distances, sun_direction, n_samples, bot
                             view_column[c] += 0.5 * (dens_prev[c] + dens[c]) * dt
                     sunlight(radius, mu_s, bottom_radius, top_radius, sun_table, extinction,
                              sun_angular_radius, column, sun)
-                    multiple_scattering_at(radius, mu_s, bottom_radius, top_radius, ms_table,
-                                           psi)
+                    multiple_scattering_at(radius, mu_s, bottom_radius, top_radius,
+                                           log_ms_table, mu_s_centre, psi)
                     for w in range(n_wl):
                         tau = 0.0
                         single = 0.0

@@ -12,7 +12,12 @@ Comput. Graph. Forum 39(4), 13-22 (EGSR 2020), doi:10.1111/cgf.14050, section 5:
 - multiple-scattering table Psi_ms, 32 (altitude) x 32 (sun zenith cosine), eqs. 5-9: the
   light scattered twice with isotropic phase functions, L_2nd, and the share f_ms of light an
   isotropic medium scatters back to a point, each integrated over the sphere (64 directions),
-  summed over all orders as a geometric series, Psi_ms = L_2nd / (1 - f_ms);
+  summed over all orders as a geometric series, Psi_ms = L_2nd / (1 - f_ms). Unlike the
+  paper's table (uniform in altitude and mu_s, read linearly), the rows crowd at the ground
+  (h = H x^2), the columns where the sun sets for the air above the observer (mu_s from 0 to
+  the top's horizon; `multiple_scattering_nodes`), and log Psi_ms is interpolated, as Psi_ms
+  falls by orders of magnitude there: read linearly from the paper's table the Earth's sky
+  with the sun 4 deg below the horizon came out up to 3.7 times too bright;
 - the radiance along a ray, eq. 10 with eq. 1: single scattering with every constituent's own
   phase function plus sigma_s Psi_ms at each sample, and the sunlit Lambertian ground;
 - the sky-view table, 192 azimuths from the sun x 108 latitudes with the paper's square-root
@@ -26,10 +31,10 @@ Spectral on the profile's wavelengths, for any profile: all constituents, their 
 functions, absorbers through extinction minus scattering, the ground albedo per wavelength.
 Limits (docs/techniques.md, "Hillaire 2020"): orders >= 2 see isotropic phase functions and a
 medium that is laterally uniform around each point (the paper's assumptions), which is good
-for thin clear air but not for thick or strongly forward-scattering media (Mars' dust); in
-twilight Psi_ms, interpolated between 32 sun zenith cosines, is too large; the ground reflects
-the direct sun only; transmittance along views is ray marched (`transport/transmittance.py`),
-as the paper marches its view rays. Kernels: `transport/_hillaire_kernels.py`.
+for thin clear air but not for thick or strongly forward-scattering media (Mars' dust); the
+ground reflects the direct sun only; transmittance along views is ray marched
+(`transport/transmittance.py`), as the paper marches its view rays. Kernels:
+`transport/_hillaire_kernels.py`.
 """
 
 from __future__ import annotations
@@ -50,7 +55,7 @@ from skyscatter.transport.geometry import (
 from skyscatter.transport.single_scattering import hemisphere_irradiance
 from skyscatter.transport.transmittance import ray_marched_transmittance
 
-__all__ = ["HillaireSolver", "sky_view_directions"]
+__all__ = ["HillaireSolver", "multiple_scattering_nodes", "sky_view_directions"]
 
 TRANSMITTANCE_SIZE = (64, 256)  # (r, mu), the paper's 256 x 64 texture
 TRANSMITTANCE_SAMPLES = 128  # intervals per column integral of the transmittance table
@@ -58,6 +63,9 @@ MULTIPLE_SCATTERING_SIZE = (32, 32)  # (altitude, mu_s)
 # Gauss-Legendre zenith cosines on each side of the horizon x azimuths: 64 directions
 MULTIPLE_SCATTERING_DIRECTIONS = (4, 8)
 MULTIPLE_SCATTERING_SAMPLES = 32  # intervals per ray of the multiple-scattering table
+# log Psi_ms where Psi_ms = 0 (the night side's full shadow; ~1e-2 sr^-1 by day): exp of it,
+# and of anything interpolated towards it, underflows to 0 or to ~1e-170 of its neighbour
+ZERO_LOG = -800.0
 SKY_VIEW_SIZE = (108, 192)  # (latitude, azimuth from the sun)
 # One observer inside the atmosphere with at least this many rays reads the sky-view table
 # (which costs as much as its 20 736 rays marched); fewer rays are marched one by one.
@@ -94,10 +102,18 @@ class HillaireSolver:
             TRANSMITTANCE_SIZE[0], TRANSMITTANCE_SIZE[1], TRANSMITTANCE_SAMPLES,
             profile.bottom_radius_m, profile.top_radius_m, self._h_step, self._density)
         gauss_x, gauss_w = np.polynomial.legendre.leggauss(MULTIPLE_SCATTERING_DIRECTIONS[0])
+        # the sun zenith cosine halfway between sunset at the ground and at the top
+        self._mu_s_centre = 0.5 * horizon_cos_zenith(profile.top_radius_m,
+                                                     profile.bottom_radius_m)
+        # the table's node radii [m] (32,) and sun zenith cosines (32,)
+        self.multiple_scattering_radii, self.multiple_scattering_sun_cosines = (
+            multiple_scattering_nodes(profile.bottom_radius_m, profile.top_radius_m,
+                                      self._mu_s_centre))
         # Psi_ms, L_2nd and f_ms (32, 32, n_wl), per unit sun irradiance
         self.multiple_scattering, self.second_order, self.f_ms = (
             _hillaire_kernels.multiple_scattering_table(
-                MULTIPLE_SCATTERING_SIZE[0], MULTIPLE_SCATTERING_SIZE[1], gauss_x, gauss_w,
+                self.multiple_scattering_radii, self.multiple_scattering_sun_cosines,
+                gauss_x, gauss_w,
                 MULTIPLE_SCATTERING_DIRECTIONS[1], MULTIPLE_SCATTERING_SAMPLES,
                 profile.bottom_radius_m, profile.top_radius_m, self._h_step, self._density,
                 self._extinction, self._scattering, self.transmittance_columns, self._albedo,
@@ -183,6 +199,8 @@ class HillaireSolver:
         p = self.profile
         radiance = np.empty((directions.shape[0], p.n_wavelengths))
         transmittance = np.empty_like(radiance)
+        psi = self.multiple_scattering
+        log_psi = np.log(psi, out=np.full_like(psi, ZERO_LOG), where=psi > 0.0)
         for start in range(0, directions.shape[0], CHUNK_RAYS):
             stop = min(start + CHUNK_RAYS, directions.shape[0])
             chunk_origins = origins if origins.shape[0] == 1 else origins[start:stop]
@@ -191,7 +209,7 @@ class HillaireSolver:
                 self.n_samples, p.bottom_radius_m, p.top_radius_m, self._h_step,
                 self._density, self._extinction, self._scattering,
                 self._phase_scattering(directions[start:stop] @ sun),
-                self.transmittance_columns, self.multiple_scattering, self._albedo,
+                self.transmittance_columns, log_psi, self._mu_s_centre, self._albedo,
                 float(p.sun_angular_radius_rad), with_ground)
             if progress is not None:
                 progress(stop - start)
@@ -205,6 +223,22 @@ class HillaireSolver:
             if phase is not None:
                 out[:, c, :] = phase.evaluate(nu, p.wavelengths_nm) * p.scattering_per_density[c]
         return out
+
+
+def multiple_scattering_nodes(bottom_radius: float, top_radius: float, mu_s_centre: float
+                              ) -> tuple[np.ndarray, np.ndarray]:
+    """(radii [m], sun zenith cosines) of the multiple-scattering table's nodes, the
+    `MULTIPLE_SCATTERING_SIZE` values x = k / (n - 1) of
+    `_hillaire_kernels.multiple_scattering_coordinates` inverted: h = H x^2, and mu_s =
+    c +- (1 -+ c) ((x - x_c) / (1 - x_c or x_c))^2 on either side of x_c = (1 + c) / 2."""
+    n_h, n_mu = MULTIPLE_SCATTERING_SIZE
+    radii = bottom_radius + (top_radius - bottom_radius) * np.linspace(0.0, 1.0, n_h) ** 2
+    x = np.linspace(0.0, 1.0, n_mu)
+    c = mu_s_centre
+    x_c = 0.5 * (1.0 + c)
+    above = c + (1.0 - c) * (np.maximum(x - x_c, 0.0) / (1.0 - x_c)) ** 2
+    below = c - (1.0 + c) * (np.maximum(x_c - x, 0.0) / x_c) ** 2
+    return radii, np.where(x >= x_c, above, below)
 
 
 def sky_view_directions(r: float, bottom_radius: float) -> np.ndarray:
