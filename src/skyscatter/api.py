@@ -1135,6 +1135,7 @@ def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | Non
     check_cost(f"a sweep of {plan.n_atmospheres} atmospheres x {rays // plan.n_atmospheres} "
                f"geometries at {n_wl} wavelengths", 2.0 * rays * n_wl * 8.0, rays, n_wl,
                solver=solver, n_samples=n_samples, allow_large=allow_large)
+    _check_sweep_values(plan)
     base = load_atmosphere(config)
     metadata = output_metadata(
         base, ["radiance"], plan.wavelengths_nm, solver=solver,
@@ -1181,8 +1182,7 @@ def _sweep_plan(config: str | Path, values: Mapping[str, str | Sequence[object]]
                 relative_azimuths_deg: Sequence[float], *, wavelengths_nm: Sequence[float],
                 altitude_m: float, solver: str, orders: int | None, n_samples: int, seed: int,
                 cache_dir: str | Path | None, use_cache: bool) -> SweepPlan:
-    """The checked plan of `sweep`: every value of every axis applied to the config alone
-    (the config's own checks name a bad key or value), the geometry and the solver."""
+    """The plan of `sweep`, its geometry, wavelengths and solver checked."""
     document, path = load_document(config)
     if values is not None and not isinstance(values, Mapping):
         raise InputError(f"values = {values!r} is not allowed: a mapping of dotted config keys "
@@ -1213,11 +1213,16 @@ def _sweep_plan(config: str | Path, values: Mapping[str, str | Sequence[object]]
         orders=orders, n_samples=checked_integer("n_samples", n_samples, 1, MAX_SAMPLES),
         seed=checked_integer("seed", seed, 0, 2**32 - 1),
         cache_dir=None if cache_dir is None else str(cache_dir), use_cache=bool(use_cache))
-    for key, listed in plan.axes:  # each value once, the others as the config has them
-        for value in listed:
-            SweepPlan(plan.config, document, plan.path, ((key, (value,)),), (0.0,), (0.0,),
-                      (0.0,), (550.0,)).atmosphere(0)
     return plan
+
+
+def _check_sweep_values(plan: SweepPlan) -> None:
+    """Each value of each axis applied alone (the others as the config has them): the config's
+    own checks name a bad key or value before any work."""
+    for key, listed in plan.axes:
+        for value in listed:
+            SweepPlan(plan.config, plan.document, plan.path, ((key, (value,)),), (0.0,),
+                      (0.0,), (0.0,), (550.0,)).atmosphere(0)
 
 
 def _plain_value(value: object) -> object:

@@ -6,7 +6,8 @@ scheduler, https://distributed.dask.org):
 - by default on a `LocalCluster` of this computer: worker processes (not threads: the numba
   kernels and numpy release the GIL only in parts, and a process per worker keeps each
   worker's memory its own), one thread each, `workers` of them (default: the number of CPU
-  cores), each paused and restarted by Dask's nanny beyond `memory_limit` bytes, no dashboard;
+  cores), each paused and restarted by Dask's nanny beyond `memory_limit` bytes, its dashboard
+  on a free port (`client.dashboard_link`: no clash with another cluster's 8787);
 - or on an existing cluster by the address of its scheduler (`tcp://host:8786`): a
   `dask-scheduler` with `dask-worker` processes on other machines, or anything Dask can reach
   (Kubernetes with dask-kubernetes, SLURM/PBS with dask-jobqueue). Its workers need the same
@@ -58,14 +59,16 @@ def checked_workers(workers: int | None) -> int:
 @contextlib.contextmanager
 def dask_client(scheduler: str | None = None, workers: int | None = None, *,
                 memory_limit: str | int | None = None,
-                timeout_s: float = CONNECT_TIMEOUT_S) -> Iterator:
+                timeout_s: float | None = None) -> Iterator:
     """A `distributed.Client` of the scheduler at `scheduler` (e.g. "tcp://host:8786"), or of
     a new `LocalCluster` of `workers` processes (default: the CPU cores) with one thread each
     and `memory_limit` per worker (bytes, or Dask's text such as "4GiB"; default: Dask's, the
     memory divided among the workers). Closed (and the local cluster shut down) on leaving.
-    InputError for a scheduler that does not answer within `timeout_s` [s], or `workers` or
+    InputError for a scheduler that does not answer within `timeout_s` [s] (default
+    `CONNECT_TIMEOUT_S`), or `workers` or
     `memory_limit` given with `scheduler` (its workers are its own)."""
     distributed = import_distributed()
+    timeout_s = CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
     if scheduler is not None:
         if workers is not None or memory_limit is not None:
             raise InputError("--workers and --memory-limit size a local cluster; the workers of "
@@ -86,7 +89,7 @@ def dask_client(scheduler: str | None = None, workers: int | None = None, *,
     options = {} if memory_limit is None else {"memory_limit": memory_limit}
     try:
         cluster = distributed.LocalCluster(n_workers=count, threads_per_worker=1,
-                                           processes=True, dashboard_address=None,
+                                           processes=True, dashboard_address=":0",
                                            **options)
     except ValueError as error:  # a memory limit Dask cannot read
         raise InputError(f"memory_limit = {memory_limit!r} is not allowed ({error}): give "

@@ -1,11 +1,11 @@
 """The finished chunks of a sweep on disk, so that an interrupted sweep resumes.
 
-A store is a folder beside the output (`OUT.nc.parts/`) holding `sweep.json` (the sweep's
-fingerprint, `plan.SweepPlan.fingerprint`, and a short description) and one
-`chunk_NNNNNN.npz` per finished chunk (numpy's npz: the chunk's named arrays), each written
-to a temporary and renamed when complete (`output_files.atomic_write`): a chunk file is whole
-or absent, whatever interrupts the sweep. A store of another sweep (another fingerprint) is
-refused, never mixed in; `restart` empties it first.
+A store is a folder beside the output (`OUT.nc.parts/`, made with the first finished chunk)
+holding `sweep.json` (the sweep's fingerprint, `plan.SweepPlan.fingerprint`, and a short
+description) and one `chunk_NNNNNN.npz` per finished chunk (numpy's npz: the chunk's named
+arrays), each written to a temporary and renamed when complete (`output_files.atomic_write`):
+a chunk file is whole or absent, whatever interrupts the sweep. A store of another sweep
+(another fingerprint) is refused, never mixed in; `restart` empties it first.
 
 Public names: `ChunkStore`, `parts_folder`.
 """
@@ -44,6 +44,7 @@ class ChunkStore:
                  description: Mapping[str, object], *, restart: bool = False) -> None:
         self.folder = Path(folder)
         self.fingerprint = fingerprint
+        self._description = dict(description)
         manifest = self.folder / MANIFEST
         if self.folder.exists() and not self.folder.is_dir():
             raise InputError(f"{self.folder} is a file, where the sweep keeps its finished "
@@ -58,10 +59,6 @@ class ChunkStore:
                     "geometry, wavelengths or solver); pass --restart to discard them "
                     "(Python: restart=True) or choose another output", key="output",
                     value=str(self.folder))
-        else:
-            text = json.dumps({"fingerprint": fingerprint, **description}, indent=1,
-                              default=str) + "\n"
-            atomic_write(manifest, lambda path: Path(path).write_text(text, encoding="utf-8"))
 
     def _fingerprint_there(self, manifest: Path) -> str | None:
         try:
@@ -73,6 +70,8 @@ class ChunkStore:
 
     def finished(self) -> set[int]:
         """The indices of the chunks already stored."""
+        if not self.folder.is_dir():
+            return set()
         return {int(match["index"]) for path in self.folder.iterdir()
                 if (match := CHUNK_NAME.fullmatch(path.name))}
 
@@ -80,7 +79,14 @@ class ChunkStore:
         return self.folder / f"chunk_{index:06d}.npz"
 
     def write(self, index: int, arrays: Mapping[str, np.ndarray]) -> None:
-        """Store chunk `index` (whole or not at all)."""
+        """Store chunk `index` (whole or not at all); the first one makes the folder and its
+        `sweep.json`."""
+        manifest = self.folder / MANIFEST
+        if not manifest.is_file():
+            text = json.dumps({"fingerprint": self.fingerprint, **self._description}, indent=1,
+                              default=str) + "\n"
+            atomic_write(manifest, lambda path: Path(path).write_text(text, encoding="utf-8"))
+
         def save(path: str) -> None:
             with open(path, "wb") as file:
                 np.savez(file, **arrays)
