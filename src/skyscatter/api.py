@@ -60,7 +60,7 @@ from skyscatter.checks import (
     checked_integer,
     checked_number,
 )
-from skyscatter.dask_cluster import dask_client, import_distributed
+from skyscatter.dask_cluster import dask_client, import_distributed, map_in_order
 from skyscatter.datasets import grid_dataset, import_xarray, rows_dataset, write_netcdf, write_zarr
 from skyscatter.errors import InputError
 from skyscatter.output_files import check_writable_file, check_writable_folder, staged_outputs
@@ -505,7 +505,8 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
               adaptation_time_s: float = 600.0,
               on_frame: Callable[[int, datetime.datetime, float], None] | None = None,
               orbit_altitude_m: float | None = None, allow_large: bool = False,
-              clouds: Clouds | None = None) -> Timelapse:
+              clouds: Clouds | None = None, scheduler: str | None = None,
+              workers: int | None = None) -> Timelapse:
     """Render the sky at each of `times` (aware datetimes) for one place and write the frames
     (PNG, `frames_dir/frame_00001.png` ...) and a video (`video_path`, .mp4 or .gif).
 
@@ -515,6 +516,11 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     night flow into each other. With `objects.scintillation` (a random generator) the stars
     twinkle, a new draw each frame. `clouds` drift with their wind from frame to frame
     (`render_at`). `on_frame(index, time, ev100)` is called after each frame.
+
+    With `scheduler` (a Dask scheduler's address) or `workers` (local worker processes) the
+    frames are rendered on that Dask cluster (`dask_cluster`; the `[dask]` extra), a few
+    ahead of the one being written, and the result is the serial run's (the solver is sent
+    to every worker once; twinkling stars, which draw in frame order, are refused).
 
     `image` (an `ImageOptions`) holds the display choices in one object and, when given, is
     used instead of `compensation_ev`, `operator` and `colour_space` (kept for existing
@@ -547,15 +553,50 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
                          f"{frames_dir}, which is replaced as a whole", key="video_path",
                          value=str(video_path))
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
+    objects = objects or SkyObjects()
+    on_cluster = scheduler is not None or workers is not None
+    if on_cluster:
+        import_distributed()
+        if objects.scintillation is not None:
+            raise InputError("twinkling stars draw their random numbers frame after frame: "
+                             "leave --twinkle out on a cluster (--workers, --scheduler)",
+                             key="twinkle", value="scintillation")
     engine = _checked_engine(atmosphere, camera, wavelengths_nm, solver, options,
                              allow_large=allow_large, clouds=clouds, frames=len(times))
-    objects = objects or SkyObjects()
     frames_dir = Path(frames_dir)
+    frame_arguments = (atmosphere, camera, objects, orbit_altitude_m, clouds)
 
-    def render_frame(observer: Observer) -> SkyImage:
-        return _render_at(engine, atmosphere, camera, observer, objects, None, orbit_altitude_m,
-                          None, clouds)
+    with contextlib.ExitStack() as stack:
+        if on_cluster:
+            client = stack.enter_context(dask_client(scheduler, workers))
+            shared = client.scatter(engine, broadcast=True)
+            images = map_in_order(client, _timelapse_frame, observers, shared, *frame_arguments)
 
+            def render_frame(observer: Observer) -> SkyImage:
+                return next(images)
+        else:
+            def render_frame(observer: Observer) -> SkyImage:
+                return _timelapse_frame(observer, engine, *frame_arguments)
+
+        return _write_timelapse(render_frame, observers, video_path, fps, frames_dir,
+                                image=image, adaptation_time_s=adaptation_time_s,
+                                on_frame=on_frame)
+
+
+def _timelapse_frame(observer: Observer, engine: Solver, atmosphere: Atmosphere, camera: Camera,
+                     objects: SkyObjects, orbit_altitude_m: float | None,
+                     clouds: Clouds | None) -> SkyImage:
+    """One frame of `timelapse` (on a Dask worker, or here)."""
+    return _render_at(engine, atmosphere, camera, observer, objects, None, orbit_altitude_m,
+                      None, clouds)
+
+
+def _write_timelapse(render_frame: Callable[[Observer], SkyImage], observers: list[Observer],
+                     video_path: str | Path, fps: float, frames_dir: Path, *,
+                     image: ImageOptions, adaptation_time_s: float,
+                     on_frame: Callable[[int, datetime.datetime, float], None] | None
+                     ) -> Timelapse:
+    """The frames and video of `timelapse`, staged and committed together."""
     with staged_outputs() as stage, VideoWriter(video_path, fps, stage) as video:
         frames, exposures = write_frames(
             render_frame, observers, video, stage.folder(frames_dir), frames_dir,

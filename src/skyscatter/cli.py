@@ -567,6 +567,9 @@ def build_parser() -> argparse.ArgumentParser:
                            help="where the PNG frames go (default: beside the video, "
                            "<name>_frames/); the folder holds only frames and is replaced as "
                            "a whole when the run completes")
+    _add_cluster_arguments(timelapse, "(default: this process renders the frames)",
+                           "to render the frames on (default: none, this process renders "
+                           "them)")
     timelapse.set_defaults(run=_timelapse)
     _add_envmap_command(commands)
 
@@ -741,6 +744,17 @@ def _setting(text: str) -> tuple[str, str]:
     return key.strip(), values.strip()
 
 
+def _add_cluster_arguments(command: argparse.ArgumentParser, scheduler_default: str,
+                           workers_default: str) -> None:
+    """--scheduler and --workers: the Dask cluster a command runs on (`dask_cluster`)."""
+    command.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                         help="run on the Dask cluster of this scheduler (tcp://HOST:8786), "
+                         "whose workers have skyscatter installed; needs `pip install "
+                         f"\"skyscatter[dask]\"` {scheduler_default}")
+    command.add_argument("--workers", type=_whole(1, 1024), default=None, metavar="N",
+                         help=f"worker processes of a local Dask cluster {workers_default}")
+
+
 def _add_sweep_command(commands: argparse._SubParsersAction) -> None:
     sweep = commands.add_parser(
         "sweep", help="compute radiance and irradiance over a grid of config values and "
@@ -781,11 +795,8 @@ def _add_sweep_command(commands: argparse._SubParsersAction) -> None:
     _add_solver_arguments(sweep, 64)
     sweep.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
                        help="the dataset: OUT.nc (NetCDF-3) or OUT.zarr (a Zarr store)")
-    sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="run on the Dask cluster of this scheduler (tcp://HOST:8786), "
-                       "whose workers have skyscatter installed (default: a local cluster)")
-    sweep.add_argument("--workers", type=_whole(1, 1024), default=None, metavar="N",
-                       help="worker processes of the local cluster (default: the CPU cores)")
+    _add_cluster_arguments(sweep, "(default: a local cluster)",
+                           "(default: the CPU cores)")
     sweep.add_argument("--memory-limit", default=None, metavar="SIZE",
                        help="memory per local worker, e.g. 4GiB (default: Dask's, the memory "
                        "shared among the workers)")
@@ -1239,7 +1250,7 @@ def _timelapse(args: argparse.Namespace) -> None:
                                    operator=args.tonemap, colour_space=args.colour_space),
             adaptation_time_s=args.adaptation_minutes * 60.0,
             on_frame=lambda *_: bar.update(1), allow_large=args.allow_large,
-            clouds=_clouds(args))
+            clouds=_clouds(args), scheduler=args.scheduler, workers=args.workers)
     print(f"wrote {result.video} and {len(result.frames)} frames in {frames_dir} (EV100 "
           f"{min(result.ev100):.1f} to {max(result.ev100):.1f})", file=sys.stderr)
 

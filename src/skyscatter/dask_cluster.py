@@ -6,28 +6,33 @@ scheduler, https://distributed.dask.org):
 - by default on a `LocalCluster` of this computer: worker processes (not threads: the numba
   kernels and numpy release the GIL only in parts, and a process per worker keeps each
   worker's memory its own), one thread each, `workers` of them (default: the number of CPU
-  cores), each paused and restarted by Dask's nanny beyond `memory_limit` bytes, its dashboard
-  on a free port (`client.dashboard_link`: no clash with another cluster's 8787);
+  cores), the cores shared among them for numba's parallel kernels (NUMBA_NUM_THREADS), each
+  paused and restarted by Dask's nanny beyond `memory_limit` bytes, its dashboard on a free
+  port (`client.dashboard_link`: no clash with another cluster's 8787);
 - or on an existing cluster by the address of its scheduler (`tcp://host:8786`): a
   `dask-scheduler` with `dask-worker` processes on other machines, or anything Dask can reach
   (Kubernetes with dask-kubernetes, SLURM/PBS with dask-jobqueue). Its workers need the same
   skyscatter installed; an unreachable scheduler is an InputError naming the address.
 
-Dask is an optional dependency (`pip install "skyscatter[dask]"`), imported only here and in
-`sweep.run`, only when a cluster is wanted.
+Dask is an optional dependency (`pip install "skyscatter[dask]"`), imported only here (the
+others ask `import_distributed`), only when a cluster is wanted.
 
-Public names: `EXTRA`, `import_distributed`, `dask_client`, `checked_workers`.
+`map_in_order` runs one function over a sequence on the cluster and yields the results in
+order, a bounded number ahead (the frames of a time-lapse, which are written in order).
+
+Public names: `EXTRA`, `import_distributed`, `dask_client`, `checked_workers`, `map_in_order`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Iterator
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
 
 from skyscatter.errors import InputError
 
-__all__ = ["EXTRA", "checked_workers", "dask_client", "import_distributed"]
+__all__ = ["EXTRA", "checked_workers", "dask_client", "import_distributed", "map_in_order"]
 
 EXTRA = 'pip install "skyscatter[dask]"'
 CONNECT_TIMEOUT_S = 10.0  # s: a scheduler that does not answer in this time is unreachable
@@ -87,13 +92,33 @@ def dask_client(scheduler: str | None = None, workers: int | None = None, *,
         return
     count = checked_workers(workers)
     options = {} if memory_limit is None else {"memory_limit": memory_limit}
+    # the cores shared among the workers: numba's parallel kernels would otherwise each start
+    # a thread per core, `workers` times over (Dask's nanny does the same for OpenMP/BLAS)
+    threads = max(1, (os.cpu_count() or 1) // count)
     try:
         cluster = distributed.LocalCluster(n_workers=count, threads_per_worker=1,
                                            processes=True, dashboard_address=":0",
-                                           **options)
+                                           env={"NUMBA_NUM_THREADS": str(threads)}, **options)
     except ValueError as error:  # a memory limit Dask cannot read
         raise InputError(f"memory_limit = {memory_limit!r} is not allowed ({error}): give "
                          "bytes or text such as 4GiB", key="memory_limit", value=memory_limit,
                          allowed="bytes, or text such as 4GiB") from None
     with cluster, distributed.Client(cluster) as client:
         yield client
+
+
+def map_in_order(client, function: Callable, items: Iterable, *arguments: object,
+                 ahead: int | None = None) -> Iterator:
+    """`function(item, *arguments)` for each of `items`, computed on `client`'s workers and
+    yielded in the order of `items`, with at most `ahead` (default: twice the cluster's
+    threads) submitted and not yet yielded, so that memory stays bounded. `arguments` may be
+    futures (`client.scatter`). A task's exception is raised here."""
+    if ahead is None:
+        ahead = 2 * max(1, sum(client.nthreads().values()))
+    pending: deque = deque()
+    for item in items:
+        pending.append(client.submit(function, item, *arguments, pure=False))
+        if len(pending) >= ahead:
+            yield pending.popleft().result()
+    while pending:
+        yield pending.popleft().result()
