@@ -250,7 +250,8 @@ def test_the_command_line_writes_the_dataset_of_the_api(cluster, tmp_path, monke
 
 
 @pytest.mark.parametrize(("arguments", "message"), [
-    (["--set", "planet.ground_albdo=0,1"], "unknown key 'planet.ground_albdo'; did you mean 'planet.ground_albedo'?"),
+    (["--set", "planet.ground_albdo=0,1"],
+     "unknown key 'planet.ground_albdo'; did you mean 'planet.ground_albedo'?"),
     (["--set", "planet.ground_albedo=0:1:1"], "COUNT from 2 to"),
     (["--set", "planet.ground_albedo=0,1", "--set", "planet.ground_albedo=2"], "given twice"),
     (["--set", "planet.ground_albedo=0,7"], "ground_albedo"),

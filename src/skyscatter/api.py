@@ -135,9 +135,9 @@ from skyscatter.transport.solvers import (
     SurfaceSolver,
     make_solver,
 )
-from skyscatter.validate.report import ValidationSettings
+from skyscatter.validate.report import CaseResult, ValidationSettings
 from skyscatter.validate.suite import CASES as VALIDATION_CASES
-from skyscatter.validate.suite import run_suite as run_validation
+from skyscatter.validate.suite import ValidationRun, run_suite
 from skyscatter.viewer import server as viewer_server_module
 from skyscatter.viewer.server import ViewerServer, make_server
 from skyscatter.viewer.sky_message import sky_message
@@ -1317,6 +1317,21 @@ def export_tables(atmosphere: Atmosphere, folder: str | Path, output_format: str
     check_writable_folder(folder, EXPORT_FILES)
     solver = load_solver(atmosphere, wavelengths_nm, "lut", options)
     return write_exported_tables(solver.tables, solver.profile, folder, settings)
+
+
+def run_validation(settings: ValidationSettings, cases: Sequence[str] | None = None,
+                   on_case: Callable[[CaseResult], None] | None = None, *,
+                   scheduler: str | None = None, workers: int | None = None) -> ValidationRun:
+    """Run the validation cases `cases` (default: all; `VALIDATION_CASES`) with `settings`,
+    write report.md, summary.json and the figures into `settings.output_dir`, and return the
+    results (`validate.suite.run_suite`); `on_case` sees each result as it ends. With
+    `scheduler` (a Dask scheduler's address) or `workers` (local worker processes) the cases
+    run at once on that Dask cluster (`dask_cluster`; the `[dask]` extra); a remote cluster's
+    workers must see `settings.output_dir` (a shared file system)."""
+    if scheduler is None and workers is None:
+        return run_suite(settings, cases, on_case)
+    with dask_client(scheduler, workers) as client:
+        return run_suite(settings, cases, on_case, client=client)
 
 
 def compare_techniques(output_dir: str | Path, solvers: Sequence[str] | None = None,

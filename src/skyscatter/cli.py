@@ -682,6 +682,10 @@ def build_parser() -> argparse.ArgumentParser:
                           help="comma-separated subset of the cases (default: all)")
     validate.add_argument("--seed", type=_whole(0, 2**32 - 1), default=0,
                           help="seed of the Monte Carlo paths (default 0)")
+    _add_cluster_arguments(validate, "(its workers must see --output: a shared file system; "
+                           "default: the cases run here, one after the other)",
+                           "to run the cases on at once (default: none, they run here, one "
+                           "after the other)")
     _add_cache_arguments(validate)
     validate.set_defaults(run=_validate)
 
@@ -1637,7 +1641,8 @@ def _validate(args: argparse.Namespace) -> int:
                                   cache=None if args.no_cache else TableCache(args.cache_dir),
                                   log=log, seed=args.seed)
     try:
-        outcome = api.run_validation(settings, args.cases, on_case)
+        outcome = api.run_validation(settings, args.cases, on_case, scheduler=args.scheduler,
+                                     workers=args.workers)
     except OSError as error:
         raise InputError(f"cannot write the report into {args.output}: {error.strerror}",
                          key="output", value=str(args.output)) from None
