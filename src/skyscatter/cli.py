@@ -724,18 +724,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _axis(bounds: Bounds) -> Callable[[str], list[float]]:
-    """An argparse type: the numbers of a sweep axis (A,B,C, START:STOP:COUNT[:log];
-    `api.parse_values`), each within `bounds`."""
+    """An argparse type: the numbers of a sweep axis, each within `bounds`: a list A,B,C (as
+    `_float_list`) or a range START:STOP:COUNT[:log] (`api.parse_values`)."""
     def parse(text: str) -> list[float]:
+        if ":" not in text:
+            return _float_list(text, bounds)
         from skyscatter import api
         try:
             values = api.parse_values(text)
         except InputError as error:
             raise argparse.ArgumentTypeError(str(error)) from None
-        if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in values):
-            raise argparse.ArgumentTypeError(f"{text!r}: give numbers, as A,B,C or "
-                                             "START:STOP:COUNT")
-        return [_checked(bounds, float(value), str(value)) for value in values]
+        return [_checked(bounds, value, repr(value)) for value in values]
     return parse
 
 
