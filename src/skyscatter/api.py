@@ -1186,6 +1186,7 @@ def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | Non
                   "view_zeniths_deg": plan.view_zeniths_deg,
                   "relative_azimuths_deg": plan.relative_azimuths_deg})
     fingerprint = plan.fingerprint()
+    metadata.pop("number_format")  # of text rows; a dataset holds the float64 values
     metadata["sweep"] = {"config_keys": ", ".join(key for key, _ in plan.axes),
                          "atmospheres": plan.n_atmospheres, "chunks": plan.n_chunks,
                          "fingerprint": fingerprint, "command": command}
