@@ -26,6 +26,7 @@ Public names: `EXTRA`, `import_distributed`, `dask_client`, `checked_workers`, `
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
@@ -103,8 +104,24 @@ def dask_client(scheduler: str | None = None, workers: int | None = None, *,
         raise InputError(f"memory_limit = {memory_limit!r} is not allowed ({error}): give "
                          "bytes or text such as 4GiB", key="memory_limit", value=memory_limit,
                          allowed="bytes, or text such as 4GiB") from None
-    with cluster, distributed.Client(cluster) as client:
+    with _quiet_dask(), cluster, distributed.Client(cluster) as client:
+        client.run(_quiet_worker)
         yield client
+
+
+@contextlib.contextmanager
+def _quiet_dask() -> Iterator[None]:
+    """Dask's own warnings of this process (the local cluster's nannies) at ERROR level while
+    the cluster runs: an interrupted run says "interrupted", not four lines about cancelled
+    tasks and workers killed on shutdown. Its worker processes get the same by
+    `_quiet_worker`."""
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 def map_in_order(client, function: Callable, items: Iterable, *arguments: object,
@@ -122,3 +139,8 @@ def map_in_order(client, function: Callable, items: Iterable, *arguments: object
             yield pending.popleft().result()
     while pending:
         yield pending.popleft().result()
+
+
+def _quiet_worker() -> None:
+    """Dask's warnings at ERROR level in a local worker process (run there by `client.run`)."""
+    logging.getLogger("distributed").setLevel(logging.ERROR)
