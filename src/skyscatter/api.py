@@ -34,7 +34,7 @@ import math
 import re
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO
 
@@ -569,7 +569,12 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     with contextlib.ExitStack() as stack:
         if on_cluster:
             client = stack.enter_context(dask_client(scheduler, workers))
-            shared = client.scatter(engine, broadcast=True)
+            # each worker builds the solver as a task (the tables from the cache, which
+            # `_checked_engine` filled): a task Dask can run again if a worker dies, which
+            # data sent by `client.scatter` is not
+            shared = client.submit(load_solver, atmosphere,
+                                   _checked_wavelength_list(wavelengths_nm, False), solver,
+                                   _worker_options(options, atmosphere), pure=False)
             images = map_in_order(client, _timelapse_frame, observers, shared, *frame_arguments)
 
             def render_frame(observer: Observer) -> SkyImage:
@@ -581,6 +586,12 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
         return _write_timelapse(render_frame, observers, video_path, fps, frames_dir,
                                 image=image, adaptation_time_s=adaptation_time_s,
                                 on_frame=on_frame)
+
+
+def _worker_options(options: SolverOptions | None, atmosphere: Atmosphere) -> SolverOptions:
+    """`options` (default: `solver_options(atmosphere)`) without the callbacks of this
+    process (progress bars, log lines), for a Dask worker."""
+    return replace(options or solver_options(atmosphere), progress=None, log=None)
 
 
 def _timelapse_frame(observer: Observer, engine: Solver, atmosphere: Atmosphere, camera: Camera,

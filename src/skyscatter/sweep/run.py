@@ -47,7 +47,9 @@ def run_sweep(client, plan: SweepPlan, store: ChunkStore, *, in_flight: int | No
     if in_flight is None:
         in_flight = sum(client.nthreads().values()) + 1
     tag = plan.fingerprint()[:12]
-    shared = client.scatter(plan, broadcast=True)
+    # the plan goes into every task as an argument (a few kB), not scattered: scattered data
+    # has no lineage, and once Dask's memory manager has dropped its extra copies a dead
+    # worker could take the last one with it
     pending = iter(waiting)
     active: dict[int, list] = {}  # atmosphere -> [solver future, chunks left]
     chunk_of: dict[str, tuple[int, int]] = {}  # future key -> (atmosphere, chunk)
@@ -58,12 +60,12 @@ def run_sweep(client, plan: SweepPlan, store: ChunkStore, *, in_flight: int | No
         if atmosphere is None:
             return
         priority = plan.n_atmospheres - atmosphere  # earlier atmospheres first: few in memory
-        solver = client.submit(build_solver, shared, atmosphere, key=f"solver-{tag}-{atmosphere}",
+        solver = client.submit(build_solver, plan, atmosphere, key=f"solver-{tag}-{atmosphere}",
                                retries=RETRIES, priority=priority, pure=False)
         chunks = [c for c in plan.chunks_of(atmosphere) if c not in finished]
         active[atmosphere] = [solver, len(chunks)]
         for chunk in chunks:
-            future = client.submit(compute_chunk, solver, shared, chunk,
+            future = client.submit(compute_chunk, solver, plan, chunk,
                                    key=f"chunk-{tag}-{chunk}", retries=RETRIES,
                                    priority=priority, pure=False)
             chunk_of[future.key] = (atmosphere, chunk)
