@@ -519,8 +519,9 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
 
     With `scheduler` (a Dask scheduler's address) or `workers` (local worker processes) the
     frames are rendered on that Dask cluster (`dask_cluster`; the `[dask]` extra), a few
-    ahead of the one being written, and the result is the serial run's (the solver is sent
-    to every worker once; twinkling stars, which draw in frame order, are refused).
+    ahead of the one being written, and the result is the serial run's (each worker builds
+    the solver once, its tables from the cache; twinkling stars, which draw in frame order,
+    are refused).
 
     `image` (an `ImageOptions`) holds the display choices in one object and, when given, is
     used instead of `compensation_ev`, `operator` and `colour_space` (kept for existing
