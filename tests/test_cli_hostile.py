@@ -22,6 +22,7 @@ RENDER = ["render", "earth"]
 TIMELAPSE = ["timelapse", "earth", "--start", "2024-06-21T20:00Z", "--end",
              "2024-06-21T21:00Z", "--lat", "52", "--lon", "13"]
 RADIANCE = ["radiance", "earth", "--sun-zenith", "30"]
+SWEEP = ["sweep", "earth", "-o", "x.nc"]
 
 # (command, option, lowest allowed, highest allowed, lowest is excluded, is a whole number)
 NUMBERS = [
@@ -51,11 +52,14 @@ NUMBERS = [
     (RADIANCE, "--view-zenith", 0.0, 180.0, False, False),
     (RADIANCE, "--view-azimuth", *FINITE, False, False),
     (RADIANCE, "--wavelengths", 280.5, 1690.0, False, False),
+    (SWEEP, "--view-zenith", 0.0, 180.0, False, False),
+    (SWEEP, "--azimuth", *FINITE, False, False),
+    (SWEEP, "--workers", 1, 1024, False, True),
     (["view"], "--port", 0, 65535, False, True),
     (["validate"], "--seed", 0, 2**32 - 1, False, True),
 ]
 NON_FINITE = ["nan", "NaN", "-nan", "inf", "-inf", "Infinity", "1e309", "-1e999"]
-LISTS = ("--view-zenith", "--view-azimuth", "--wavelengths")  # comma-separated lists
+LISTS = ("--view-zenith", "--view-azimuth", "--azimuth", "--wavelengths")  # comma-separated
 
 
 def _allowed(text: str, low: float, high: float, low_open: bool, whole: bool) -> bool:

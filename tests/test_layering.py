@@ -35,9 +35,11 @@ LAYERS: dict[str, set[str]] = {
     "viewer": {"base", "render", "transport", "atmosphere", "spectrum"},
     # compares the solvers and their images with references; no viewer, no API
     "validate": {"base", "spectrum", "optics", "atmosphere", "transport", "astro", "render"},
+    # sweeps over config values and geometry: atmospheres, their solvers, the radiance grid
+    "sweep": {"base", "spectrum", "optics", "atmosphere", "transport", "render"},
     # the facade: every layer below it
     "api": {"base", "spectrum", "optics", "atmosphere", "transport", "astro", "render", "viewer",
-            "validate"},
+            "validate", "sweep"},
     # a thin skin: the public API (api, api_constants), the base modules, its own cli_progress
     "cli": {"base", "api"},
 }
@@ -51,6 +53,7 @@ TOP_LEVEL = {
     "output_files": "base",
     "jit_cache": "base",
     "row_output": "base",  # rows of numbers as JSON/CSV text, with their metadata
+    "dask_cluster": "base",  # the Dask client of batch work (sweep): local or a scheduler's
     "api": "api",
     "output_metadata": "api",  # units, solver, version of a table of results
     "datasets": "api",  # tables of results as xarray Datasets / NetCDF

@@ -25,9 +25,12 @@ PACKAGE = ROOT / "src" / "skyscatter"
 PROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
 # modules imported only where an extra is needed; each must name its extra where it fails
 EXTRA_ONLY = {"imageio_ffmpeg": "video", "matplotlib": "validate", "pvlib": "validate",
-              "PythonicDISORT": "validate", "xarray": "science"}
-# where each extra's modules may be imported: only there does a missing extra make itself felt
-EXTRA_HOME = {"video": "render/video_io.py", "validate": "validate/", "science": "datasets.py"}
+              "PythonicDISORT": "validate", "xarray": "science", "dask": "dask",
+              "distributed": "dask", "zarr": "dask"}
+# where each extra's modules may be imported (a prefix, or a tuple of them): only there does a
+# missing extra make itself felt
+EXTRA_HOME = {"video": "render/video_io.py", "validate": "validate/", "science": "datasets.py",
+              "dask": ("dask_cluster.py",)}
 
 
 def _requirement_name(requirement: str) -> str:
@@ -93,7 +96,8 @@ def test_every_import_is_a_core_dependency_or_its_extra():
             assert distributions & core, f"{module} ({files}) is not a core dependency"
     assert "imageio-ffmpeg" not in core
     test_extra = " ".join(PROJECT["optional-dependencies"]["test"])
-    assert all(extra in test_extra for extra in ("video", "viewer", "validate", "science"))
+    assert all(extra in test_extra for extra in ("video", "viewer", "validate", "science",
+                                                 "dask"))
 
 
 @pytest.mark.slow  # builds an sdist and a wheel from a copy of the tree: about 10 s

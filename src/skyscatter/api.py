@@ -25,14 +25,16 @@ computing (`render.budget`; `allow_large=True` lifts that limit).
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import ipaddress
 import itertools
 import json
 import math
 import re
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+import tempfile
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO
 
@@ -43,6 +45,7 @@ from skyscatter.astro.time import check_utc, parse_time
 from skyscatter.atmosphere.cloud_config import Clouds, list_cloud_presets, load_clouds
 from skyscatter.atmosphere.cloud_field import CloudField, cloud_field
 from skyscatter.atmosphere.config import list_presets, load_atmosphere
+from skyscatter.atmosphere.config_overrides import load_document, parse_values
 from skyscatter.atmosphere.gas import describe_gas
 from skyscatter.atmosphere.model import MAX_SCATTERING_ORDERS, Atmosphere
 from skyscatter.atmosphere.variants import load_variant, with_ground_albedo
@@ -57,7 +60,8 @@ from skyscatter.checks import (
     checked_integer,
     checked_number,
 )
-from skyscatter.datasets import import_xarray, rows_dataset, write_netcdf
+from skyscatter.dask_cluster import dask_client, import_distributed, map_in_order
+from skyscatter.datasets import grid_dataset, import_xarray, rows_dataset, write_netcdf, write_zarr
 from skyscatter.errors import InputError
 from skyscatter.output_files import check_writable_file, check_writable_folder, staged_outputs
 from skyscatter.output_metadata import output_metadata
@@ -84,6 +88,7 @@ from skyscatter.render.image_options import EXR_CONTENTS, EXR_UNITS, ImageOption
 from skyscatter.render.octahedral import OctahedralCamera
 from skyscatter.render.paraboloid import ParaboloidCamera
 from skyscatter.render.prefilter import prefiltered_mips
+from skyscatter.render.radiance_grid import sky_radiance_grid, surface_irradiance_grid
 from skyscatter.render.radiance_hdr import hdr_writer
 from skyscatter.render.scene import (
     SkyImage,
@@ -117,20 +122,22 @@ from skyscatter.spectrum.grid import (
     checked_grid,
     wavelength_grid,
 )
+from skyscatter.sweep.assemble import grid_coordinates, grid_variables
+from skyscatter.sweep.plan import SweepPlan
+from skyscatter.sweep.run import run_sweep
+from skyscatter.sweep.store import ChunkStore, parts_folder
 from skyscatter.transport.cache import TableCache
-from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.plane_irradiance import plane_irradiance, plane_normal
-from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import (
-    NoisySolver,
+    SOLVERS,
     Solver,
     SolverOptions,
     SurfaceSolver,
     make_solver,
 )
-from skyscatter.validate.report import ValidationSettings
+from skyscatter.validate.report import CaseResult, ValidationSettings
 from skyscatter.validate.suite import CASES as VALIDATION_CASES
-from skyscatter.validate.suite import run_suite as run_validation
+from skyscatter.validate.suite import ValidationRun, run_suite
 from skyscatter.viewer import server as viewer_server_module
 from skyscatter.viewer.server import ViewerServer, make_server
 from skyscatter.viewer.sky_message import sky_message
@@ -171,6 +178,7 @@ __all__ = [
     "SkyObjects",
     "SolverOptions",
     "SphereMapCamera",
+    "SweepResult",
     "check_image_options",
     "compare_techniques",
     "check_mip_chain",
@@ -197,6 +205,7 @@ __all__ = [
     "output_metadata",
     "radiance_dataset",
     "write_netcdf",
+    "write_zarr",
     "save_image",
     "sky_ephemeris",
     "timelapse",
@@ -204,6 +213,8 @@ __all__ = [
     "sky_radiance_rows",
     "solver_options",
     "sun_direction",
+    "sweep",
+    "parse_values",
     "viewer_server",
     "viewpoint_at",
     "is_loopback",
@@ -494,7 +505,8 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
               adaptation_time_s: float = 600.0,
               on_frame: Callable[[int, datetime.datetime, float], None] | None = None,
               orbit_altitude_m: float | None = None, allow_large: bool = False,
-              clouds: Clouds | None = None) -> Timelapse:
+              clouds: Clouds | None = None, scheduler: str | None = None,
+              workers: int | None = None) -> Timelapse:
     """Render the sky at each of `times` (aware datetimes) for one place and write the frames
     (PNG, `frames_dir/frame_00001.png` ...) and a video (`video_path`, .mp4 or .gif).
 
@@ -504,6 +516,12 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
     night flow into each other. With `objects.scintillation` (a random generator) the stars
     twinkle, a new draw each frame. `clouds` drift with their wind from frame to frame
     (`render_at`). `on_frame(index, time, ev100)` is called after each frame.
+
+    With `scheduler` (a Dask scheduler's address) or `workers` (local worker processes) the
+    frames are rendered on that Dask cluster (`dask_cluster`; the `[dask]` extra), a few
+    ahead of the one being written, and the result is the serial run's (each worker builds
+    the solver once, its tables from the cache; twinkling stars, which draw in frame order,
+    are refused).
 
     `image` (an `ImageOptions`) holds the display choices in one object and, when given, is
     used instead of `compensation_ev`, `operator` and `colour_space` (kept for existing
@@ -536,15 +554,61 @@ def timelapse(atmosphere: Atmosphere, camera: Camera, times: Sequence[datetime.d
                          f"{frames_dir}, which is replaced as a whole", key="video_path",
                          value=str(video_path))
     observers = [make_observer(t, latitude_deg, longitude_deg, elevation_m) for t in times]
+    objects = objects or SkyObjects()
+    on_cluster = scheduler is not None or workers is not None
+    if on_cluster:
+        import_distributed()
+        if objects.scintillation is not None:
+            raise InputError("twinkling stars draw their random numbers frame after frame: "
+                             "leave --twinkle out on a cluster (--workers, --scheduler)",
+                             key="twinkle", value="scintillation")
     engine = _checked_engine(atmosphere, camera, wavelengths_nm, solver, options,
                              allow_large=allow_large, clouds=clouds, frames=len(times))
-    objects = objects or SkyObjects()
     frames_dir = Path(frames_dir)
+    frame_arguments = (atmosphere, camera, objects, orbit_altitude_m, clouds)
 
-    def render_frame(observer: Observer) -> SkyImage:
-        return _render_at(engine, atmosphere, camera, observer, objects, None, orbit_altitude_m,
-                          None, clouds)
+    with contextlib.ExitStack() as stack:
+        if on_cluster:
+            client = stack.enter_context(dask_client(scheduler, workers))
+            # each worker builds the solver as a task (the tables from the cache, which
+            # `_checked_engine` filled): a task Dask can run again if a worker dies, which
+            # data sent by `client.scatter` is not
+            shared = client.submit(load_solver, atmosphere,
+                                   _checked_wavelength_list(wavelengths_nm, False), solver,
+                                   _worker_options(options, atmosphere), pure=False)
+            images = map_in_order(client, _timelapse_frame, observers, shared, *frame_arguments)
 
+            def render_frame(observer: Observer) -> SkyImage:
+                return next(images)
+        else:
+            def render_frame(observer: Observer) -> SkyImage:
+                return _timelapse_frame(observer, engine, *frame_arguments)
+
+        return _write_timelapse(render_frame, observers, video_path, fps, frames_dir,
+                                image=image, adaptation_time_s=adaptation_time_s,
+                                on_frame=on_frame)
+
+
+def _worker_options(options: SolverOptions | None, atmosphere: Atmosphere) -> SolverOptions:
+    """`options` (default: `solver_options(atmosphere)`) without the callbacks of this
+    process (progress bars, log lines), for a Dask worker."""
+    return replace(options or solver_options(atmosphere), progress=None, log=None)
+
+
+def _timelapse_frame(observer: Observer, engine: Solver, atmosphere: Atmosphere, camera: Camera,
+                     objects: SkyObjects, orbit_altitude_m: float | None,
+                     clouds: Clouds | None) -> SkyImage:
+    """One frame of `timelapse` (on a Dask worker, or here)."""
+    return _render_at(engine, atmosphere, camera, observer, objects, None, orbit_altitude_m,
+                      None, clouds)
+
+
+def _write_timelapse(render_frame: Callable[[Observer], SkyImage], observers: list[Observer],
+                     video_path: str | Path, fps: float, frames_dir: Path, *,
+                     image: ImageOptions, adaptation_time_s: float,
+                     on_frame: Callable[[int, datetime.datetime, float], None] | None
+                     ) -> Timelapse:
+    """The frames and video of `timelapse`, staged and committed together."""
     with staged_outputs() as stage, VideoWriter(video_path, fps, stage) as video:
         frames, exposures = write_frames(
             render_frame, observers, video, stage.folder(frames_dir), frames_dir,
@@ -936,28 +1000,20 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                n_samples=_samples(options), allow_large=allow_large)
     engine = load_solver(atmosphere, wavelengths, solver, options, monochromatic=True)
     profile = engine.profile
-    position = observer_position(altitude_m, profile.bottom_radius_m)
-    view_zenith, azimuth = np.meshgrid(np.radians(view_zeniths_deg),
-                                       np.radians(relative_azimuths_deg), indexing="ij")
-    directions = local_frame_directions(view_zenith, azimuth)
+    radiance, error = sky_radiance_grid(engine, altitude_m, sun_zeniths_deg, view_zeniths_deg,
+                                        relative_azimuths_deg)
     rows = []
-    for sun_zenith in sun_zeniths_deg:
-        sun = sun_direction(sun_zenith, 0.0)
-        error = None
-        if isinstance(engine, NoisySolver):
-            radiance, error = engine.sky_radiance_with_error(position, directions, sun)
-        else:
-            radiance = engine.sky_radiance(position, directions, sun)
-        for (i, vz), (j, az) in itertools.product(enumerate(view_zeniths_deg),
-                                                   enumerate(relative_azimuths_deg)):
-            for k, wavelength in enumerate(profile.wavelengths_nm):
-                row = {"sun_zenith_deg": float(sun_zenith), "view_zenith_deg": float(vz),
-                       "relative_azimuth_deg": float(az), "wavelength_nm": float(wavelength),
-                       "radiance": float(radiance[i, j, k]),
-                       "toa_irradiance": float(profile.toa_irradiance[k])}
-                if error is not None:
-                    row["standard_error"] = float(error[i, j, k])
-                rows.append(row)
+    for (s, sun_zenith), (i, vz), (j, az) in itertools.product(
+            enumerate(sun_zeniths_deg), enumerate(view_zeniths_deg),
+            enumerate(relative_azimuths_deg)):
+        for k, wavelength in enumerate(profile.wavelengths_nm):
+            row = {"sun_zenith_deg": float(sun_zenith), "view_zenith_deg": float(vz),
+                   "relative_azimuth_deg": float(az), "wavelength_nm": float(wavelength),
+                   "radiance": float(radiance[s, i, j, k]),
+                   "toa_irradiance": float(profile.toa_irradiance[k])}
+            if error is not None:
+                row["standard_error"] = float(error[s, i, j, k])
+            rows.append(row)
     return rows
 
 
@@ -997,19 +1053,18 @@ def irradiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
         raise InputError(f"the {solver!r} solver does not give irradiance; use lut or single",
                          key="solver", value=solver, allowed="lut, single")
     profile = engine.profile
-    position = observer_position(altitude_m, profile.bottom_radius_m)
+    direct_normals, diffuses, globals_ = surface_irradiance_grid(engine, altitude_m,
+                                                                 sun_zeniths_deg)
     rows = []
-    for sun_zenith in sun_zeniths_deg:
-        mu = float(np.cos(np.radians(sun_zenith)))
-        sun = sun_direction(sun_zenith, 0.0)
-        direct, diffuse = engine.ground_irradiance(position, sun)
-        direct_normal = direct / mu if mu > 0.0 else np.zeros_like(direct)
-        plane = None if normal is None else plane_irradiance(engine, sun, normal, altitude_m)
+    for sun_zenith, direct_normal, diffuse, global_ in zip(sun_zeniths_deg, direct_normals,
+                                                           diffuses, globals_, strict=True):
+        plane = (None if normal is None else
+                 plane_irradiance(engine, sun_direction(sun_zenith, 0.0), normal, altitude_m))
         for k, wavelength in enumerate(profile.wavelengths_nm):
             row = {"sun_zenith_deg": float(sun_zenith), "wavelength_nm": float(wavelength),
                    "direct_normal": float(direct_normal[k]),
                    "diffuse_horizontal": float(diffuse[k]),
-                   "global_horizontal": float(direct[k] + diffuse[k]),
+                   "global_horizontal": float(global_[k]),
                    "toa_irradiance": float(profile.toa_irradiance[k])}
             if transmittance or plane is not None:
                 row["direct_transmittance"] = float(direct_normal[k] / profile.toa_irradiance[k])
@@ -1074,6 +1129,179 @@ def irradiance_dataset(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                                   if name in rows[0]})
 
 
+@dataclass(frozen=True)
+class SweepResult:
+    """What `sweep` made: the `dataset` (`xarray.Dataset`, docs/sweep.md), the file or Zarr
+    store it was written to (None: not written), and how many chunks were `computed` now and
+    `reused` from the chunk store of an earlier, interrupted run."""
+
+    dataset: object
+    output: Path | None
+    computed: int
+    reused: int
+
+
+def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | None = None,
+          sun_zeniths_deg: Sequence[float] = (30.0,), view_zeniths_deg: Sequence[float] = (0.0,),
+          relative_azimuths_deg: Sequence[float] = (0.0,), *,
+          wavelengths_nm: Sequence[float] = (440.0, 550.0, 680.0),
+          output_path: str | Path | None = None, altitude_m: float = 0.0, solver: str = "lut",
+          orders: int | None = None, n_samples: int = 64, seed: int = 0,
+          cache_dir: str | Path | None = None, use_cache: bool = True,
+          scheduler: str | None = None, workers: int | None = None,
+          memory_limit: str | int | None = None, atmospheres_in_flight: int | None = None,
+          restart: bool = False, keep_parts: bool = False, allow_large: bool = False,
+          command: str | None = None,
+          on_chunk: Callable[[int, int], None] | None = None) -> SweepResult:
+    """Diffuse sky radiance (and, from solvers that light surfaces, the surface irradiance)
+    for every combination of the config `values` (dotted key -> values, or an axis written
+    as text: "0,0.1,0.3", "0.02:0.8:20", "0.01:1:5:log"; `config_overrides`) of `config` (a
+    preset name or TOML file), `sun_zeniths_deg`, `view_zeniths_deg`,
+    `relative_azimuths_deg` (0 looks towards the sun) and monochromatic `wavelengths_nm`,
+    run on a Dask cluster: a `LocalCluster` of `workers` processes (default: the CPU cores;
+    `memory_limit` each), or the scheduler at the address `scheduler`. Each atmosphere's
+    solver is built once; at most `atmospheres_in_flight` are held at a time
+    (`sweep.run`). Returns a `SweepResult` whose dataset has one dimension per config key
+    (`[i]` -> `_i`, `.` -> `_`; attribute `config_key`), then sun_zenith, view_zenith,
+    azimuth, wavelength (docs/sweep.md, `sweep.assemble`), written to `output_path` (.nc:
+    NetCDF-3, .zarr: a Zarr store) when given. Finished chunks are kept in `OUT.parts/`
+    beside it, so an interrupted sweep run again computes only what is missing (`restart`:
+    start afresh); the folder is removed when the output is written unless `keep_parts`.
+    `on_chunk(done, total)` follows the chunks. `orders` (default: each atmosphere's
+    config's), `n_samples`, `seed`, `cache_dir`, `use_cache` as `solver_options`; `command`
+    is recorded in the attributes. InputError, before any work, for an unknown key or bad
+    value, bad angles or wavelengths, an unknown solver, an output that cannot be written,
+    a sweep too large (`render.budget`; `allow_large`), or the `[dask]` extra missing."""
+    import_xarray()
+    import_distributed()
+    plan = _sweep_plan(config, values, sun_zeniths_deg, view_zeniths_deg,
+                       relative_azimuths_deg, wavelengths_nm=wavelengths_nm,
+                       altitude_m=altitude_m, solver=solver, orders=orders,
+                       n_samples=n_samples, seed=seed, cache_dir=cache_dir,
+                       use_cache=use_cache)
+    if atmospheres_in_flight is not None:
+        atmospheres_in_flight = checked_integer("atmospheres_in_flight",
+                                                atmospheres_in_flight, 1, 1_000_000)
+    output = _checked_sweep_output(output_path)
+    rays = plan.n_chunks * len(plan.view_zeniths_deg) * len(plan.relative_azimuths_deg)
+    n_wl = len(plan.wavelengths_nm)
+    check_cost(f"a sweep of {plan.n_atmospheres} atmospheres x {rays // plan.n_atmospheres} "
+               f"geometries at {n_wl} wavelengths", 2.0 * rays * n_wl * 8.0, rays, n_wl,
+               solver=solver, n_samples=n_samples, allow_large=allow_large)
+    _check_sweep_values(plan)
+    base = load_atmosphere(config)
+    metadata = output_metadata(
+        base, ["radiance"], plan.wavelengths_nm, solver=solver,
+        options=SolverOptions(n_samples=n_samples, seed=seed,
+                              orders=base.scattering_orders if orders is None else orders),
+        geometry={"altitude_m": plan.altitude_m, "sun_zeniths_deg": plan.sun_zeniths_deg,
+                  "view_zeniths_deg": plan.view_zeniths_deg,
+                  "relative_azimuths_deg": plan.relative_azimuths_deg})
+    fingerprint = plan.fingerprint()
+    metadata.pop("number_format")  # of text rows; a dataset holds the float64 values
+    metadata["sweep"] = {"config_keys": ", ".join(key for key, _ in plan.axes),
+                         "atmospheres": plan.n_atmospheres, "chunks": plan.n_chunks,
+                         "fingerprint": fingerprint, "command": command}
+    with contextlib.ExitStack() as stack:
+        folder = (parts_folder(output) if output is not None
+                  else Path(stack.enter_context(tempfile.TemporaryDirectory())) / "parts")
+        store = ChunkStore(folder, fingerprint, {"config": str(plan.config),
+                                                 "keys": [key for key, _ in plan.axes],
+                                                 "chunks": plan.n_chunks}, restart=restart)
+        reused = len(store.finished() & set(range(plan.n_chunks)))
+        done = [reused]
+
+        def stored(_: int) -> None:
+            done[0] += 1
+            if on_chunk is not None:
+                on_chunk(done[0], plan.n_chunks)
+
+        if on_chunk is not None:
+            on_chunk(reused, plan.n_chunks)
+        computed = 0
+        if reused < plan.n_chunks:
+            with dask_client(scheduler, workers, memory_limit=memory_limit) as client:
+                computed = run_sweep(client, plan, store, in_flight=atmospheres_in_flight,
+                                     on_chunk=stored)
+        dataset = grid_dataset(grid_variables(plan, store), grid_coordinates(plan), metadata)
+        if output is not None:
+            (write_zarr if output.suffix.lower() == ".zarr" else write_netcdf)(dataset, output)
+            if not keep_parts:
+                store.remove()
+    return SweepResult(dataset, output, computed, reused)
+
+
+def _sweep_plan(config: str | Path, values: Mapping[str, str | Sequence[object]] | None,
+                sun_zeniths_deg: Sequence[float], view_zeniths_deg: Sequence[float],
+                relative_azimuths_deg: Sequence[float], *, wavelengths_nm: Sequence[float],
+                altitude_m: float, solver: str, orders: int | None, n_samples: int, seed: int,
+                cache_dir: str | Path | None, use_cache: bool) -> SweepPlan:
+    """The plan of `sweep`, its geometry, wavelengths and solver checked."""
+    document, path = load_document(config)
+    if values is not None and not isinstance(values, Mapping):
+        raise InputError(f"values = {values!r} is not allowed: a mapping of dotted config keys "
+                         "to values", key="values", value=values,
+                         allowed="{key: values} such as {'planet.ground_albedo': '0,0.3'}")
+    axes = []
+    for key, axis in (values or {}).items():
+        if isinstance(axis, str):
+            listed = parse_values(axis)
+        else:
+            listed = list(axis) if isinstance(axis, Sequence | np.ndarray) else [axis]
+        if not listed:
+            raise InputError(f"{key}: no values to sweep", key=str(key), value=axis)
+        axes.append((str(key), tuple(_plain_value(value) for value in listed)))
+    if not isinstance(solver, str) or solver not in SOLVERS:
+        raise InputError(f"unknown solver {solver!r}; available: {', '.join(SOLVERS)}",
+                         key="solver", value=solver, allowed=", ".join(SOLVERS))
+    if orders is not None:
+        orders = checked_integer("orders", orders, 1, MAX_SCATTERING_ORDERS)
+    plan = SweepPlan(
+        str(config), document, str(path), tuple(axes),
+        tuple(float(v) for v in _angle_list("sun_zeniths_deg", sun_zeniths_deg, ZENITH_DEG)),
+        tuple(float(v) for v in _angle_list("view_zeniths_deg", view_zeniths_deg, ZENITH_DEG)),
+        tuple(float(v) for v in _angle_list("relative_azimuths_deg", relative_azimuths_deg,
+                                            ANGLE_DEG)),
+        tuple(float(v) for v in _checked_wavelength_list(wavelengths_nm, True)),
+        altitude_m=float(ALTITUDE_M.check("altitude_m", altitude_m)), solver=solver,
+        orders=orders, n_samples=checked_integer("n_samples", n_samples, 1, MAX_SAMPLES),
+        seed=checked_integer("seed", seed, 0, 2**32 - 1),
+        cache_dir=None if cache_dir is None else str(cache_dir), use_cache=bool(use_cache))
+    return plan
+
+
+def _check_sweep_values(plan: SweepPlan) -> None:
+    """Each value of each axis applied alone (the others as the config has them): the config's
+    own checks name a bad key or value before any work."""
+    for key, listed in plan.axes:
+        for value in listed:
+            SweepPlan(plan.config, plan.document, plan.path, ((key, (value,)),), (0.0,),
+                      (0.0,), (0.0,), (550.0,)).atmosphere(0)
+
+
+def _plain_value(value: object) -> object:
+    """numpy scalars as Python numbers (the config's parser checks Python types)."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _checked_sweep_output(output_path: str | Path | None) -> Path | None:
+    """The sweep's output, named .nc or .zarr, where it and its chunk store can be written."""
+    if output_path is None:
+        return None
+    output = Path(output_path)
+    if output.suffix.lower() not in (".nc", ".zarr"):
+        raise InputError(f"cannot write a sweep as {str(output)!r}: name it .nc (NetCDF) or "
+                         ".zarr (a Zarr store)", key="output", value=str(output),
+                         allowed=".nc, .zarr")
+    if output.suffix.lower() == ".nc":
+        check_writable_file(output)
+    elif output.exists() and not output.is_dir():
+        raise InputError(f"cannot write {output}: it is a file; a Zarr store is a folder",
+                         key="output", value=str(output))
+    check_writable_file(parts_folder(output) / "sweep.json")
+    return output
+
+
 def _angle_list(name: str, values: Sequence[float], bounds: Bounds) -> np.ndarray:
     """`values` (a number or a list) as a checked non-empty 1-D array."""
     array = np.atleast_1d(bounds.check_array(name, values))
@@ -1102,6 +1330,21 @@ def export_tables(atmosphere: Atmosphere, folder: str | Path, output_format: str
     check_writable_folder(folder, EXPORT_FILES)
     solver = load_solver(atmosphere, wavelengths_nm, "lut", options)
     return write_exported_tables(solver.tables, solver.profile, folder, settings)
+
+
+def run_validation(settings: ValidationSettings, cases: Sequence[str] | None = None,
+                   on_case: Callable[[CaseResult], None] | None = None, *,
+                   scheduler: str | None = None, workers: int | None = None) -> ValidationRun:
+    """Run the validation cases `cases` (default: all; `VALIDATION_CASES`) with `settings`,
+    write report.md, summary.json and the figures into `settings.output_dir`, and return the
+    results (`validate.suite.run_suite`); `on_case` sees each result as it ends. With
+    `scheduler` (a Dask scheduler's address) or `workers` (local worker processes) the cases
+    run at once on that Dask cluster (`dask_cluster`; the `[dask]` extra); a remote cluster's
+    workers must see `settings.output_dir` (a shared file system)."""
+    if scheduler is None and workers is None:
+        return run_suite(settings, cases, on_case)
+    with dask_client(scheduler, workers) as client:
+        return run_suite(settings, cases, on_case, client=client)
 
 
 def compare_techniques(output_dir: str | Path, solvers: Sequence[str] | None = None,

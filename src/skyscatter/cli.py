@@ -1,5 +1,5 @@
-"""Command line: `skyscatter render | timelapse | radiance | precompute | validate | compare |
-presets`
+"""Command line: `skyscatter render | timelapse | radiance | sweep | precompute | validate |
+compare | presets`
 (and `completion`, from `cli_completion`).
 Thin: parse,
 call the library, print.
@@ -567,6 +567,9 @@ def build_parser() -> argparse.ArgumentParser:
                            help="where the PNG frames go (default: beside the video, "
                            "<name>_frames/); the folder holds only frames and is replaced as "
                            "a whole when the run completes")
+    _add_cluster_arguments(timelapse, "(default: this process renders the frames)",
+                           "to render the frames on (default: none, this process renders "
+                           "them)")
     timelapse.set_defaults(run=_timelapse)
     _add_envmap_command(commands)
 
@@ -679,10 +682,15 @@ def build_parser() -> argparse.ArgumentParser:
                           help="comma-separated subset of the cases (default: all)")
     validate.add_argument("--seed", type=_whole(0, 2**32 - 1), default=0,
                           help="seed of the Monte Carlo paths (default 0)")
+    _add_cluster_arguments(validate, "(its workers must see --output: a shared file system; "
+                           "default: the cases run here, one after the other)",
+                           "to run the cases on at once (default: none, they run here, one "
+                           "after the other)")
     _add_cache_arguments(validate)
     validate.set_defaults(run=_validate)
 
     _add_compare_command(commands)
+    _add_sweep_command(commands)
 
     cache = commands.add_parser(
         "cache", help="list, size or clear the cache of precomputed tables",
@@ -713,6 +721,127 @@ def build_parser() -> argparse.ArgumentParser:
     _add_completion_command(commands)
     _add_quiet_arguments(parser, commands)
     return parser
+
+
+def _axis(bounds: Bounds) -> Callable[[str], list[float]]:
+    """An argparse type: the numbers of a sweep axis, each within `bounds`: a list A,B,C (as
+    `_float_list`) or a range START:STOP:COUNT[:log] (`api.parse_values`)."""
+    def parse(text: str) -> list[float]:
+        if ":" not in text:
+            return _float_list(text, bounds)
+        from skyscatter import api
+        try:
+            values = api.parse_values(text)
+        except InputError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+        return [_checked(bounds, value, repr(value)) for value in values]
+    return parse
+
+
+def _setting(text: str) -> tuple[str, str]:
+    """'planet.ground_albedo=0,0.3' -> ('planet.ground_albedo', '0,0.3') (argparse type)."""
+    key, equals, values = text.partition("=")
+    if not equals or not key.strip() or not values.strip():
+        raise argparse.ArgumentTypeError(f"{text!r} is not KEY=VALUES; give e.g. "
+                                         "planet.ground_albedo=0,0.1,0.3")
+    return key.strip(), values.strip()
+
+
+def _add_cluster_arguments(command: argparse.ArgumentParser, scheduler_default: str,
+                           workers_default: str) -> None:
+    """--scheduler and --workers: the Dask cluster a command runs on (`dask_cluster`)."""
+    command.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                         help="run on the Dask cluster of this scheduler (tcp://HOST:8786), "
+                         "whose workers have skyscatter installed; needs `pip install "
+                         f"\"skyscatter[dask]\"` {scheduler_default}")
+    command.add_argument("--workers", type=_whole(1, 1024), default=None, metavar="N",
+                         help=f"worker processes of a local Dask cluster {workers_default}")
+
+
+def _add_sweep_command(commands: argparse._SubParsersAction) -> None:
+    sweep = commands.add_parser(
+        "sweep", help="compute radiance and irradiance over a grid of config values and "
+        "geometries on a Dask cluster, into one NetCDF or Zarr dataset",
+        description="Compute the diffuse sky radiance (and, with the lut and single solvers, "
+        "the direct and diffuse surface irradiance) for every combination of config values "
+        "(--set KEY=VALUES, repeatable), sun zenith, view zenith, azimuth and wavelength, as "
+        "one labelled dataset (docs/sweep.md). Runs on a local Dask cluster (--workers "
+        "processes) or an existing one (--scheduler); each atmosphere's tables are built once. "
+        "Finished chunks are kept in OUT.parts/ beside the output, so running the same "
+        "command again after an interruption computes only what is missing. Needs `pip "
+        "install \"skyscatter[dask]\"`. Example: skyscatter sweep earth --set "
+        "constituent[2].optics.optical_depth=0.02:0.8:5 --set planet.ground_albedo=0,0.3 "
+        "--sun-zenith 0:80:5 --view-zenith 0:85:18 --azimuth 0:180:7 -o lut.nc")
+    _add_atmosphere_argument(sweep)
+    sweep.add_argument("--set", dest="settings", type=_setting, action="append", default=[],
+                       metavar="KEY=VALUES",
+                       help="a config value to sweep, by dotted key (planet.ground_albedo, "
+                       "constituent[2].optics.optical_depth), over VALUES: A,B,C, "
+                       "START:STOP:COUNT (ends included) or START:STOP:COUNT:log; repeat for "
+                       "more axes (the dataset's dimensions, in this order)")
+    sweep.add_argument("--sun-zenith", type=_axis(checks.ZENITH_DEG), default=[30.0],
+                       metavar="VALUES", help="sun zenith angles in degrees, as VALUES "
+                       "(default 30)")
+    sweep.add_argument("--view-zenith", type=_axis(checks.ZENITH_DEG), default=[0.0],
+                       metavar="VALUES", help="view zenith angles in degrees, 0 straight up "
+                       "(default 0)")
+    sweep.add_argument("--azimuth", type=_axis(checks.ANGLE_DEG), default=[0.0],
+                       metavar="VALUES", help="view azimuths in degrees relative to the sun, "
+                       "0 towards it (default 0)")
+    sweep.add_argument("--wavelengths", type=_axis(checks.ANY_NUMBER),
+                       default=[440.0, 550.0, 680.0], metavar="VALUES",
+                       help="wavelengths in nm, each a 1 nm cell, within 280.5-1690 "
+                       "(default 440,550,680)")
+    sweep.add_argument("--elevation-m", "--altitude", dest="altitude",
+                       type=_number(checks.ELEVATION_M), default=0.0, metavar="M",
+                       help="observer height above the ground in metres (default 0)")
+    _add_solver_arguments(sweep, 64)
+    sweep.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+                       help="the dataset: OUT.nc (NetCDF-3) or OUT.zarr (a Zarr store)")
+    _add_cluster_arguments(sweep, "(default: a local cluster)",
+                           "(default: the CPU cores)")
+    sweep.add_argument("--memory-limit", default=None, metavar="SIZE",
+                       help="memory per local worker, e.g. 4GiB (default: Dask's, the memory "
+                       "shared among the workers)")
+    sweep.add_argument("--restart", action="store_true",
+                       help="discard the finished chunks of an earlier run in OUT.parts/ and "
+                       "start afresh (default: resume from them)")
+    sweep.add_argument("--keep-parts", action="store_true",
+                       help="keep OUT.parts/ after the dataset is written")
+    sweep.set_defaults(run=_sweep)
+
+
+def _sweep(args: argparse.Namespace) -> None:
+    import shlex
+    import time
+
+    from skyscatter import api
+    from skyscatter.cli_progress import progress
+
+    values: dict[str, str] = {}
+    for key, text in args.settings:
+        if key in values:
+            raise InputError(f"--set {key} is given twice; give each key once, with all its "
+                             "values", key="set", value=key)
+        values[key] = text
+    start = time.perf_counter()
+    with progress(1, "sweep", unit="chunk") as bar:
+        def advance(done: int, total: int) -> None:
+            bar.total = total
+            bar.update(done - bar.n)
+
+        result = api.sweep(
+            args.atmosphere, values, args.sun_zenith, args.view_zenith, args.azimuth,
+            wavelengths_nm=args.wavelengths, output_path=args.output, altitude_m=args.altitude,
+            solver=args.solver, orders=args.orders, n_samples=args.samples,
+            cache_dir=args.cache_dir, use_cache=not args.no_cache, scheduler=args.scheduler,
+            workers=args.workers, memory_limit=args.memory_limit, restart=args.restart,
+            keep_parts=args.keep_parts, allow_large=args.allow_large,
+            command=shlex.join(["skyscatter", *args.command_line]), on_chunk=advance)
+    sizes = " x ".join(f"{size} {name}" for name, size in result.dataset.sizes.items())
+    reused = f", {result.reused} reused from {args.output}.parts" if result.reused else ""
+    print(f"wrote {result.output}: {sizes}; {result.computed} chunks computed{reused} in "
+          f"{time.perf_counter() - start:.0f} s", file=sys.stderr)
 
 
 def _add_compare_command(commands: argparse._SubParsersAction) -> None:
@@ -1124,7 +1253,7 @@ def _timelapse(args: argparse.Namespace) -> None:
                                    operator=args.tonemap, colour_space=args.colour_space),
             adaptation_time_s=args.adaptation_minutes * 60.0,
             on_frame=lambda *_: bar.update(1), allow_large=args.allow_large,
-            clouds=_clouds(args))
+            clouds=_clouds(args), scheduler=args.scheduler, workers=args.workers)
     print(f"wrote {result.video} and {len(result.frames)} frames in {frames_dir} (EV100 "
           f"{min(result.ev100):.1f} to {max(result.ev100):.1f})", file=sys.stderr)
 
@@ -1511,7 +1640,8 @@ def _validate(args: argparse.Namespace) -> int:
                                   cache=None if args.no_cache else TableCache(args.cache_dir),
                                   log=log, seed=args.seed)
     try:
-        outcome = api.run_validation(settings, args.cases, on_case)
+        outcome = api.run_validation(settings, args.cases, on_case, scheduler=args.scheduler,
+                                     workers=args.workers)
     except OSError as error:
         raise InputError(f"cannot write the report into {args.output}: {error.strerror}",
                          key="output", value=str(args.output)) from None
@@ -1535,6 +1665,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()  # `skyscatter` alone: what it can do
         return 0
     args = parser.parse_args(argv)
+    args.command_line = list(sys.argv[1:] if argv is None else argv)
     first_run = False
     if args.command in COMPILING_COMMANDS:
         from skyscatter import compile_ahead

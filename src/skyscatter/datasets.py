@@ -8,8 +8,12 @@ https://cfconventions.org/; units in UDUNITS spelling, `output_metadata.COLUMNS`
 global attributes are the run's metadata (`output_metadata`), nested keys joined with "_"
 (NetCDF attributes are flat: text, numbers or lists of numbers).
 
+`grid_dataset` makes one of arrays already on a grid (a sweep's: `sweep.assemble`), with the
+same attributes.
+
 `write_netcdf` writes one with scipy's NetCDF-3 writer (`engine="scipy"`, no netCDF4 library
-needed), to a temporary renamed when complete (`output_files`).
+needed), `write_zarr` as a Zarr store (a folder, https://zarr.dev; the `[dask]` extra), each to
+a temporary renamed when complete (`output_files`).
 
 xarray is an optional dependency (`pip install "skyscatter[science]"`), imported only here and
 only when a Dataset is made.
@@ -17,6 +21,8 @@ only when a Dataset is made.
 
 from __future__ import annotations
 
+import importlib.util
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -24,12 +30,13 @@ from typing import Any
 import numpy as np
 
 from skyscatter.errors import InputError
-from skyscatter.output_files import atomic_write
+from skyscatter.output_files import atomic_write, staged_outputs
 from skyscatter.output_metadata import COLUMNS
 
-__all__ = ["import_xarray", "rows_dataset", "write_netcdf"]
+__all__ = ["grid_dataset", "import_xarray", "rows_dataset", "write_netcdf", "write_zarr"]
 
 EXTRA = 'pip install "skyscatter[science]"'
+ZARR_EXTRA = 'pip install "skyscatter[dask]"'
 
 
 def import_xarray():
@@ -78,6 +85,24 @@ def rows_dataset(rows: Sequence[Mapping[str, float]], dimensions: Mapping[str, s
     return xarray.Dataset(variables, coords={**coords, **scalars}, attrs=attributes)
 
 
+def grid_dataset(variables: Mapping[str, tuple[Sequence[str], np.ndarray]],
+                 coordinates: Mapping[str, tuple[Sequence[object], str | Mapping[str, str]]],
+                 metadata: Mapping[str, Any]):
+    """A Dataset of `variables` (column name in `output_metadata.COLUMNS` -> (dimensions,
+    array)) on `coordinates` (dimension -> (values, the column whose units and long name it
+    takes, or its attributes)); `metadata` gives the global attributes as in `rows_dataset`."""
+    xarray = import_xarray()
+    coords = {}
+    for name, (values, described) in coordinates.items():
+        attributes = _attributes(described) if isinstance(described, str) else dict(described)
+        coords[name] = (name, np.asarray(values), attributes)
+    data = {name: (tuple(dims), np.asarray(values), _attributes(name))
+            for name, (dims, values) in variables.items()}
+    attributes = {"Conventions": "CF-1.8", **_flat_attributes(
+        {key: value for key, value in metadata.items() if key != "columns"})}
+    return xarray.Dataset(data, coords=coords, attrs=attributes)
+
+
 def _attributes(column: str) -> dict[str, str]:
     units, long_name = COLUMNS[column]
     return {"units": units, "long_name": long_name}
@@ -105,3 +130,21 @@ def write_netcdf(dataset, path: str | Path) -> Path:
         raise InputError(f"cannot write a dataset as {str(path)!r}: name it .nc (NetCDF)",
                          key="path", value=str(path), allowed=".nc")
     return atomic_write(path, lambda temporary: dataset.to_netcdf(temporary, engine="scipy"))
+
+
+def write_zarr(dataset, path: str | Path) -> Path:
+    """Write `dataset` to `path` as a Zarr store (a folder), whole or not at all: written into
+    a temporary folder that replaces `path` when complete. InputError naming the extra when
+    zarr is missing."""
+    if Path(path).suffix.lower() != ".zarr":
+        raise InputError(f"cannot write a Zarr store as {str(path)!r}: name it .zarr",
+                         key="path", value=str(path), allowed=".zarr")
+    if importlib.util.find_spec("zarr") is None:
+        raise InputError(f"Zarr stores need zarr: {ZARR_EXTRA} (or pip install zarr)",
+                         key="zarr", allowed=ZARR_EXTRA)
+    with staged_outputs() as stage, warnings.catch_warnings():
+        # zarr 3 notes that consolidated metadata (which xarray writes for fast opening) is
+        # not in the Zarr 3 specification; xarray and zarr read it
+        warnings.filterwarnings("ignore", message="Consolidated metadata")
+        dataset.to_zarr(stage.folder(path), mode="w")
+    return Path(path)

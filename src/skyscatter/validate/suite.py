@@ -19,9 +19,10 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from skyscatter.errors import InputError
 from skyscatter.validate.report import CaseResult, ValidationSettings, write_report
@@ -60,6 +61,21 @@ class ValidationRun:
         return all(r.passed for r in self.results)
 
 
+def _run_case(key: str, settings: ValidationSettings) -> CaseResult:
+    """One case (here or on a Dask worker)."""
+    settings.log(f"[{key}] {CASES[key][1]}")
+    return importlib.import_module(f"skyscatter.validate.{CASES[key][0]}").run(settings)
+
+
+def _silent(message: str) -> None:
+    """The log of a case on a worker: its lines are said where the results arrive."""
+
+
+def _logged(settings: ValidationSettings, key: str, result: CaseResult) -> CaseResult:
+    settings.log(f"[{key}] {CASES[key][1]}")
+    return result
+
+
 def check_dependencies() -> None:
     """Raise a one-line InputError naming the missing packages of the [validate] extra."""
     missing = [name for module, name in OPTIONAL_PACKAGES.items()
@@ -83,18 +99,27 @@ def selected_cases(keys: Sequence[str] | None) -> list[str]:
 
 
 def run_suite(settings: ValidationSettings, keys: Sequence[str] | None = None,
-              on_case: Callable[[CaseResult], None] | None = None) -> ValidationRun:
+              on_case: Callable[[CaseResult], None] | None = None, *,
+              client: Any = None) -> ValidationRun:
     """Run the cases `keys` (default: all), write the report and the JSON summary into
-    `settings.output_dir`, and return the results; `on_case` sees each result as it ends."""
+    `settings.output_dir`, and return the results; `on_case` sees each result as it ends.
+    With `client` (a `distributed.Client`, `dask_cluster.dask_client`) the cases run at once
+    on its workers, which write their figures into `settings.output_dir` (on another
+    machine: a shared file system); their log lines are said here as each result arrives,
+    in suite order."""
     check_dependencies()
     chosen = selected_cases(keys)
     Path(settings.output_dir).mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
+    if client is None:
+        outcomes: Iterator[CaseResult] = (_run_case(key, settings) for key in chosen)
+    else:
+        remote = replace(settings, log=_silent)
+        futures = [client.submit(_run_case, key, remote, pure=False) for key in chosen]
+        outcomes = (_logged(settings, key, future.result())
+                    for key, future in zip(chosen, futures, strict=True))
     results = []
-    for key in chosen:
-        module = importlib.import_module(f"skyscatter.validate.{CASES[key][0]}")
-        settings.log(f"[{key}] {CASES[key][1]}")
-        result = module.run(settings)
+    for result in outcomes:
         results.append(result)
         if on_case is not None:
             on_case(result)

@@ -1,0 +1,78 @@
+"""The arrays of a whole sweep, put together from its chunk store.
+
+Dimensions, outermost first: one per config axis (`plan.dimension_name` of its key), then
+sun_zenith, view_zenith, azimuth (relative to the sun), wavelength:
+
+    radiance              (config..., sun_zenith, view_zenith, azimuth, wavelength)
+    standard_error        as radiance (Monte Carlo solver only)
+    toa_irradiance        (wavelength), or (config..., wavelength) where a config value
+                          changes it (the star's distance, say)
+    direct_normal, diffuse_horizontal, global_horizontal, direct_transmittance
+                          (config..., sun_zenith, wavelength) (solvers that light surfaces)
+
+`grid_variables` returns them as name -> (dimensions, array), `grid_coordinates` the values
+of every dimension, with the attributes of the config axes (`config_key`: the dotted key).
+
+Public names: `grid_coordinates`, `grid_variables`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from skyscatter.sweep.plan import GEOMETRY_DIMENSIONS, SweepPlan
+from skyscatter.sweep.store import ChunkStore
+
+__all__ = ["grid_coordinates", "grid_variables"]
+
+# column of the units and long name of each geometry dimension (`output_metadata.COLUMNS`)
+_GEOMETRY_COLUMNS = dict(zip(GEOMETRY_DIMENSIONS, ("sun_zenith_deg", "view_zenith_deg",
+                                                   "relative_azimuth_deg", "wavelength_nm"),
+                             strict=True))
+_SURFACE = ("direct_normal", "diffuse_horizontal", "global_horizontal", "direct_transmittance")
+
+
+def grid_coordinates(plan: SweepPlan) -> dict[str, tuple[list, str | dict[str, str]]]:
+    """Dimension -> (values, column of its units or its attributes), in dimension order."""
+    coordinates: dict[str, tuple[list, str | dict[str, str]]] = {}
+    for name, (key, values) in zip(plan.dimensions, plan.axes, strict=True):
+        coordinates[name] = (list(values), {"config_key": key,
+                                            "long_name": f"config value {key}"})
+    geometry = (plan.sun_zeniths_deg, plan.view_zeniths_deg, plan.relative_azimuths_deg,
+                plan.wavelengths_nm)
+    for name, values in zip(GEOMETRY_DIMENSIONS, geometry, strict=True):
+        coordinates[name] = (list(values), _GEOMETRY_COLUMNS[name])
+    return coordinates
+
+
+def grid_variables(plan: SweepPlan, store: ChunkStore
+                   ) -> dict[str, tuple[tuple[str, ...], np.ndarray]]:
+    """Every variable of the sweep from the chunks in `store` (all of them must be there)."""
+    config = plan.dimensions
+    shape = plan.atmosphere_shape
+    n_sun, n_view, n_az, n_wl = (len(plan.sun_zeniths_deg), len(plan.view_zeniths_deg),
+                                 len(plan.relative_azimuths_deg), len(plan.wavelengths_nm))
+    sky = (*config, *GEOMETRY_DIMENSIONS)
+    surface = (*config, "sun_zenith", "wavelength")
+    cubes: dict[str, tuple[tuple[str, ...], np.ndarray]] = {}
+    for chunk in range(plan.n_chunks):
+        arrays = store.read(chunk)
+        atmosphere, sun = plan.chunk(chunk)
+        where = tuple(int(i) for i in np.unravel_index(atmosphere, shape)) if shape else ()
+        for name, values in arrays.items():
+            if name not in cubes:
+                if name in ("radiance", "standard_error"):
+                    dims, size = sky, (*shape, n_sun, n_view, n_az, n_wl)
+                elif name == "toa_irradiance":
+                    dims, size = (*config, "wavelength"), (*shape, n_wl)
+                else:
+                    dims, size = surface, (*shape, n_sun, n_wl)
+                cubes[name] = (dims, np.full(size, np.nan))
+            index = where if name == "toa_irradiance" else (*where, sun)
+            cubes[name][1][index] = values
+    dims, toa = cubes["toa_irradiance"]
+    flat = toa.reshape(-1, n_wl)
+    if np.array_equal(flat, np.broadcast_to(flat[0], flat.shape)):
+        cubes["toa_irradiance"] = (("wavelength",), flat[0].copy())
+    order = ["radiance", "standard_error", "toa_irradiance", *_SURFACE]
+    return {name: cubes[name] for name in order if name in cubes}
