@@ -35,9 +35,11 @@ LAYERS: dict[str, set[str]] = {
     "viewer": {"base", "render", "transport", "atmosphere", "spectrum"},
     # compares the solvers and their images with references; no viewer, no API
     "validate": {"base", "spectrum", "optics", "atmosphere", "transport", "astro", "render"},
+    # estimates config values from measurements with the solvers' forward models
+    "fit": {"base", "spectrum", "optics", "atmosphere", "transport", "astro", "render"},
     # the facade: every layer below it
     "api": {"base", "spectrum", "optics", "atmosphere", "transport", "astro", "render", "viewer",
-            "validate"},
+            "validate", "fit"},
     # a thin skin: the public API (api, api_constants), the base modules, its own cli_progress
     "cli": {"base", "api"},
 }
