@@ -1187,7 +1187,7 @@ def fit(config: str | Path, measurements: str | Path | Sequence[dict],
         model: str | Path | None = None, refine: str | None = None,
         checks: Sequence[str] = (), relative_uncertainty: float | None = None,
         model_error: float | None = None, model_error_correlation: float = 0.0,
-        relative_weights: bool = False, altitude_m: float = 0.0,
+        relative_weights: bool = False, altitude_m: float = 0.0, samples: int = 64,
         check_samples: int = 4000) -> Retrieval:
     """Estimate the config values `free` (`KEY=LOW:HIGH[:START]` or `FreeParameter`) of the
     preset or config file `config` from `measurements` (a CSV/JSON file or rows as dicts,
@@ -1200,7 +1200,8 @@ def fit(config: str | Path, measurements: str | Path | Sequence[dict],
     take `relative_uncertainty` x value; `model_error` replaces the forward model's stated
     error (a fraction for radiance, absolute for chromaticity), `model_error_correlation` (0-1)
     the share of its variance common to the values of one kind; `relative_weights` scales the
-    covariance by the reduced chi-square. InputError, before any work, for a bad key, bounds,
+    covariance by the reduced chi-square. `samples`: ray-marching samples per view ray of the
+    solvers (as `solver_options`). InputError, before any work, for a bad key, bounds,
     file, row or option."""
     document, path = load_document(config)
     parameters = checked_free(free, document)
@@ -1223,8 +1224,9 @@ def fit(config: str | Path, measurements: str | Path | Sequence[dict],
         checked_number("model_error", model_error, 0.0, 10.0)
     checked_number("model_error_correlation", model_error_correlation, 0.0, 1.0)
     ALTITUDE_M.check("altitude_m", altitude_m)
-    samples = checked_integer("check_samples", check_samples, 1, MAX_SAMPLES)
-    common = {"altitude_m": altitude_m}
+    paths = checked_integer("check_samples", check_samples, 1, MAX_SAMPLES)
+    common = {"altitude_m": altitude_m,
+              "samples": checked_integer("samples", samples, 1, MAX_SAMPLES)}
     if model is not None:
         forward = SweepModel(_read_sweep(model), parameters,
                              model_error_override=model_error, label=str(model))
@@ -1232,9 +1234,8 @@ def fit(config: str | Path, measurements: str | Path | Sequence[dict],
         forward = SolverModel(document, path, solver, model_error_override=model_error,
                               **common)
     exact = SolverModel(document, path, refine, **common) if refine else None
-    check_models = [SolverModel(document, path, name, **common,
-                                options=SolverOptions(n_samples=samples) if name ==
-                                "montecarlo" else None) for name in checks]
+    check_models = [SolverModel(document, path, name, **(common | {"samples": paths})
+                                if name == "montecarlo" else common) for name in checks]
     return retrieve(rows, parameters, forward, refine=exact, checks=check_models,
                     relative_weights=relative_weights,
                     model_error_correlation=model_error_correlation)

@@ -1320,7 +1320,10 @@ def _add_fit_command(commands) -> None:
     fit.add_argument("--check", action="append", default=[], choices=["lut", "montecarlo"],
                      help="evaluate this exact solver at the answer (residuals per row); "
                      "repeatable")
-    fit.add_argument("--check-samples", type=int, default=4000, metavar="N",
+    fit.add_argument("--samples", type=_samples, default=512,
+                     help="ray-marching samples per view ray of the solvers (default 512, "
+                     "as `radiance`)")
+    fit.add_argument("--check-samples", type=_samples, default=4000, metavar="N",
                      help="Monte Carlo paths per value for --check montecarlo (default 4000)")
     fit.add_argument("--relative-uncertainty", type=float, default=None, metavar="FRACTION",
                      help="1-sigma uncertainty of the rows that give none, as a fraction of "
@@ -1351,7 +1354,8 @@ def _fit(args: argparse.Namespace) -> None:
                      model_error=args.model_error,
                      model_error_correlation=args.model_error_correlation,
                      relative_weights=args.relative_weights,
-                     altitude_m=args.altitude, check_samples=args.check_samples)
+                     altitude_m=args.altitude, samples=args.samples,
+                     check_samples=args.check_samples)
     report = result.report
     for parameter in report["parameters"]:
         sigma = parameter["uncertainty"]

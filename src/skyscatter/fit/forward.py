@@ -54,13 +54,15 @@ def folded_azimuth_deg(azimuth_deg: np.ndarray) -> np.ndarray:
 
 class SolverModel:
     """The forward model of `solver` (a registered name) for the config `document` read from
-    `path`; `options` as `api.solver_options` (None: the config's orders, no table cache)."""
+    `path`: `samples` ray-marching samples per view ray (paths for the Monte Carlo), the
+    config's scattering orders, tables kept in memory (not cached: each atmosphere of a fit
+    is used once)."""
 
     def __init__(self, document: Mapping[str, Any], path: Path, solver: str, *,
-                 options: SolverOptions | None = None, altitude_m: float = 0.0,
+                 samples: int = 64, altitude_m: float = 0.0,
                  model_error_override: float | None = None) -> None:
         self.document, self.path, self.name = document, Path(path), solver
-        self.options, self.altitude_m = options, float(altitude_m)
+        self.samples, self.altitude_m = int(samples), float(altitude_m)
         self.model_error_override = model_error_override
         self._last: tuple[tuple, tuple[np.ndarray, np.ndarray]] | None = None
 
@@ -77,7 +79,7 @@ class SolverModel:
         if self._last is not None and self._last[0] == point:
             return self._last[1]
         atmosphere = atmosphere_with(self.document, self.path, dict(point))
-        options = self.options or SolverOptions(orders=atmosphere.scattering_orders)
+        options = SolverOptions(n_samples=self.samples, orders=atmosphere.scattering_orders)
         predicted = np.full(measurements.size, np.nan)
         noise = np.zeros(measurements.size)
         index = measurements.where("radiance")
