@@ -10,7 +10,9 @@ model error. Counts the trials whose truth lies within 1 and 2 stated sigma (68 
 correct, Gaussian uncertainties) and prints the retrieval error and the time per fit.
 
 Forward models: interpolation in a sweep of 8 optical depths made by "hillaire" and by "lut"
-(tests/fit/sweep_builder.py), and the "hillaire" solver itself for a few trials (time per fit).
+(tests/fit/sweep_builder.py), with and without the transmittance rows; the "hillaire" solver
+itself for a few trials (time per fit); one fit with hillaire refined with the tables and
+checked by the Monte Carlo (time of each stage).
 
     PYTHONPATH=src python benchmarks/bench_fit_coverage.py [N_TRIALS] [MC_PATHS]
 """
@@ -100,10 +102,24 @@ def main() -> None:
         path = Path(f"/tmp/fit_sweep_{solver}.nc")
         sweep.to_netcdf(path)
         built = time.perf_counter() - start
-        print(f"sweep {solver} ({dimension_name(KEY)}: {len(GRID)} values) {built:.0f} s; "
-              f"{trials} trials: {coverage(path, sky, sun, trials)}", flush=True)
-    print(f"solver hillaire, 5 trials: {coverage(None, sky, sun, 5, solver='hillaire')}",
+        print(f"sweep {solver} ({dimension_name(KEY)}: {len(GRID)} values) {built:.0f} s",
+              flush=True)
+        print(f"  {trials} trials, radiance + transmittance: {coverage(path, sky, sun, trials)}",
+              flush=True)
+        print(f"  {trials} trials, radiance only: {coverage(path, sky, [], trials)}", flush=True)
+    print(f"solver hillaire, 5 trials: {coverage(None, sky, [], 5, solver='hillaire')}",
           flush=True)
+    rows = trial_rows(sky, [], np.random.default_rng(5))
+    result = api.fit("earth", rows, [f"{KEY}=0.02:0.6:0.1"], refine="lut",
+                     checks=["montecarlo"], check_samples=paths)
+    stages = [(s["model"], round(s["estimates"][KEY], 4), round(s["uncertainties"][KEY], 4),
+               s["evaluations"], round(s["seconds"], 1)) for s in result.report["stages"]]
+    check = result.report["checks"][0]
+    print(f"hillaire -> lut -> montecarlo check (model, estimate, sigma, evaluations, s): "
+          f"{stages}; check chi-square {check['chi_square_measurement_only']:.1f} for "
+          f"{check['values']} values, lut vs Monte Carlo "
+          f"{check['fitted_model_minus_check']}, {check['seconds']:.0f} s; total "
+          f"{result.report['seconds']:.0f} s", flush=True)
 
 
 if __name__ == "__main__":
