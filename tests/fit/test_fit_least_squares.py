@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from skyscatter.fit.least_squares import weighted_fit
+from skyscatter.fit.model_error import error_covariance, whitened
 from skyscatter.fit.parameters import FreeParameter
 
 AIRMASSES = np.array([1.0, 1.5, 2.0, 3.0, 5.0])
@@ -90,3 +91,25 @@ def test_a_parameter_the_data_hardly_see_is_named_with_its_share_of_the_bounds()
     named = {n["key"]: n["reason"] for n in fit.unconstrained}
     assert "tau" not in named
     assert "c" in named and "bounds' width" in named["c"]
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])
+def test_correlated_model_error_gives_the_variance_of_a_mean_of_correlated_values(rho):
+    # n values of one level c, each with error sigma, errors correlated rho pairwise: the
+    # generalised least-squares estimate of c is their mean, of variance
+    # sigma^2 (1 + (n - 1) rho) / n (equicorrelated errors). Here the whole sigma is the model
+    # error (the measurements' own 1e-9 is nil); 1e-3: the measurements' term, the Jacobian's
+    # central difference and the model error's change with c over the step.
+    n, sigma, level = 8, 0.05, 1.0
+    measured = np.full(n, level)
+    kind = np.array(["radiance"] * n)
+
+    def residuals(p):
+        predicted = np.full(n, p[0])
+        covariance = error_covariance(np.full(n, 1e-9), np.full(n, sigma), kind, rho)
+        return whitened(measured - predicted, covariance)
+
+    fit = weighted_fit(residuals, [FreeParameter("c", 0.5, 1.5, 0.8)])
+    assert fit.estimates[0] == pytest.approx(level, abs=1e-8)
+    expected = sigma * np.sqrt((1 + (n - 1) * rho) / n)
+    assert fit.uncertainties[0] == pytest.approx(expected, rel=1e-3)

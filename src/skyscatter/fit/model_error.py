@@ -33,9 +33,9 @@ with a share rho of the variance common to all values of one kind (the model's o
 and the rest independent (its pattern). `error_covariance` adds the measurements' diagonal
 and `whitened` divides the residuals by the Cholesky factor of the sum, so chi^2 = r^T S^-1 r.
 rho = 0 (independent, the default) is what the synthetic retrievals support: the truth within
-2 sigma in 98 % of 50 trials with the tables' and with hillaire's sweep; rho = 0.5 leaves the
-tables' fits as good but biases hillaire's (its angular pattern is wrong, and a common
-level that is let go leaves the pattern to decide: 92 %), rho = 1 fails it (18 %)
+2 sigma in 98-100 % of 50 trials with the tables' and with hillaire's sweep; rho = 0.5 leaves
+the tables' fits as good but biases hillaire's (its angular pattern is wrong, and a common
+level that is let go leaves the pattern to decide: 92 %), rho = 1 fails it (0-2 %)
 (docs/fit.md, benchmarks/bench_fit_coverage.py).
 
 Public names: `CORRELATION`, `MODEL_ERRORS`, `error_covariance`, `model_error`, `whitened`.
