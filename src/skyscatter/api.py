@@ -61,7 +61,8 @@ from skyscatter.checks import (
 from skyscatter.datasets import import_xarray, rows_dataset, write_netcdf
 from skyscatter.errors import InputError
 from skyscatter.fit.forward import FAST_SOLVERS, SolverModel
-from skyscatter.fit.measurements import measurements_from_rows, read_measurements
+from skyscatter.fit.image_samples import image_rows
+from skyscatter.fit.measurements import measurements_from_rows, read_measurements, read_rows
 from skyscatter.fit.parameters import FreeParameter, checked_free
 from skyscatter.fit.retrieval import Retrieval, retrieve
 from skyscatter.fit.sweep_model import SweepModel
@@ -201,6 +202,8 @@ __all__ = [
     "with_ground_albedo",
     "export_tables",
     "fit",
+    "image_measurements",
+    "measurement_rows",
     "irradiance_dataset",
     "irradiance_rows",
     "output_metadata",
@@ -1259,3 +1262,25 @@ def _read_sweep(path: str | Path):
         raise InputError(f"sweep {source}: cannot read it ({type(error).__name__}: "
                          f"{error}); give a NetCDF file or Zarr folder of `skyscatter sweep`",
                          key="model", value=str(source)) from None
+
+
+def image_measurements(exr_path: str | Path, camera: Camera, sun_zenith_deg: float,
+                       sun_azimuth_deg: float = 180.0, *, pixels: int = 200,
+                       seed: int = 0) -> list[dict[str, float]]:
+    """Luminance rows [cd m^-2] of `pixels` sky pixels drawn (`seed`) from a linear EXR of
+    `render`/`save_image` ("rgb" or "luminance" content) taken by `camera` with the sun at
+    `sun_zenith_deg`, `sun_azimuth_deg` (from north towards east) [deg], for `fit`
+    (`fit.image_samples`). InputError for a missing or unreadable EXR, one without
+    luminance, a size that is not the camera's, or fewer sky pixels than `pixels`."""
+    _check_camera(camera)
+    ZENITH_DEG.check("sun_zenith_deg", sun_zenith_deg)
+    ANGLE_DEG.check("sun_azimuth_deg", sun_azimuth_deg)
+    return image_rows(exr_path, camera, sun_zenith_deg, sun_azimuth_deg,
+                      pixels=checked_integer("pixels", pixels, 1, 1_000_000),
+                      seed=checked_integer("seed", seed, 0, 2**32 - 1))
+
+
+def measurement_rows(path: str | Path) -> list[dict]:
+    """The rows of a measurement file (CSV or JSON, docs/fit.md) as dicts, to combine with
+    `image_measurements` before `fit`; InputError for a missing or garbled file."""
+    return read_rows(path)

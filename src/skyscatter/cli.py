@@ -1304,8 +1304,9 @@ def _add_fit_command(commands) -> None:
         "writes the whole report (covariance, correlation, chi-square, residuals per row, "
         "what the data cannot constrain and why, time) as JSON.")
     _add_atmosphere_argument(fit)
-    fit.add_argument("measurements", type=Path, metavar="MEASUREMENTS",
-                     help="CSV or JSON file of measurement rows (docs/fit.md)")
+    fit.add_argument("measurements", type=Path, metavar="MEASUREMENTS", nargs="?",
+                     default=None, help="CSV or JSON file of measurement rows (docs/fit.md); "
+                     "optional with --image")
     fit.add_argument("--free", action="append", required=True, metavar="KEY=LOW:HIGH[:START]",
                      help="a config value to fit, by dotted key, with its bounds and start "
                      "(default: the config's value), e.g. "
@@ -1339,6 +1340,20 @@ def _add_fit_command(commands) -> None:
                      "by the reduced chi-square")
     fit.add_argument("--altitude", type=_number(checks.ALTITUDE_M), default=0.0, metavar="M",
                      help="the observer's altitude above the ground in metres (default 0)")
+    image = fit.add_argument_group(
+        "an image", "fit the luminance of --pixels sky pixels of a linear EXR of `render "
+        "--exr` (rgb or luminance content), taken with the camera options below and the sun "
+        "at --sun-zenith, --sun-azimuth (give --relative-uncertainty for its pixels)")
+    image.add_argument("--image", type=Path, default=None, metavar="EXR",
+                       help="the EXR image")
+    image.add_argument("--sun-zenith", type=_number(checks.ZENITH_DEG), default=None,
+                       metavar="DEG", help="the sun's zenith angle in the image, degrees")
+    image.add_argument("--sun-azimuth", type=_number(checks.ANGLE_DEG), default=180.0,
+                       metavar="DEG", help="the sun's azimuth from north towards east in the "
+                       "image, degrees (default 180, as render)")
+    image.add_argument("--pixels", type=int, default=200, metavar="N",
+                       help="sky pixels to sample (default 200)")
+    _add_camera_arguments(image, CAMERAS[:3], 512)
     fit.add_argument("-o", "--output", type=Path, default=None, metavar="REPORT.json",
                      help="write the report as JSON")
     fit.set_defaults(run=_fit)
@@ -1348,7 +1363,20 @@ def _fit(args: argparse.Namespace) -> None:
     from skyscatter import api
     if args.output is not None:
         check_writable_file(args.output)
-    result = api.fit(args.atmosphere, args.measurements, args.free, solver=args.solver,
+    measurements = args.measurements
+    if args.image is not None:
+        if args.sun_zenith is None:
+            raise InputError("--image needs the sun's place in it: give --sun-zenith DEG "
+                             "(and --sun-azimuth)", key="sun_zenith")
+        rows = api.image_measurements(args.image, _camera(args), args.sun_zenith,
+                                      args.sun_azimuth, pixels=args.pixels)
+        if measurements is not None:
+            rows += api.measurement_rows(measurements)
+        measurements = rows
+    elif measurements is None:
+        raise InputError("nothing to fit: give a MEASUREMENTS file or --image EXR",
+                         key="measurements")
+    result = api.fit(args.atmosphere, measurements, args.free, solver=args.solver,
                      model=args.model, refine=args.refine, checks=args.check,
                      relative_uncertainty=args.relative_uncertainty,
                      model_error=args.model_error,

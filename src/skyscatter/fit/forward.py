@@ -10,8 +10,10 @@ and computes, for each measured value,
 - transmittance: exp(-optical depth along the path to the sun), ray marched through the
   spherical shell (`transport.transmittance.ray_marched_transmittance`), the same for every
   solver (the Beer-Lambert law needs none);
-- chromaticity: CIE 1931 x, y of the solver's sky radiance on `COLOUR_BANDS` bands over
-  360-830 nm (`spectrum.colour.spectral_to_xyz`, `xy_chromaticity`).
+- chromaticity and luminance: CIE 1931 x, y and Y [cd m^-2] of the solver's sky radiance on
+  `COLOUR_BANDS` bands over 360-830 nm (`spectrum.colour.spectral_to_xyz`,
+  `xy_chromaticity`), the grid `skyscatter render` uses by default, so a rendered image's
+  luminance is this model's.
 
 The Monte Carlo solver also returns the standard error of each radiance (and, to first order,
 of x and y), which a fit adds to the model error. The last prediction is kept, so the fit's
@@ -103,17 +105,23 @@ class SolverModel:
                                                       n_samples=TRANSMITTANCE_INTERVALS)
             predicted[index] = transmittance[np.arange(index.size), np.searchsorted(
                 wavelengths, measurements.wavelength_nm[index])]
-        index = measurements.where("chromaticity_x")
-        if index.size:
+        chroma = measurements.where("chromaticity_x")
+        luminance = measurements.where("luminance")
+        if chroma.size or luminance.size:
             grid = wavelength_grid(COLOUR_BANDS)
             engine = make_solver(self.name, atmosphere.optical_profile(grid), options)
+            index = np.concatenate([chroma, luminance])
             radiance, error = self._sky(engine, measurements, index)
-            xy = xy_chromaticity(spectral_to_xyz(radiance, grid))
-            # first-order noise of x, y from the radiance's: perturb by one standard error
-            shifted = xy_chromaticity(spectral_to_xyz(radiance + error, grid))
-            for offset, channel in ((0, 0), (1, 1)):  # y follows x in `measurements`
-                predicted[index + offset] = xy[:, channel]
-                noise[index + offset] = np.abs(shifted[:, channel] - xy[:, channel])
+            xyz = spectral_to_xyz(radiance, grid)
+            # first-order noise of x, y and Y from the radiance's: perturb by one standard error
+            shifted = spectral_to_xyz(radiance + error, grid)
+            xy, xy_shifted = xy_chromaticity(xyz), xy_chromaticity(shifted)
+            n = chroma.size
+            for offset in (0, 1):  # y follows x in `measurements`
+                predicted[chroma + offset] = xy[:n, offset]
+                noise[chroma + offset] = np.abs(xy_shifted[:n, offset] - xy[:n, offset])
+            predicted[luminance] = xyz[n:, 1]
+            noise[luminance] = np.abs(shifted[n:, 1] - xyz[n:, 1])
         sigma = np.hypot(model_error(self.name, measurements.kind, predicted,
                                      self.model_error_override), noise)
         self._last = (point, (predicted, sigma))

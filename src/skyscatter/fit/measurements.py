@@ -9,6 +9,8 @@ fills (exactly one of them):
     transmittance  direct_transmittance [-]         sun_zenith_deg, wavelength_nm
     chromaticity   chromaticity_x, chromaticity_y   sun_zenith_deg, view_zenith_deg,
                    (CIE 1931 x, y of the sky) [-]   relative_azimuth_deg
+    luminance      luminance [cd m^-2]              sun_zenith_deg, view_zenith_deg,
+                                                    relative_azimuth_deg
 
 Each row may give its 1-sigma uncertainty, in the unit of its value, as `uncertainty` (or
 `standard_error`, the column `skyscatter radiance --solver montecarlo` writes); a chromaticity
@@ -17,7 +19,8 @@ The output of `skyscatter radiance` (CSV, JSON array, or JSON envelope `{"metada
 is a measurement file as it is; its other columns (toa_irradiance, ...) are ignored. In CSV an
 empty cell is an absent value, so the kinds share one header.
 
-Public names: `KINDS`, `Measurements`, `read_measurements`, `measurements_from_rows`.
+Public names: `KINDS`, `Measurements`, `read_measurements`, `read_rows`,
+`measurements_from_rows`.
 """
 
 from __future__ import annotations
@@ -35,15 +38,16 @@ import numpy as np
 
 from skyscatter.errors import InputError, read_user_file
 
-__all__ = ["KINDS", "Measurements", "measurements_from_rows", "read_measurements"]
+__all__ = ["KINDS", "Measurements", "measurements_from_rows", "read_measurements", "read_rows"]
 
-KINDS = ("radiance", "transmittance", "chromaticity")
+KINDS = ("radiance", "transmittance", "chromaticity", "luminance")
 _VALUES = {"radiance": ("radiance",), "transmittance": ("direct_transmittance",),
-           "chromaticity": ("chromaticity_x", "chromaticity_y")}
+           "chromaticity": ("chromaticity_x", "chromaticity_y"), "luminance": ("luminance",)}
 _GEOMETRY = {"radiance": ("sun_zenith_deg", "view_zenith_deg", "relative_azimuth_deg",
                           "wavelength_nm"),
              "transmittance": ("sun_zenith_deg", "wavelength_nm"),
-             "chromaticity": ("sun_zenith_deg", "view_zenith_deg", "relative_azimuth_deg")}
+             "chromaticity": ("sun_zenith_deg", "view_zenith_deg", "relative_azimuth_deg"),
+             "luminance": ("sun_zenith_deg", "view_zenith_deg", "relative_azimuth_deg")}
 _UNCERTAINTY = ("uncertainty", "standard_error")
 _FORMAT = "docs/fit.md lists the columns"
 
@@ -53,7 +57,7 @@ class Measurements:
     """Measured values, one entry per fitted number (a chromaticity row gives two: x, then y).
 
     kind : (n,) str
-        "radiance", "transmittance", "chromaticity_x" or "chromaticity_y".
+        "radiance", "transmittance", "chromaticity_x", "chromaticity_y" or "luminance".
     row : (n,) int
         The row of the file (from 1) each value came from.
     sun_zenith_deg, view_zenith_deg, relative_azimuth_deg, wavelength_nm : (n,) float
@@ -86,13 +90,19 @@ def read_measurements(path: str | Path, relative_uncertainty: float | None = Non
     """The measurements of a CSV (`.csv`) or JSON file (module docstring); InputError naming
     the file and row for a missing file, garbled text, a missing column or a bad value."""
     source = Path(path)
-    rows = read_user_file(source, _rows_of, what="measurement file", key="measurements",
-                          allowed="a CSV or JSON file of measurement rows (docs/fit.md)")
+    rows = read_rows(source)
     try:
         return measurements_from_rows(rows, relative_uncertainty)
     except InputError as error:
         raise InputError(f"{source}: {error}", key="measurements", value=str(source),
                          allowed=_FORMAT) from None
+
+
+def read_rows(path: str | Path) -> list[dict[str, Any]]:
+    """The rows of a measurement file as dicts, unchecked; InputError for a missing file or
+    one that is not CSV or JSON rows."""
+    return read_user_file(Path(path), _rows_of, what="measurement file", key="measurements",
+                          allowed="a CSV or JSON file of measurement rows (docs/fit.md)")
 
 
 def _rows_of(path: Path) -> list[dict[str, Any]]:
@@ -136,9 +146,9 @@ def measurements_from_rows(rows: Sequence[Mapping[str, Any]],
             if kind == "transmittance" and not 0.0 < value <= 1.0:
                 raise InputError(f"row {number}: direct_transmittance = {value!r} must be in "
                                  "(0, 1]", key="direct_transmittance", value=value)
-            if kind == "radiance" and value <= 0.0:
-                raise InputError(f"row {number}: radiance = {value!r} must be > 0",
-                                 key="radiance", value=value)
+            if kind in ("radiance", "luminance") and value <= 0.0:
+                raise InputError(f"row {number}: {value_key} = {value!r} must be > 0",
+                                 key=value_key, value=value)
             sigma = uncertainty
             if sigma is None:
                 if relative_uncertainty is None:
@@ -163,7 +173,8 @@ def _kind(row: Mapping[str, Any], number: int) -> str:
     if len(present) != 1:
         given = "none" if not present else " and ".join(present)
         raise InputError(f"row {number} gives {given} of radiance, direct_transmittance, "
-                         "chromaticity_x/chromaticity_y: give exactly one", key="measurements",
+                         "chromaticity_x/chromaticity_y, luminance: give exactly one",
+                         key="measurements",
                          allowed=_FORMAT)
     return present[0]
 

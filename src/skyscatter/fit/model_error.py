@@ -18,6 +18,9 @@ normal error is 0.67 sigma, so sigma ~ 1.5 m, and the 95th percentile ~ 2 sigma)
                Delta xy 0.004-0.011 -> 0.01. Mars: 48-76 %: not a forward model for Mars
                (use lut; a fit with it states that sigma_model).
     schuler, single   single scattering only: 46-56 % (worst band) -> 0.5; Delta xy 0.02 -> 0.03
+    luminance  (integrated over the visible, so below the worst band's error) median at sun
+               zenith 30 deg: lut 0.4-2.0 % -> 0.02; hillaire 3.3-6.0 % (Earth) -> 0.06;
+               schuler 28-43 % -> 0.35
     montecarlo its own standard error per value (added by the model, not from this table)
 
 Direct-sun transmittance is ray marched (`transport.transmittance.ray_marched_transmittance`,
@@ -49,13 +52,14 @@ from skyscatter.errors import InputError
 
 __all__ = ["CORRELATION", "MODEL_ERRORS", "error_covariance", "model_error", "whitened"]
 
-# solver -> (radiance [relative], transmittance [relative], chromaticity x, y [absolute])
-MODEL_ERRORS: dict[str, tuple[float, float, float]] = {
-    "lut": (0.02, 0.001, 0.002),
-    "hillaire": (0.10, 0.001, 0.01),
-    "schuler": (0.5, 0.001, 0.03),
-    "single": (0.5, 0.001, 0.03),
-    "montecarlo": (0.0, 0.001, 0.0),
+# solver -> (radiance [relative], transmittance [relative], chromaticity x, y [absolute],
+#            luminance [relative])
+MODEL_ERRORS: dict[str, tuple[float, float, float, float]] = {
+    "lut": (0.02, 0.001, 0.002, 0.02),
+    "hillaire": (0.10, 0.001, 0.01, 0.06),
+    "schuler": (0.5, 0.001, 0.03, 0.35),
+    "single": (0.5, 0.001, 0.03, 0.35),
+    "montecarlo": (0.0, 0.001, 0.0, 0.0),
 }
 CORRELATION = 0.0  # share of the model error's variance common to all values of one kind
 SWEEP_TRANSMITTANCE = 0.002  # interpolated transmittance: quadrature + log-linear interpolation
@@ -64,21 +68,25 @@ SWEEP_TRANSMITTANCE = 0.002  # interpolated transmittance: quadrature + log-line
 def model_error(solver: str, kind: np.ndarray, predicted: np.ndarray,
                 override: float | None = None, *, sweep: bool = False) -> np.ndarray:
     """sigma_model of each predicted value (kinds as `measurements.Measurements.kind`): the
-    table above for `solver`, or `override` (a fraction for radiance, an absolute x, y error
-    for chromaticity) for every radiance and chromaticity value."""
+    table above for `solver`, or `override` (a fraction for radiance and luminance, an
+    absolute x, y error for chromaticity) for every value but transmittance."""
     if solver not in MODEL_ERRORS and override is None:
         raise InputError(f"no model error is known for the {solver!r} solver: give one "
                          "(--model-error FRACTION)", key="model_error", value=solver,
                          allowed=", ".join(MODEL_ERRORS))
-    radiance, transmittance, chromaticity = MODEL_ERRORS.get(solver, (0.0, 0.001, 0.0))
+    radiance, transmittance, chromaticity, luminance = MODEL_ERRORS.get(
+        solver, (0.0, 0.001, 0.0, 0.0))
     if override is not None:
-        radiance = chromaticity = override
+        radiance = chromaticity = luminance = override
     if sweep:
         transmittance = SWEEP_TRANSMITTANCE
     kind = np.asarray(kind).astype(str)
     predicted = np.abs(np.asarray(predicted, dtype=np.float64))
-    return np.where(kind == "radiance", radiance * predicted,
-                    np.where(kind == "transmittance", transmittance * predicted, chromaticity))
+    relative = {"radiance": radiance, "transmittance": transmittance, "luminance": luminance}
+    sigma = np.full(kind.shape, chromaticity, dtype=np.float64)
+    for name, fraction in relative.items():
+        sigma = np.where(kind == name, fraction * predicted, sigma)
+    return sigma
 
 
 def error_covariance(uncertainty: np.ndarray, sigma_model: np.ndarray, kind: np.ndarray,

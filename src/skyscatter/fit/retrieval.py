@@ -145,7 +145,7 @@ def _differences(measurements: Measurements, fitted: np.ndarray, exact: np.ndarr
     """Median and largest |fitted / check - 1| (radiance, transmittance) and |dx|, |dy|."""
     out = {}
     for kind, relative in (("radiance", True), ("transmittance", True),
-                           ("chromaticity", False)):
+                           ("chromaticity", False), ("luminance", True)):
         index = measurements.where(kind)
         if index.size:
             d = fitted[index] - exact[index]

@@ -94,10 +94,10 @@ class SweepModel:
 
     def check(self, measurements: Measurements) -> None:
         """InputError for a kind the sweep cannot give or a row outside its grid."""
-        if measurements.where("chromaticity").size:
+        if measurements.where("chromaticity").size or measurements.where("luminance").size:
             raise InputError(f"{self.label}: a sweep holds no spectra, so it cannot give "
-                             "chromaticity; fit it with a solver (--solver)", key="model",
-                             value=self.label)
+                             "chromaticity or luminance; fit them with a solver (--solver)",
+                             key="model", value=self.label)
         for kind, grid in (("radiance", self._radiance), ("transmittance",
                                                           self._transmittance)):
             index = measurements.where(kind)
