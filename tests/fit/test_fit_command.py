@@ -2,6 +2,7 @@
 mixed rows, and every bad input as one line and exit code 2."""
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -130,3 +131,28 @@ def test_a_sweep_that_does_not_hold_the_free_key_is_refused(tmp_path):
              "wavelength_nm": 440, "radiance": 1.0, "uncertainty": 0.1}]
     with pytest.raises(InputError, match="does not sweep constituent"):
         api.fit("earth", rows, [f"{KEY}=0:1"], model=path)
+
+
+ROWS = [{"sun_zenith_deg": 60, "wavelength_nm": 440, "direct_transmittance": 0.5,
+         "uncertainty": 0.01}]
+
+
+@pytest.mark.parametrize(("free", "options", "message"), [
+    ([f"{KEY}=nan:1"], {}, "must be finite"),
+    ([f"{KEY}=0:inf"], {}, "must be finite"),
+    ([f"{KEY}=0:1:nan"], {}, "lies outside the bounds"),
+    ([f"{KEY}"], {}, "give KEY=LOW:HIGH"),
+    ([], {}, "no free parameter"),
+    ([f"{KEY}=0:1", f"{KEY}=0:2"], {}, "given twice"),
+    ([f"{KEY}=0:1"], {"model_error": math.nan}, "model_error"),
+    ([f"{KEY}=0:1"], {"model_error_correlation": 1.5}, "model_error_correlation"),
+    ([f"{KEY}=0:1"], {"relative_uncertainty": math.nan}, "relative_uncertainty"),
+    ([f"{KEY}=0:1"], {"samples": 0}, "samples"),
+    ([f"{KEY}=0:1"], {"refine": "hillaire"}, "refine"),
+    ([f"{KEY}=0:1"], {"checks": ["schuler"]}, "check"),
+    ([f"{KEY}=0:1"], {"altitude_m": math.inf}, "altitude_m"),
+])
+def test_the_api_refuses_hostile_arguments_before_any_work(free, options, message):
+    # every refusal comes before a forward model runs (each would take a second or more)
+    with pytest.raises(InputError, match=message):
+        api.fit("earth", ROWS, free, **options)
