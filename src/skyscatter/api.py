@@ -15,6 +15,12 @@ The whole sky at a date and place (sun, moon, stars; Earth and Mars presets):
                   video_path="night.mp4", frames_dir="night_frames",
                   image=api.ImageOptions(operator="reinhard"))
 
+Which atmosphere made a measured sky, with uncertainties (docs/fit.md):
+
+    result = api.fit("earth", "almucantar.csv",
+                     ["constituent[2].optics.optical_depth=0.01:1"], refine="lut")
+    result.estimates, result.uncertainties, result.report
+
 Past the leading arguments (at most five) every option is keyword-only: name it.
 
 Every function checks its arguments before any work and raises `skyscatter.InputError` (the
@@ -171,11 +177,11 @@ __all__ = [
     "Ground",
     "Heightfield",
     "ImageOptions",
-    "Retrieval",
     "Observer",
     "OctahedralCamera",
     "ParaboloidCamera",
     "PerspectiveCamera",
+    "Retrieval",
     "SkyImage",
     "SkyObjects",
     "SolverOptions",
@@ -1181,6 +1187,7 @@ def is_loopback(host: str) -> bool:
         return False
 
 
+FIT_SOLVERS = (*FAST_SOLVERS, "lut")  # the forward models of a fit's first stage
 FIT_REFINE = ("lut",)  # the exact solver a fit may refine with
 FIT_CHECKS = ("lut", "montecarlo")  # the exact solvers that check a fit's answer
 
@@ -1243,8 +1250,6 @@ def fit(config: str | Path, measurements: str | Path | Sequence[dict],
                     relative_weights=relative_weights,
                     model_error_correlation=model_error_correlation)
 
-
-FIT_SOLVERS = (*FAST_SOLVERS, "lut")
 
 
 def _read_sweep(path: str | Path):
