@@ -37,9 +37,11 @@ LAYERS: dict[str, set[str]] = {
     "validate": {"base", "spectrum", "optics", "atmosphere", "transport", "astro", "render"},
     # sweeps over config values and geometry: atmospheres, their solvers, the radiance grid
     "sweep": {"base", "spectrum", "optics", "atmosphere", "transport", "render"},
+    # estimates config values from measurements with the solvers' forward models
+    "fit": {"base", "spectrum", "optics", "atmosphere", "transport", "astro", "render"},
     # the facade: every layer below it
     "api": {"base", "spectrum", "optics", "atmosphere", "transport", "astro", "render", "viewer",
-            "validate", "sweep"},
+            "validate", "sweep", "fit"},
     # a thin skin: the public API (api, api_constants), the base modules, its own cli_progress
     "cli": {"base", "api"},
 }

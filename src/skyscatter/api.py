@@ -15,6 +15,12 @@ The whole sky at a date and place (sun, moon, stars; Earth and Mars presets):
                   video_path="night.mp4", frames_dir="night_frames",
                   image=api.ImageOptions(operator="reinhard"))
 
+Which atmosphere made a measured sky, with uncertainties (docs/fit.md):
+
+    result = api.fit("earth", "almucantar.csv",
+                     ["constituent[2].optics.optical_depth=0.01:1"], refine="lut")
+    result.estimates, result.uncertainties, result.report
+
 Past the leading arguments (at most five) every option is keyword-only: name it.
 
 Every function checks its arguments before any work and raises `skyscatter.InputError` (the
@@ -63,6 +69,12 @@ from skyscatter.checks import (
 from skyscatter.dask_cluster import dask_client, import_distributed, map_in_order
 from skyscatter.datasets import grid_dataset, import_xarray, rows_dataset, write_netcdf, write_zarr
 from skyscatter.errors import InputError
+from skyscatter.fit.forward import FAST_SOLVERS, SolverModel
+from skyscatter.fit.image_samples import image_rows
+from skyscatter.fit.measurements import measurements_from_rows, read_measurements, read_rows
+from skyscatter.fit.parameters import FreeParameter, checked_free
+from skyscatter.fit.retrieval import Retrieval, retrieve
+from skyscatter.fit.sweep_model import SweepModel
 from skyscatter.output_files import check_writable_file, check_writable_folder, staged_outputs
 from skyscatter.output_metadata import output_metadata
 from skyscatter.render.albedo_map import AlbedoMap
@@ -167,6 +179,7 @@ __all__ = [
     "EquirectangularCamera",
     "FRAME_NAME",
     "FisheyeCamera",
+    "FreeParameter",
     "Ground",
     "Heightfield",
     "ImageOptions",
@@ -174,6 +187,7 @@ __all__ = [
     "OctahedralCamera",
     "ParaboloidCamera",
     "PerspectiveCamera",
+    "Retrieval",
     "SkyImage",
     "SkyObjects",
     "SolverOptions",
@@ -200,6 +214,9 @@ __all__ = [
     "without_ground",
     "with_ground_albedo",
     "export_tables",
+    "fit",
+    "image_measurements",
+    "measurement_rows",
     "irradiance_dataset",
     "irradiance_rows",
     "output_metadata",
@@ -1410,3 +1427,107 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
+
+
+FIT_SOLVERS = (*FAST_SOLVERS, "lut")  # the forward models of a fit's first stage
+FIT_REFINE = ("lut",)  # the exact solver a fit may refine with
+FIT_CHECKS = ("lut", "montecarlo")  # the exact solvers that check a fit's answer
+
+
+def fit(config: str | Path, measurements: str | Path | Sequence[dict],
+        free: Sequence[str | FreeParameter], *, solver: str = "hillaire",
+        model: str | Path | None = None, refine: str | None = None,
+        checks: Sequence[str] = (), relative_uncertainty: float | None = None,
+        model_error: float | None = None, model_error_correlation: float = 0.0,
+        relative_weights: bool = False, altitude_m: float = 0.0, samples: int = 64,
+        check_samples: int = 4000) -> Retrieval:
+    """Estimate the config values `free` (`KEY=LOW:HIGH[:START]` or `FreeParameter`) of the
+    preset or config file `config` from `measurements` (a CSV/JSON file or rows as dicts,
+    docs/fit.md), with uncertainties (`fit.retrieval`).
+
+    The forward model is `solver` (one of `FIT_SOLVERS`, default "hillaire") or, with `model`,
+    interpolation in a sweep file (NetCDF/Zarr of `skyscatter sweep`); `refine` ("lut") fits
+    again with the tables from that answer; each of `checks` ("lut", "montecarlo" with
+    `check_samples` paths per value) is evaluated at the answer. Rows without an uncertainty
+    take `relative_uncertainty` x value; `model_error` replaces the forward model's stated
+    error (a fraction for radiance, absolute for chromaticity), `model_error_correlation` (0-1)
+    the share of its variance common to the values of one kind; `relative_weights` scales the
+    covariance by the reduced chi-square. `samples`: ray-marching samples per view ray of the
+    solvers (as `solver_options`). InputError, before any work, for a bad key, bounds,
+    file, row or option."""
+    document, path = load_document(config)
+    parameters = checked_free(free, document)
+    if isinstance(measurements, str | Path):
+        rows = read_measurements(measurements, relative_uncertainty)
+    else:
+        rows = measurements_from_rows(list(measurements), relative_uncertainty)
+    if solver not in FIT_SOLVERS:
+        raise InputError(f"solver = {solver!r} is not a fit's forward model: one of "
+                         f"{', '.join(FIT_SOLVERS)}", key="solver", value=solver,
+                         allowed=", ".join(FIT_SOLVERS))
+    if refine is not None and refine not in FIT_REFINE:
+        raise InputError(f"refine = {refine!r}: only {', '.join(FIT_REFINE)}", key="refine",
+                         value=refine, allowed=", ".join(FIT_REFINE))
+    for name in checks:
+        if name not in FIT_CHECKS:
+            raise InputError(f"check = {name!r}: one of {', '.join(FIT_CHECKS)}", key="check",
+                             value=name, allowed=", ".join(FIT_CHECKS))
+    if model_error is not None:
+        checked_number("model_error", model_error, 0.0, 10.0)
+    checked_number("model_error_correlation", model_error_correlation, 0.0, 1.0)
+    ALTITUDE_M.check("altitude_m", altitude_m)
+    paths = checked_integer("check_samples", check_samples, 1, MAX_SAMPLES)
+    common = {"altitude_m": altitude_m,
+              "samples": checked_integer("samples", samples, 1, MAX_SAMPLES)}
+    if model is not None:
+        forward = SweepModel(_read_sweep(model), parameters,
+                             model_error_override=model_error, label=str(model))
+    else:
+        forward = SolverModel(document, path, solver, model_error_override=model_error,
+                              **common)
+    exact = SolverModel(document, path, refine, **common) if refine else None
+    check_models = [SolverModel(document, path, name, **(common | {"samples": paths})
+                                if name == "montecarlo" else common) for name in checks]
+    return retrieve(rows, parameters, forward, refine=exact, checks=check_models,
+                    relative_weights=relative_weights,
+                    model_error_correlation=model_error_correlation)
+
+
+
+def _read_sweep(path: str | Path):
+    """The dataset of a sweep file (NetCDF, or a Zarr folder), loaded into memory."""
+    xarray = import_xarray()
+    source = Path(path)
+    if not source.exists():
+        raise InputError(f"sweep {source}: no such file", key="model", value=str(source))
+    try:
+        if source.is_dir():
+            return xarray.open_zarr(source).load()
+        with xarray.open_dataset(source) as dataset:
+            return dataset.load()
+    except Exception as error:  # any reader's complaint about a bad file
+        raise InputError(f"sweep {source}: cannot read it ({type(error).__name__}: "
+                         f"{error}); give a NetCDF file or Zarr folder of `skyscatter sweep`",
+                         key="model", value=str(source)) from None
+
+
+def image_measurements(exr_path: str | Path, camera: Camera, sun_zenith_deg: float,
+                       sun_azimuth_deg: float = 180.0, *, pixels: int = 200,
+                       seed: int = 0) -> list[dict[str, float]]:
+    """Luminance rows [cd m^-2] of `pixels` sky pixels drawn (`seed`) from a linear EXR of
+    `render`/`save_image` ("rgb" or "luminance" content) taken by `camera` with the sun at
+    `sun_zenith_deg`, `sun_azimuth_deg` (from north towards east) [deg], for `fit`
+    (`fit.image_samples`). InputError for a missing or unreadable EXR, one without
+    luminance, a size that is not the camera's, or fewer sky pixels than `pixels`."""
+    _check_camera(camera)
+    ZENITH_DEG.check("sun_zenith_deg", sun_zenith_deg)
+    ANGLE_DEG.check("sun_azimuth_deg", sun_azimuth_deg)
+    return image_rows(exr_path, camera, sun_zenith_deg, sun_azimuth_deg,
+                      pixels=checked_integer("pixels", pixels, 1, 1_000_000),
+                      seed=checked_integer("seed", seed, 0, 2**32 - 1))
+
+
+def measurement_rows(path: str | Path) -> list[dict]:
+    """The rows of a measurement file (CSV or JSON, docs/fit.md) as dicts, to combine with
+    `image_measurements` before `fit`; InputError for a missing or garbled file."""
+    return read_rows(path)

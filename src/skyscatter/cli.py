@@ -40,6 +40,7 @@ from skyscatter.row_output import (
     rows_csv,
     rows_json,
     sidecar_path,
+    tidy,
 )
 
 __all__ = ["main"]
@@ -614,6 +615,7 @@ def build_parser() -> argparse.ArgumentParser:
                             metavar="DEG", help="the sun's azimuth from north towards east, "
                             "for --tilt (default 180; with --time the sun's own)")
     irradiance.set_defaults(run=_irradiance)
+    _add_fit_command(commands)
 
     precompute = commands.add_parser(
         "precompute", help="precompute the scattering tables of an atmosphere into the cache",
@@ -1416,6 +1418,118 @@ def _irradiance(args: argparse.Namespace) -> None:
                                    transmittance=args.transmittance, **plane)
         _write_rows(args, output_format, rows,
                     _rows_metadata(args, atmosphere, rows, options, sun_zenith, plane))
+
+
+def _add_fit_command(commands) -> None:
+    fit = commands.add_parser(
+        "fit", help="estimate config values from measured radiances, transmittances, colours",
+        description="Estimate config values (the --free keys, within their bounds) from "
+        "measurements with uncertainties: sky radiances, direct-sun transmittances and sky "
+        "chromaticities in one CSV or JSON file (docs/fit.md; the output of `radiance` is "
+        "one). Bounded least squares on a fast forward model (a solver, or interpolation in "
+        "a sweep with --model), each residual weighted by the measurement's uncertainty and "
+        "the model's stated error; optionally refined with the tables and checked by an "
+        "exact solver at the answer. Prints the estimates with 1-sigma uncertainties; -o "
+        "writes the whole report (covariance, correlation, chi-square, residuals per row, "
+        "what the data cannot constrain and why, time) as JSON.")
+    _add_atmosphere_argument(fit)
+    fit.add_argument("measurements", type=Path, metavar="MEASUREMENTS", nargs="?",
+                     default=None, help="CSV or JSON file of measurement rows (docs/fit.md); "
+                     "optional with --image")
+    fit.add_argument("--free", action="append", required=True, metavar="KEY=LOW:HIGH[:START]",
+                     help="a config value to fit, by dotted key, with its bounds and start "
+                     "(default: the config's value), e.g. "
+                     "constituent[2].optics.optical_depth=0.01:1:0.1; repeat for more")
+    fit.add_argument("--solver", default="hillaire", metavar="NAME",
+                     help="the fast forward model: hillaire (default), schuler, single or lut")
+    fit.add_argument("--model", type=Path, default=None, metavar="SWEEP",
+                     help="interpolate in this sweep (NetCDF/Zarr of `skyscatter sweep`) "
+                     "instead of running --solver")
+    fit.add_argument("--refine", default=None, choices=["lut"],
+                     help="fit again with the tables, from the fast fit's answer")
+    fit.add_argument("--check", action="append", default=[], choices=["lut", "montecarlo"],
+                     help="evaluate this exact solver at the answer (residuals per row); "
+                     "repeatable")
+    fit.add_argument("--samples", type=_samples, default=512,
+                     help="ray-marching samples per view ray of the solvers (default 512, "
+                     "as `radiance`)")
+    fit.add_argument("--check-samples", type=_samples, default=4000, metavar="N",
+                     help="Monte Carlo paths per value for --check montecarlo (default 4000)")
+    fit.add_argument("--relative-uncertainty", type=float, default=None, metavar="FRACTION",
+                     help="1-sigma uncertainty of the rows that give none, as a fraction of "
+                     "their value (e.g. 0.03)")
+    fit.add_argument("--model-error", type=float, default=None, metavar="FRACTION",
+                     help="replace the forward model's stated error (docs/fit.md): a "
+                     "fraction for radiance, absolute for chromaticity x, y")
+    fit.add_argument("--model-error-correlation", type=float, default=0.0, metavar="RHO",
+                     help="share (0-1) of the model error's variance common to all values "
+                     "of one kind (default 0: independent; docs/fit.md)")
+    fit.add_argument("--relative-weights", action="store_true",
+                     help="the uncertainties are relative weights only: scale the covariance "
+                     "by the reduced chi-square")
+    fit.add_argument("--altitude", type=_number(checks.ALTITUDE_M), default=0.0, metavar="M",
+                     help="the observer's altitude above the ground in metres (default 0)")
+    image = fit.add_argument_group(
+        "an image", "fit the luminance of --pixels sky pixels of a linear EXR of `render "
+        "--exr` (rgb or luminance content), taken with the camera options below and the sun "
+        "at --sun-zenith, --sun-azimuth (give --relative-uncertainty for its pixels)")
+    image.add_argument("--image", type=Path, default=None, metavar="EXR",
+                       help="the EXR image")
+    image.add_argument("--sun-zenith", type=_number(checks.ZENITH_DEG), default=None,
+                       metavar="DEG", help="the sun's zenith angle in the image, degrees")
+    image.add_argument("--sun-azimuth", type=_number(checks.ANGLE_DEG), default=180.0,
+                       metavar="DEG", help="the sun's azimuth from north towards east in the "
+                       "image, degrees (default 180, as render)")
+    image.add_argument("--pixels", type=int, default=200, metavar="N",
+                       help="sky pixels to sample (default 200)")
+    _add_camera_arguments(image, CAMERAS[:3], 512)
+    fit.add_argument("-o", "--output", type=Path, default=None, metavar="REPORT.json",
+                     help="write the report as JSON")
+    fit.set_defaults(run=_fit)
+
+
+def _fit(args: argparse.Namespace) -> None:
+    from skyscatter import api
+    if args.output is not None:
+        check_writable_file(args.output)
+    measurements = args.measurements
+    if args.image is not None:
+        if args.sun_zenith is None:
+            raise InputError("--image needs the sun's place in it: give --sun-zenith DEG "
+                             "(and --sun-azimuth)", key="sun_zenith")
+        rows = api.image_measurements(args.image, _camera(args), args.sun_zenith,
+                                      args.sun_azimuth, pixels=args.pixels)
+        if measurements is not None:
+            rows += api.measurement_rows(measurements)
+        measurements = rows
+    elif measurements is None:
+        raise InputError("nothing to fit: give a MEASUREMENTS file or --image EXR",
+                         key="measurements")
+    result = api.fit(args.atmosphere, measurements, args.free, solver=args.solver,
+                     model=args.model, refine=args.refine, checks=args.check,
+                     relative_uncertainty=args.relative_uncertainty,
+                     model_error=args.model_error,
+                     model_error_correlation=args.model_error_correlation,
+                     relative_weights=args.relative_weights,
+                     altitude_m=args.altitude, samples=args.samples,
+                     check_samples=args.check_samples)
+    report = result.report
+    for parameter in report["parameters"]:
+        sigma = parameter["uncertainty"]
+        shown = "unbounded" if sigma is None else f"{sigma:.4g}"
+        print(f"{parameter['key']} = {parameter['estimate']:.6g} +- {shown} (1 sigma)"
+              + ("" if parameter["constrained"] else "  NOT CONSTRAINED"))
+    print(f"chi-square {report['chi_square']:.4g} for {report['degrees_of_freedom']} degrees "
+          f"of freedom; {report['seconds']:.1f} s")
+    for note in report["not_constrained"]:
+        print(f"not constrained: {note['key']}: {note['reason']}")
+    for check in report["checks"]:
+        print(f"check {check['model']}: chi-square {check['chi_square_measurement_only']:.4g} "
+              f"for {check['values']} values (measurement uncertainty only)")
+    if args.output is not None:
+        atomic_write(args.output, lambda path: Path(path).write_text(
+            json.dumps(tidy(report), indent=1, allow_nan=False) + "\n", encoding="utf-8"))
+        print(f"wrote {args.output}", file=sys.stderr)
 
 
 def _rows_format(args: argparse.Namespace) -> str:
