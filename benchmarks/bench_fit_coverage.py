@@ -10,7 +10,7 @@ model error. Counts the trials whose truth lies within 1 and 2 stated sigma (68 
 correct, Gaussian uncertainties) and prints the retrieval error and the time per fit.
 
 Forward models: interpolation in a sweep of 8 optical depths made by "hillaire" and by "lut"
-(tests/fit/sweep_builder.py), with and without the transmittance rows; the "hillaire" solver
+(`api.sweep`), with and without the transmittance rows; the "hillaire" solver
 itself for a few trials (time per fit); one fit with hillaire refined with the tables and
 checked by the Monte Carlo (time of each stage).
 
@@ -25,11 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "fit"))
-from sweep_builder import build_sweep, dimension_name  # noqa: E402
-
-from skyscatter import api  # noqa: E402
-from skyscatter.atmosphere.config_overrides import atmosphere_with, load_document  # noqa: E402
+from skyscatter import api
+from skyscatter.atmosphere.config_overrides import atmosphere_with, load_document
+from skyscatter.sweep.plan import dimension_name
 
 KEY = "constituent[2].optics.optical_depth"
 TRUTH = 0.15
@@ -98,9 +96,9 @@ def main() -> None:
           f"error {100 * relative:.2f} %, {time.perf_counter() - start:.0f} s", flush=True)
     for solver in ("hillaire", "lut"):
         start = time.perf_counter()
-        sweep = build_sweep("earth", KEY, GRID, [SUN], [VIEW], AZIMUTHS, WAVELENGTHS, solver)
         path = Path(f"/tmp/fit_sweep_{solver}.nc")
-        sweep.to_netcdf(path)
+        api.sweep("earth", {KEY: GRID}, [SUN], [VIEW], AZIMUTHS, wavelengths_nm=WAVELENGTHS,
+                  solver=solver, output_path=path, restart=True)
         built = time.perf_counter() - start
         print(f"sweep {solver} ({dimension_name(KEY)}: {len(GRID)} values) {built:.0f} s",
               flush=True)

@@ -18,7 +18,6 @@ standard deviation of 6.6 %, so 50 % is 2.7 standard deviations below).
 
 import numpy as np
 import pytest
-from sweep_builder import build_sweep
 
 from skyscatter import api
 from skyscatter.atmosphere.config_overrides import atmosphere_with, load_document
@@ -45,8 +44,8 @@ def monte_carlo_truth():
 @pytest.fixture(scope="module")
 def hillaire_sweep(tmp_path_factory):
     path = tmp_path_factory.mktemp("sweep") / "hillaire.nc"
-    build_sweep("earth", KEY, GRID, [60.0], [60.0], AZIMUTHS, WAVELENGTHS,
-                "hillaire").to_netcdf(path)
+    api.sweep("earth", {KEY: GRID}, [60.0], [60.0], AZIMUTHS, wavelengths_nm=WAVELENGTHS,
+              solver="hillaire", output_path=path, workers=1)
     return path
 
 

@@ -15,9 +15,9 @@ row's geometry and wavelength must lie inside the grid (no extrapolation). Chrom
 spectra over the visible, which a sweep at a few wavelengths does not hold: fit it with a
 solver.
 
-The model error is that of the solver that made the sweep (its `solver` attribute, as
-`output_metadata` writes it), plus the interpolation's, which the grid's spacing sets: check
-it by fitting with the solver (`--refine`) or a denser sweep.
+The model error is that of the solver that made the sweep (its `solver_name` attribute, as
+`skyscatter sweep` writes it, or a `solver` attribute), plus the interpolation's, which the
+grid's spacing sets: check it by fitting with the solver (`--refine`) or a denser sweep.
 
 Public names: `GEOMETRY_DIMENSIONS`, `SweepModel`.
 """
@@ -56,7 +56,7 @@ class SweepModel:
                              "`skyscatter sweep`?", key="model", value=label)
         self.label, self.free = label, list(free)
         self.model_error_override = model_error_override
-        self.solver = _solver_name(dataset.attrs.get("solver"))
+        self.solver = _solver_name(dataset.attrs.get("solver_name", dataset.attrs.get("solver")))
         self.name = f"sweep ({self.solver or 'solver not named'})"
         radiance = dataset["radiance"]
         self.config_dims = [d for d in radiance.dims if d not in GEOMETRY_DIMENSIONS]
