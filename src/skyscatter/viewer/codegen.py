@@ -45,8 +45,8 @@ from skyscatter.viewer.gpu_clouds import CLOUD_FORMAT_VERSION, CLOUD_LAYOUT, CLO
 from skyscatter.viewer.gpu_fast import (
     FAST_FORMAT_VERSION,
     FAST_GROUP,
+    FAST_IRRADIANCE_DIRECTIONS,
     FAST_MAGIC,
-    FAST_MULTIPLE_DIRECTIONS,
     FAST_SIZES,
     FAST_STEPS,
     MAX_CONSTITUENTS,
@@ -165,7 +165,7 @@ def _fast_lines() -> list[str]:
     """The fast model's part of constants.glsl (viewer/gpu_fast.py, transport/hillaire.py)."""
     lines = [f"#define FAST_MAX_CONSTITUENTS {MAX_CONSTITUENTS}",
              f"#define FAST_MAX_GROUPS {MAX_GROUPS}",
-             f"#define FAST_MULTIPLE_DIRECTIONS {FAST_MULTIPLE_DIRECTIONS}",
+             f"#define FAST_IRRADIANCE_DIRECTIONS {FAST_IRRADIANCE_DIRECTIONS}",
              f"const float FAST_ZERO_LOG = {ZERO_LOG!r};  // log Psi_ms where Psi_ms = 0"]
     # the multiple-scattering LUT's directions, the CPU table's (fast_multiple.frag)
     n_gauss, n_azimuths = MULTIPLE_SCATTERING_DIRECTIONS

@@ -45,7 +45,7 @@ from skyscatter.transport.hillaire import (
 )
 from skyscatter.viewer.gpu_tables import PHASE_ROW, pack_message, sun_header, unpack_message
 
-__all__ = ["FAST_FORMAT_VERSION", "FAST_GROUP", "FAST_MAGIC", "FAST_MULTIPLE_DIRECTIONS",
+__all__ = ["FAST_FORMAT_VERSION", "FAST_GROUP", "FAST_IRRADIANCE_DIRECTIONS", "FAST_MAGIC",
            "FAST_SIZES", "FAST_STEPS", "FAST_WAVELENGTH_BINS", "MAX_CONSTITUENTS", "MAX_GROUPS",
            "decode_fast", "encode_fast", "fast_description", "fast_profile"]
 
@@ -55,14 +55,14 @@ FAST_WAVELENGTH_BINS = 8  # those of the preview tables (viewer.table_service.QU
 FAST_GROUP = 4  # wavelengths per RGBA texel: one pass of each LUT per group
 MAX_CONSTITUENTS = 8  # the shader's uniform arrays
 MAX_GROUPS = 4  # wavelength groups the page converts to XYZ (16 wavelengths)
-# The LUTs' sizes (width, height) and the samples of their ray marches, Hillaire's (64
-# directions for the multiple scattering, on the nodes of the CPU solver's table:
+# The LUTs' sizes (width, height) and the samples of their ray marches, Hillaire's (the
+# multiple scattering's nodes and directions those of the CPU solver's table,
 # transport.hillaire), and the sky's irradiance on the ground over the sun's cosine, ours
-# (fast_model.glsl)
+# (fast_model.glsl), from the sky on FAST_IRRADIANCE_DIRECTIONS directions
 FAST_SIZES = {"transmittance": (256, 64), "multiple": MULTIPLE_SCATTERING_SIZE[::-1],
               "irradiance": (32, 1), "sky_view": (192, 108)}
 FAST_STEPS = {"transmittance": 40, "multiple": 20, "sky_view": 32}
-FAST_MULTIPLE_DIRECTIONS = 64
+FAST_IRRADIANCE_DIRECTIONS = 64
 
 
 def fast_profile(atmosphere: Atmosphere) -> OpticalProfile:

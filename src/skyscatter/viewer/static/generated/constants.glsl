@@ -68,7 +68,7 @@ const float NEAR_EDGE = 2.0;
 const float NEAR_STEP_M = 20.0;
 #define FAST_MAX_CONSTITUENTS 8
 #define FAST_MAX_GROUPS 4
-#define FAST_MULTIPLE_DIRECTIONS 64
+#define FAST_IRRADIANCE_DIRECTIONS 64
 const float FAST_ZERO_LOG = -800.0;  // log Psi_ms where Psi_ms = 0
 #define FAST_GAUSS_NODES 4
 #define FAST_MULTIPLE_AZIMUTHS 8
