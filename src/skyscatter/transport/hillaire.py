@@ -55,7 +55,8 @@ from skyscatter.transport.geometry import (
 from skyscatter.transport.single_scattering import hemisphere_irradiance
 from skyscatter.transport.transmittance import ray_marched_transmittance
 
-__all__ = ["HillaireSolver", "multiple_scattering_nodes", "sky_view_directions"]
+__all__ = ["HillaireSolver", "multiple_scattering_nodes", "multiple_scattering_sun_centre",
+           "sky_view_directions"]
 
 TRANSMITTANCE_SIZE = (64, 256)  # (r, mu), the paper's 256 x 64 texture
 TRANSMITTANCE_SAMPLES = 128  # intervals per column integral of the transmittance table
@@ -102,9 +103,8 @@ class HillaireSolver:
             TRANSMITTANCE_SIZE[0], TRANSMITTANCE_SIZE[1], TRANSMITTANCE_SAMPLES,
             profile.bottom_radius_m, profile.top_radius_m, self._h_step, self._density)
         gauss_x, gauss_w = np.polynomial.legendre.leggauss(MULTIPLE_SCATTERING_DIRECTIONS[0])
-        # the sun zenith cosine halfway between sunset at the ground and at the top
-        self._mu_s_centre = 0.5 * horizon_cos_zenith(profile.top_radius_m,
-                                                     profile.bottom_radius_m)
+        self._mu_s_centre = multiple_scattering_sun_centre(profile.bottom_radius_m,
+                                                           profile.top_radius_m)
         # the table's node radii [m] (32,) and sun zenith cosines (32,)
         self.multiple_scattering_radii, self.multiple_scattering_sun_cosines = (
             multiple_scattering_nodes(profile.bottom_radius_m, profile.top_radius_m,
@@ -223,6 +223,13 @@ class HillaireSolver:
             if phase is not None:
                 out[:, c, :] = phase.evaluate(nu, p.wavelengths_nm) * p.scattering_per_density[c]
         return out
+
+
+def multiple_scattering_sun_centre(bottom_radius: float, top_radius: float) -> float:
+    """The sun zenith cosine c around which the multiple-scattering table's columns crowd:
+    halfway between the sun setting for the ground (0) and for the top of the atmosphere
+    (its geometric horizon). The viewer's fast model reads it from `/api/fast`."""
+    return 0.5 * horizon_cos_zenith(top_radius, bottom_radius)
 
 
 def multiple_scattering_nodes(bottom_radius: float, top_radius: float, mu_s_centre: float

@@ -38,14 +38,15 @@ from skyscatter.transport import (
     air_shadows,
 )
 from skyscatter.transport.clouds import REFINE_TOLERANCE
+from skyscatter.transport.hillaire import MULTIPLE_SCATTERING_DIRECTIONS, ZERO_LOG
 from skyscatter.transport.table_parameterisation import SPREAD_MIN
 from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS
 from skyscatter.viewer.gpu_clouds import CLOUD_FORMAT_VERSION, CLOUD_LAYOUT, CLOUD_MAGIC
 from skyscatter.viewer.gpu_fast import (
     FAST_FORMAT_VERSION,
     FAST_GROUP,
+    FAST_IRRADIANCE_DIRECTIONS,
     FAST_MAGIC,
-    FAST_MULTIPLE_DIRECTIONS,
     FAST_SIZES,
     FAST_STEPS,
     MAX_CONSTITUENTS,
@@ -143,7 +144,7 @@ def constants_glsl() -> str:
                                     "spectrum/colour.py, atmosphere/_cloud_sampling.py, "
                                     "transport/_cloud_kernels.py, "
                                     "transport/air_shadows.py, transport/clouds.py, "
-                                    "viewer/gpu_fast.py"),
+                                    "viewer/gpu_fast.py, transport/hillaire.py"),
              *table_constant_lines(),
              f"#define SUN_DISK_SAMPLES {SUN_DISK_SAMPLES}",
              f"const float SPLAT_PIXELS = {float(SPLAT_PIXELS)!r};",
@@ -161,10 +162,19 @@ def constants_glsl() -> str:
 
 
 def _fast_lines() -> list[str]:
-    """The fast model's part of constants.glsl (viewer/gpu_fast.py)."""
+    """The fast model's part of constants.glsl (viewer/gpu_fast.py, transport/hillaire.py)."""
     lines = [f"#define FAST_MAX_CONSTITUENTS {MAX_CONSTITUENTS}",
              f"#define FAST_MAX_GROUPS {MAX_GROUPS}",
-             f"#define FAST_MULTIPLE_DIRECTIONS {FAST_MULTIPLE_DIRECTIONS}"]
+             f"#define FAST_IRRADIANCE_DIRECTIONS {FAST_IRRADIANCE_DIRECTIONS}",
+             f"const float FAST_ZERO_LOG = {ZERO_LOG!r};  // log Psi_ms where Psi_ms = 0"]
+    # the multiple-scattering LUT's directions, the CPU table's (fast_multiple.frag)
+    n_gauss, n_azimuths = MULTIPLE_SCATTERING_DIRECTIONS
+    gauss_x, gauss_w = np.polynomial.legendre.leggauss(n_gauss)
+    lines += [f"#define FAST_GAUSS_NODES {n_gauss}",
+              f"#define FAST_MULTIPLE_AZIMUTHS {n_azimuths}"]
+    for name, values in (("X", gauss_x), ("W", gauss_w)):
+        lines.append(f"const float FAST_GAUSS_{name}[{n_gauss}] = float[{n_gauss}]("
+                     + ", ".join(repr(float(v)) for v in values) + ");")
     for name, (width, height) in FAST_SIZES.items():
         lines.append(f"const vec2 FAST_{name.upper()}_SIZE = vec2({width}.0, {height}.0);")
     lines += [f"#define FAST_{name.upper()}_STEPS {value}" for name, value in FAST_STEPS.items()]

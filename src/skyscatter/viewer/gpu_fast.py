@@ -24,10 +24,12 @@ header, then float32 arrays:
                                         constituent c at the four wavelengths of group g in
                                         row c * n_g + g (zeros for a constituent that does not
                                         scatter) [sr^-1]
-Header: radii, the wavelengths, per constituent its name and extinction and scattering
-coefficients at the largest density [m^-1] (n_c, n_wl), the ground albedo (n_wl), the
-star's irradiance (n_wl) [W m^-2 nm^-1], the XYZ weights (n_wl, 3) and the star as the tables'
-header has it (`gpu_tables.sun_header`).
+Header: radii, the sun zenith cosine around which the multiple-scattering LUT's columns crowd
+("multiple_scattering_mu_s_centre", `hillaire.multiple_scattering_sun_centre`), the
+wavelengths, per constituent its name and extinction and scattering coefficients at the largest
+density [m^-1] (n_c, n_wl), the ground albedo (n_wl), the star's irradiance (n_wl)
+[W m^-2 nm^-1], the XYZ weights (n_wl, 3) and the star as the tables' header has it
+(`gpu_tables.sun_header`).
 """
 
 from __future__ import annotations
@@ -37,9 +39,13 @@ import numpy as np
 from skyscatter.atmosphere.model import Atmosphere, OpticalProfile
 from skyscatter.spectrum.colour import cmf_weights
 from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.transport.hillaire import (
+    MULTIPLE_SCATTERING_SIZE,
+    multiple_scattering_sun_centre,
+)
 from skyscatter.viewer.gpu_tables import PHASE_ROW, pack_message, sun_header, unpack_message
 
-__all__ = ["FAST_FORMAT_VERSION", "FAST_GROUP", "FAST_MAGIC", "FAST_MULTIPLE_DIRECTIONS",
+__all__ = ["FAST_FORMAT_VERSION", "FAST_GROUP", "FAST_IRRADIANCE_DIRECTIONS", "FAST_MAGIC",
            "FAST_SIZES", "FAST_STEPS", "FAST_WAVELENGTH_BINS", "MAX_CONSTITUENTS", "MAX_GROUPS",
            "decode_fast", "encode_fast", "fast_description", "fast_profile"]
 
@@ -49,13 +55,14 @@ FAST_WAVELENGTH_BINS = 8  # those of the preview tables (viewer.table_service.QU
 FAST_GROUP = 4  # wavelengths per RGBA texel: one pass of each LUT per group
 MAX_CONSTITUENTS = 8  # the shader's uniform arrays
 MAX_GROUPS = 4  # wavelength groups the page converts to XYZ (16 wavelengths)
-# The LUTs' sizes and the samples of their ray marches, Hillaire's (64 directions for the
-# multiple scattering), and the sky's irradiance on the ground over the sun's cosine, ours
-# (fast_model.glsl)
-FAST_SIZES = {"transmittance": (256, 64), "multiple": (32, 32), "irradiance": (32, 1),
-              "sky_view": (192, 108)}
+# The LUTs' sizes (width, height) and the samples of their ray marches, Hillaire's (the
+# multiple scattering's nodes and directions those of the CPU solver's table,
+# transport.hillaire), and the sky's irradiance on the ground over the sun's cosine, ours
+# (fast_model.glsl), from the sky on FAST_IRRADIANCE_DIRECTIONS directions
+FAST_SIZES = {"transmittance": (256, 64), "multiple": MULTIPLE_SCATTERING_SIZE[::-1],
+              "irradiance": (32, 1), "sky_view": (192, 108)}
 FAST_STEPS = {"transmittance": 40, "multiple": 20, "sky_view": 32}
-FAST_MULTIPLE_DIRECTIONS = 64
+FAST_IRRADIANCE_DIRECTIONS = 64
 
 
 def fast_profile(atmosphere: Atmosphere) -> OpticalProfile:
@@ -91,6 +98,8 @@ def fast_description(atmosphere: Atmosphere, profile: OpticalProfile,
         "label": label,
         "bottom_radius_m": float(profile.bottom_radius_m),
         "top_radius_m": float(profile.top_radius_m),
+        "multiple_scattering_mu_s_centre": multiple_scattering_sun_centre(
+            profile.bottom_radius_m, profile.top_radius_m),
         "altitude_step_m": float(profile.altitudes_m[1] - profile.altitudes_m[0]),
         "altitudes": int(n_z),
         "density_rows": int(rows),

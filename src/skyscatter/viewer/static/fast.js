@@ -111,6 +111,7 @@ export class FastModel {
     set("u_fast_to_xyz", "uniformMatrix4x3fv", false, this.toXyz);
     set("u_bottom_radius", "uniform1f", h.bottom_radius_m);
     set("u_top_radius", "uniform1f", h.top_radius_m);
+    set("u_fast_mu_s_centre", "uniform1f", h.multiple_scattering_mu_s_centre);
     set("u_sun_irradiance", "uniform3fv", h.sun_irradiance_xyz);
     set("u_sun_angular_radius", "uniform1f", h.sun_angular_radius_rad);
     set("u_sun_solid_angle", "uniform1f", h.sun_solid_angle_sr);

@@ -2,7 +2,7 @@
 // texel i the sun's cosine mu_s = 2 i / (w - 1) - 1 and the sky's irradiance on the level
 // ground, E = integral of L cos(theta) over the upper hemisphere, from the sky's radiance
 // (the sun's single scattering with the phase functions and sigma_s Psi_ms, fast_march) on
-// FAST_MULTIPLE_DIRECTIONS directions of equal solid angle (a hemispherical Fibonacci set).
+// FAST_IRRADIANCE_DIRECTIONS directions of equal solid angle (a hemispherical Fibonacci set).
 
 out vec4 frag_colour;
 
@@ -11,8 +11,8 @@ void main() {
     vec3 sun = vec3(sqrt(max(1.0 - mu_s * mu_s, 0.0)), 0.0, mu_s);
     vec4 irradiance = vec4(0.0);
     const float GOLDEN_ANGLE = 2.39996322972865332;
-    for (int k = 0; k < FAST_MULTIPLE_DIRECTIONS; ++k) {
-        float mu = 1.0 - (float(k) + 0.5) / float(FAST_MULTIPLE_DIRECTIONS);
+    for (int k = 0; k < FAST_IRRADIANCE_DIRECTIONS; ++k) {
+        float mu = 1.0 - (float(k) + 0.5) / float(FAST_IRRADIANCE_DIRECTIONS);
         float s = sqrt(max(1.0 - mu * mu, 0.0));
         float phi = GOLDEN_ANGLE * float(k);
         vec3 dir = vec3(s * cos(phi), s * sin(phi), mu);
@@ -20,5 +20,5 @@ void main() {
         irradiance += mu * fast_march(u_bottom_radius, mu, mu_s, dot(dir, sun), u_fast_group,
                                       FAST_MULTIPLE_STEPS, false, through, f_ms);
     }
-    frag_colour = irradiance * (2.0 * PI / float(FAST_MULTIPLE_DIRECTIONS));
+    frag_colour = irradiance * (2.0 * PI / float(FAST_IRRADIANCE_DIRECTIONS));
 }

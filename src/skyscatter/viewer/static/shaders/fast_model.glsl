@@ -4,14 +4,15 @@
 // precomputed table: the transmittance to the top (256 x 64, Bruneton's mapping of
 // parameterisation.glsl), the multiple scattering Psi_ms (32 x 32 over mu_s and altitude: the
 // second order with an isotropic phase function, times the sum of the geometric series of
-// the higher orders, 1 / (1 - f_ms)), and the sky seen from the camera's altitude (192 x 108
+// the higher orders, 1 / (1 - f_ms); stored as log Psi_ms on the nodes of the CPU solver's
+// table, transport/hillaire.py), and the sky seen from the camera's altitude (192 x 108
 // over the view's azimuth from the sun and its zenith angle). Spectral: each LUT is a texture
 // array with one layer per group of four wavelengths (one RGBA texel), all per unit
 // irradiance of the star; the final pass converts to CIE XYZ with u_to_xyz (C_wc E_w).
 // Uses sky.glsl's u_bottom_radius, u_top_radius, enter_atmosphere and sun_visible_fraction.
 
 uniform highp sampler2DArray u_fast_transmittance;  // RGBA16F, one layer per group
-uniform highp sampler2DArray u_fast_multiple;       // RGBA16F, Psi_ms per unit irradiance
+uniform highp sampler2DArray u_fast_multiple;       // RGBA16F, log Psi_ms per unit irradiance
 uniform highp sampler2DArray u_fast_sky_view;       // RGBA16F, radiance per unit irradiance
 uniform highp sampler2DArray u_fast_irradiance;     // RGBA16F, the sky's on the ground
 uniform highp sampler2D u_fast_density;  // R32F, density / its largest, level i of constituent
@@ -30,6 +31,7 @@ uniform vec4 u_fast_albedo[FAST_MAX_GROUPS];  // the ground albedo of each group
 uniform mat4x3 u_fast_to_xyz[FAST_MAX_GROUPS];  // XYZ of each group: C_wc E_w (columns w)
 uniform float u_fast_view_radius;        // sky-view pass: the camera's r [m] ...
 uniform float u_fast_view_mu_s;          // ... and the sun's cosine there
+uniform float u_fast_mu_s_centre;        // the multiple-scattering LUT's c (fast_multiple_x)
 
 // density of constituent c at altitude h [m], linear between the uniform levels, 0 above
 float fast_density(int c, float h) {
@@ -75,21 +77,53 @@ vec4 fast_transmittance_to_top(float r, float mu, int g) {
 }
 
 // the star's light reaching radius r with the sun at cosine mu_s: the transmittance to the top
-// times the part of the disk above the horizon (sky.glsl's sun_visible_fraction)
+// times the part of the disk above the horizon (sky.glsl's sun_visible_fraction); below the
+// horizontal the sun's own ray down to the geometric horizon, whose ray serves below it (as
+// transport/_kernels.py sun_columns: air above the ground sees the sun set later, through
+// more air)
 vec4 fast_sunlight(float r, float mu_s, int g) {
     float visible = sun_visible_fraction(r, mu_s);
     if (visible <= 0.0) return vec4(0.0);
-    return visible * fast_transmittance_to_top(r, max(mu_s, 0.0), g);
+    float mu_h = -horizon_distance(r, u_bottom_radius) / r;
+    return visible * fast_transmittance_to_top(r, max(mu_s, mu_h), g);
 }
 
-// Psi_ms of group g at radius r and sun cosine mu_s (the LUT: x = (mu_s + 1) / 2, altitude
-// linear from the ground to the top)
+// (x_mu, x_h) in [0, 1] of radius r and sun cosine mu_s in the multiple-scattering LUT, whose
+// nodes are at x = k / (n - 1), texel centres (twin of transport/_hillaire_kernels.py
+// multiple_scattering_coordinates): x_h = sqrt(h / H), rows crowded at the ground;
+// x_mu = x_c +- (1 - x_c or x_c) sqrt(|mu_s - c| / (1 - c or 1 + c)), x_c = (1 + c) / 2,
+// columns crowded at c = u_fast_mu_s_centre, where the sun sets for the air above
+vec2 fast_multiple_x(float r, float mu_s) {
+    float h = clamp((r - u_bottom_radius) / (u_top_radius - u_bottom_radius), 0.0, 1.0);
+    float mu = clamp(mu_s, -1.0, 1.0);
+    float c = u_fast_mu_s_centre;
+    float x_c = 0.5 * (1.0 + c);
+    float x_mu = mu >= c ? x_c + (1.0 - x_c) * sqrt((mu - c) / (1.0 - c))
+                         : x_c - x_c * sqrt((c - mu) / (1.0 + c));
+    return vec2(x_mu, sqrt(h));
+}
+
+// (r, mu_s) of the multiple-scattering LUT at x = (x_mu, x_h), the inverse of fast_multiple_x
+// (twin of transport/hillaire.py multiple_scattering_nodes): h = H x_h^2 and
+// mu_s = c +- (1 -+ c) ((x_mu - x_c) / (1 - x_c or x_c))^2 on either side of x_c
+vec2 fast_multiple_r_mu_s(vec2 x) {
+    float c = u_fast_mu_s_centre;
+    float x_c = 0.5 * (1.0 + c);
+    float above = (x.x - x_c) / (1.0 - x_c);
+    float below = (x_c - x.x) / x_c;
+    float mu_s = x.x >= x_c ? c + (1.0 - c) * above * above : c - (1.0 + c) * below * below;
+    return vec2(mix(u_bottom_radius, u_top_radius, x.y * x.y), mu_s);
+}
+
+// Psi_ms of group g at radius r and sun cosine mu_s: exp of the LUT's log Psi_ms, bilinear
+// between its nodes (fast_multiple_x) as the CPU solver's (Psi_ms falls by orders of
+// magnitude between columns as the sun sets, where linear interpolation follows the brighter
+// node; FAST_ZERO_LOG where Psi_ms = 0 gives 0 again)
 vec4 fast_multiple_scattering(float r, float mu_s, int g) {
-    vec2 x = vec2(clamp(0.5 * (mu_s + 1.0), 0.0, 1.0),
-                  clamp((r - u_bottom_radius) / (u_top_radius - u_bottom_radius), 0.0, 1.0));
+    vec2 x = fast_multiple_x(r, mu_s);
     vec2 uv = vec2(texture_coord_from_unit_range(x.x, FAST_MULTIPLE_SIZE.x),
                    texture_coord_from_unit_range(x.y, FAST_MULTIPLE_SIZE.y));
-    return texture(u_fast_multiple, vec3(uv, float(g)));
+    return exp(texture(u_fast_multiple, vec3(uv, float(g))));
 }
 
 // The sky's irradiance on the ground per unit irradiance of the star, of group g at sun cosine
