@@ -3,7 +3,8 @@ scheduler with two worker processes, both equal to `api.sky_radiance_rows` and
 `api.irradiance_rows` called atmosphere by atmosphere (the reference: the atmospheres made
 without `config_overrides`, by editing the preset's text and by `api.with_ground_albedo`); an
 interrupted sweep resumes without recomputing its finished chunks; a worker killed mid-sweep
-loses nothing; bad input gets one line.
+loses nothing; a sweep over times has astropy's sun and the radiance of the rows at its sun's
+zenith angles; bad input gets one line.
 
 The clusters are real: `distributed.LocalCluster` processes, and a scheduler and two workers
 started here as subprocesses (`python -m distributed.cli.dask_scheduler` / `dask_worker`) on
@@ -249,6 +250,79 @@ def test_the_command_line_writes_the_dataset_of_the_api(cluster, tmp_path, monke
     assert written.attrs["sweep_command"].startswith("skyscatter sweep earth --set")
 
 
+def _astropy_sun(utc: str, latitude: float, longitude: float) -> tuple[float, float]:
+    """Zenith angle and azimuth [deg] of the sun's centre, topocentric and airless (pressure 0)
+    from astropy with its built-in ephemeris (no download)."""
+    import warnings
+
+    from astropy import units
+    from astropy.coordinates import AltAz, EarthLocation, get_body, solar_system_ephemeris
+    from astropy.time import Time
+    from astropy.utils import iers
+
+    iers.conf.auto_download = False
+    place = EarthLocation.from_geodetic(longitude * units.deg, latitude * units.deg,
+                                        0 * units.m)
+    moment = Time(utc)
+    with solar_system_ephemeris.set("builtin"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # IERS table age: UT1 - UTC to well under a second
+        sun = get_body("sun", moment, place).transform_to(
+            AltAz(obstime=moment, location=place, pressure=0 * units.hPa))
+    return 90.0 - float(sun.alt.deg), float(sun.az.deg)
+
+
+def test_a_sweep_over_times_has_the_suns_of_astropy_and_the_radiance_of_their_zeniths(
+        cluster, tmp_path):
+    pytest.importorskip("astropy")
+    output = tmp_path / "berlin.nc"
+    # midsummer in Berlin from deep twilight (00:00 local, sun 12.6 deg down) through noon to
+    # dusk (21:00, 3 deg up), every 3 h: night, twilight and day rows, none dropped
+    code = main(["sweep", "earth", "--start", "2024-06-21T00:00+02:00", "--end",
+                 "2024-06-21T21:00+02:00", "--step", "3h", "--lat", "52.52", "--lon", "13.40",
+                 "--view-zenith", "0,80", "--azimuth", "0,90", "--wavelengths", "450,650",
+                 "--solver", "single", "--samples", "16", "--scheduler", cluster.address,
+                 "--keep-parts", "-o", str(output), "-q"])
+    assert code == 0
+    written = xarray.open_dataset(output, engine="scipy").load()
+    expected_utc = [f"2024-06-{day}T{hour:02d}:00:00" for day, hour in
+                    [("20", 22)] + [("21", h) for h in range(1, 20, 3)]]
+    assert [str(t)[:19] for t in written["time"].values] == expected_utc
+    assert list(written["radiance"].dims) == ["time", "view_zenith", "azimuth", "wavelength"]
+    assert list(written["direct_normal"].dims) == ["time", "wavelength"]
+    assert written["sun_zenith"].dims == ("time",) and written["sun_azimuth"].dims == ("time",)
+    assert written["sun_azimuth"].attrs["units"] == "degree"
+    # Reference: astropy's airless topocentric sun; skyscatter's ephemeris agreed to 4e-5 deg
+    # in zenith angle and 2.2e-4 deg in azimuth here (tests/astro: <= 4" over other cases),
+    # so 1e-3 deg.
+    for utc, zenith, azimuth in zip(expected_utc, written["sun_zenith"].values,
+                                     written["sun_azimuth"].values, strict=True):
+        reference_zenith, reference_azimuth = _astropy_sun(utc, 52.52, 13.40)
+        assert abs(zenith - reference_zenith) < 1e-3 and abs(azimuth - reference_azimuth) < 1e-3
+    assert written["sun_zenith"].values.max() > 100.0  # a night row is there, radiance ~0
+    # the radiance at those times is the rows' at those sun zenith angles: same solver, same
+    # kernels, only the way the sun was placed differs (1e-12: rounding)
+    rows = api.sky_radiance_rows(api.load_atmosphere("earth"), written["sun_zenith"].values,
+                                 [0.0, 80.0], [0.0, 90.0], [450.0, 650.0], solver="single",
+                                 options=api.SolverOptions(n_samples=16))
+    np.testing.assert_allclose(written["radiance"].values,
+                               np.reshape([row["radiance"] for row in rows], (8, 2, 2, 2)),
+                               rtol=1e-12, atol=0)
+    # the time on disk is CF: float64 seconds since the Unix epoch, read back the same by Zarr
+    import scipy.io
+    with scipy.io.netcdf_file(output, mmap=False) as raw:
+        variable = raw.variables["time"]
+        assert variable.units == b"seconds since 1970-01-01" and variable.data.dtype == ">f8"
+        assert variable.data[0] == 1718920800.0  # 2024-06-20T22:00Z, `date -d ... +%s`
+    api.write_zarr(written, tmp_path / "berlin.zarr")
+    xarray.testing.assert_identical(xarray.open_zarr(tmp_path / "berlin.zarr").load(), written)
+    # the times are in the fingerprint: other times do not resume from these chunks
+    with pytest.raises(InputError, match="holds the chunks of another sweep"):
+        api.sweep("earth", None, None, [0.0, 80.0], [0.0, 90.0],
+                  times=["2024-06-22T00:00+02:00"], latitude_deg=52.52, longitude_deg=13.40,
+                  wavelengths_nm=[450.0, 650.0], solver="single", n_samples=16,
+                  output_path=output)
+
+
 @pytest.mark.parametrize(("arguments", "message"), [
     (["--set", "planet.ground_albdo=0,1"],
      "unknown key 'planet.ground_albdo'; did you mean 'planet.ground_albedo'?"),
@@ -262,6 +336,18 @@ def test_the_command_line_writes_the_dataset_of_the_api(cluster, tmp_path, monke
     (["--set", "planet.ground_albedo=0:1:10000", "--view-zenith", "0:90:1000",
       "--azimuth", "0:180:1000", "--solver", "single"], "would"),
     (["--scheduler", "tcp://127.0.0.1:9"], "cannot reach the Dask scheduler"),
+    (["--start", "2024-06-21T00:00", "--end", "2024-06-22T00:00Z", "--lat", "52", "--lon",
+      "13"], "has no time zone"),
+    (["--start", "2024-06-21T00:00Z", "--end", "2024-06-20T00:00Z", "--lat", "52", "--lon",
+      "13"], "must come after --start"),
+    (["--start", "2024-06-21T00:00Z", "--lat", "52", "--lon", "13"], "both --start and --end"),
+    (["--start", "2024-06-21T00:00Z", "--end", "2024-06-22T00:00Z"], "give latitude_deg"),
+    (["--start", "2024-06-21T00:00Z", "--end", "2024-06-22T00:00Z", "--lat", "52", "--lon",
+      "13", "--sun-zenith", "30"], "both place the sun"),
+    (["--start", "2024-01-01T00:00Z", "--end", "2024-12-31T00:00Z", "--lat", "52", "--lon",
+      "13", "--step", "1min"], "give a longer --step"),
+    (["--lat", "52", "--lon", "13"], "give --start and --end too"),
+    (["--step", "10min"], "space the times of --start/--end"),
 ])
 def test_bad_input_gets_one_line_and_exit_code_2(arguments, message, tmp_path, capsys,
                                                   monkeypatch):
@@ -282,6 +368,12 @@ def test_an_unwritable_output_is_refused_before_any_work(tmp_path, capsys):
     blocker.write_text("x")
     assert main(["sweep", "earth", "--solver", "single", "-o", str(blocker / "x.nc")]) == 2
     assert "cannot write" in capsys.readouterr().err
+
+
+def test_a_planet_without_an_ephemeris_cannot_sweep_times(tmp_path):
+    with pytest.raises(InputError, match="no ephemeris"):
+        api.sweep("exo-hazy", times=["2024-06-21T12:00Z"], latitude_deg=0.0,
+                  longitude_deg=0.0, solver="single", output_path=tmp_path / "x.nc")
 
 
 def test_two_keys_that_make_the_same_dimension_are_refused():

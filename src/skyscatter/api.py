@@ -134,7 +134,7 @@ from skyscatter.spectrum.grid import (
     checked_grid,
     wavelength_grid,
 )
-from skyscatter.sweep.assemble import grid_coordinates, grid_variables
+from skyscatter.sweep.assemble import grid_coordinates, grid_variables, time_coordinates
 from skyscatter.sweep.plan import SweepPlan
 from skyscatter.sweep.run import run_sweep
 from skyscatter.sweep.store import ChunkStore, parts_folder
@@ -1159,8 +1159,11 @@ class SweepResult:
 
 
 def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | None = None,
-          sun_zeniths_deg: Sequence[float] = (30.0,), view_zeniths_deg: Sequence[float] = (0.0,),
+          sun_zeniths_deg: Sequence[float] | None = None,
+          view_zeniths_deg: Sequence[float] = (0.0,),
           relative_azimuths_deg: Sequence[float] = (0.0,), *,
+          times: Sequence[str | datetime.datetime] | None = None,
+          latitude_deg: float | None = None, longitude_deg: float | None = None,
           wavelengths_nm: Sequence[float] = (440.0, 550.0, 680.0),
           output_path: str | Path | None = None, altitude_m: float = 0.0, solver: str = "lut",
           orders: int | None = None, n_samples: int = 64, seed: int = 0,
@@ -1173,14 +1176,17 @@ def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | Non
     """Diffuse sky radiance (and, from solvers that light surfaces, the surface irradiance)
     for every combination of the config `values` (dotted key -> values, or an axis written
     as text: "0,0.1,0.3", "0.02:0.8:20", "0.01:1:5:log"; `config_overrides`) of `config` (a
-    preset name or TOML file), `sun_zeniths_deg`, `view_zeniths_deg`,
+    preset name or TOML file), `sun_zeniths_deg` (default 30) or `times` (each as
+    `make_observer` takes it: the sun where it stands then, seen from `latitude_deg`,
+    `longitude_deg` and `altitude_m`; Earth and Mars presets), `view_zeniths_deg`,
     `relative_azimuths_deg` (0 looks towards the sun) and monochromatic `wavelengths_nm`,
     run on a Dask cluster: a `LocalCluster` of `workers` processes (default: the CPU cores;
     `memory_limit` each), or the scheduler at the address `scheduler`. Each atmosphere's
     solver is built once; at most `atmospheres_in_flight` are held at a time
     (`sweep.run`). Returns a `SweepResult` whose dataset has one dimension per config key
-    (`[i]` -> `_i`, `.` -> `_`; attribute `config_key`), then sun_zenith, view_zenith,
-    azimuth, wavelength (docs/sweep.md, `sweep.assemble`), written to `output_path` (.nc:
+    (`[i]` -> `_i`, `.` -> `_`; attribute `config_key`), then sun_zenith (with `times`: time,
+    with the coordinates sun_zenith(time) and sun_azimuth(time)), view_zenith, azimuth,
+    wavelength (docs/sweep.md, `sweep.assemble`), written to `output_path` (.nc:
     NetCDF-3, .zarr: a Zarr store) when given. Finished chunks are kept in `OUT.parts/`
     beside it, so an interrupted sweep run again computes only what is missing (`restart`:
     start afresh); the folder is removed when the output is written unless `keep_parts`.
@@ -1196,6 +1202,11 @@ def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | Non
                        altitude_m=altitude_m, solver=solver, orders=orders,
                        n_samples=n_samples, seed=seed, cache_dir=cache_dir,
                        use_cache=use_cache)
+    if times is not None:
+        plan = _sweep_over_times(plan, sun_zeniths_deg, times, latitude_deg, longitude_deg)
+    elif latitude_deg is not None or longitude_deg is not None:
+        raise InputError("latitude_deg and longitude_deg place the sun of `times`: give times "
+                         "too, or leave them out", key="times", value=None)
     if atmospheres_in_flight is not None:
         atmospheres_in_flight = checked_integer("atmospheres_in_flight",
                                                 atmospheres_in_flight, 1, 1_000_000)
@@ -1207,12 +1218,18 @@ def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | Non
                solver=solver, n_samples=n_samples, allow_large=allow_large)
     _check_sweep_values(plan)
     base = load_atmosphere(config)
+    geometry: dict[str, object] = {"altitude_m": plan.altitude_m,
+                                   "sun_zeniths_deg": plan.sun_zeniths_deg}
+    if plan.place_deg is not None:  # over times: the sun's zeniths are sun_zenith(time)
+        geometry = {"altitude_m": plan.altitude_m, "latitude_deg": plan.place_deg[0],
+                    "longitude_deg": plan.place_deg[1], "body": base.planet.body,
+                    "azimuth": "relative to the sun's azimuth sun_azimuth(time), 0 towards "
+                    "the sun"}
     metadata = output_metadata(
         base, ["radiance"], plan.wavelengths_nm, solver=solver,
         options=SolverOptions(n_samples=n_samples, seed=seed,
                               orders=base.scattering_orders if orders is None else orders),
-        geometry={"altitude_m": plan.altitude_m, "sun_zeniths_deg": plan.sun_zeniths_deg,
-                  "view_zeniths_deg": plan.view_zeniths_deg,
+        geometry={**geometry, "view_zeniths_deg": plan.view_zeniths_deg,
                   "relative_azimuths_deg": plan.relative_azimuths_deg})
     fingerprint = plan.fingerprint()
     metadata.pop("number_format")  # of text rows; a dataset holds the float64 values
@@ -1240,7 +1257,8 @@ def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | Non
             with dask_client(scheduler, workers, memory_limit=memory_limit) as client:
                 computed = run_sweep(client, plan, store, in_flight=atmospheres_in_flight,
                                      on_chunk=stored)
-        dataset = grid_dataset(grid_variables(plan, store), grid_coordinates(plan), metadata)
+        dataset = grid_dataset(grid_variables(plan, store), grid_coordinates(plan), metadata,
+                               aligned=time_coordinates(plan))
         if output is not None:
             (write_zarr if output.suffix.lower() == ".zarr" else write_netcdf)(dataset, output)
             if not keep_parts:
@@ -1249,7 +1267,7 @@ def sweep(config: str | Path, values: Mapping[str, str | Sequence[object]] | Non
 
 
 def _sweep_plan(config: str | Path, values: Mapping[str, str | Sequence[object]] | None,
-                sun_zeniths_deg: Sequence[float], view_zeniths_deg: Sequence[float],
+                sun_zeniths_deg: Sequence[float] | None, view_zeniths_deg: Sequence[float],
                 relative_azimuths_deg: Sequence[float], *, wavelengths_nm: Sequence[float],
                 altitude_m: float, solver: str, orders: int | None, n_samples: int, seed: int,
                 cache_dir: str | Path | None, use_cache: bool) -> SweepPlan:
@@ -1275,7 +1293,8 @@ def _sweep_plan(config: str | Path, values: Mapping[str, str | Sequence[object]]
         orders = checked_integer("orders", orders, 1, MAX_SCATTERING_ORDERS)
     plan = SweepPlan(
         str(config), document, str(path), tuple(axes),
-        tuple(float(v) for v in _angle_list("sun_zeniths_deg", sun_zeniths_deg, ZENITH_DEG)),
+        tuple(float(v) for v in _angle_list("sun_zeniths_deg", (30.0,) if sun_zeniths_deg is None
+                                            else sun_zeniths_deg, ZENITH_DEG)),
         tuple(float(v) for v in _angle_list("view_zeniths_deg", view_zeniths_deg, ZENITH_DEG)),
         tuple(float(v) for v in _angle_list("relative_azimuths_deg", relative_azimuths_deg,
                                             ANGLE_DEG)),
@@ -1285,6 +1304,32 @@ def _sweep_plan(config: str | Path, values: Mapping[str, str | Sequence[object]]
         seed=checked_integer("seed", seed, 0, 2**32 - 1),
         cache_dir=None if cache_dir is None else str(cache_dir), use_cache=bool(use_cache))
     return plan
+
+
+def _sweep_over_times(plan: SweepPlan, sun_zeniths_deg: Sequence[float] | None,
+                      times: Sequence[str | datetime.datetime], latitude_deg: float | None,
+                      longitude_deg: float | None) -> SweepPlan:
+    """`plan` over `times`: the sun's zenith angle and azimuth at each (`sky_ephemeris` of the
+    config's planet, seen from the place at the plan's altitude) in place of its sun zeniths."""
+    if sun_zeniths_deg is not None:
+        raise InputError("sun_zeniths_deg and times both place the sun: give one",
+                         key="times", value=None)
+    if latitude_deg is None or longitude_deg is None:
+        raise InputError("times need the place too: give latitude_deg and longitude_deg "
+                         "(CLI: --lat and --lon, in degrees north and east)", key="latitude_deg",
+                         value=(latitude_deg, longitude_deg))
+    if isinstance(times, str | datetime.datetime) or not 1 <= len(times) <= MAX_FRAMES:
+        raise InputError(f"times: give a list of 1 to {MAX_FRAMES} times", key="times",
+                         value=times if isinstance(times, str) else None,
+                         allowed=f"1 to {MAX_FRAMES} times")
+    atmosphere = load_atmosphere(plan.config)
+    suns = [sky_ephemeris(atmosphere, make_observer(time, latitude_deg, longitude_deg,
+                                                    plan.altitude_m)) for time in times]
+    return replace(
+        plan, sun_zeniths_deg=tuple(float(sky.sun_zenith_deg) for sky in suns),
+        sun_azimuths_deg=tuple(float(sky.sun.azimuth_deg) for sky in suns),
+        times_utc=tuple(sky.observer.time_utc.isoformat() for sky in suns),
+        place_deg=(float(latitude_deg), float(longitude_deg)))
 
 
 def _check_sweep_values(plan: SweepPlan) -> None:

@@ -766,8 +766,9 @@ def _add_sweep_command(commands: argparse._SubParsersAction) -> None:
         "geometries on a Dask cluster, into one NetCDF or Zarr dataset",
         description="Compute the diffuse sky radiance (and, with the lut and single solvers, "
         "the direct and diffuse surface irradiance) for every combination of config values "
-        "(--set KEY=VALUES, repeatable), sun zenith, view zenith, azimuth and wavelength, as "
-        "one labelled dataset (docs/sweep.md). Runs on a local Dask cluster (--workers "
+        "(--set KEY=VALUES, repeatable), sun zenith (or time: --start/--end/--step at "
+        "--lat/--lon), view zenith, azimuth and wavelength, as one labelled dataset "
+        "(docs/sweep.md). Runs on a local Dask cluster (--workers "
         "processes) or an existing one (--scheduler); each atmosphere's tables are built once. "
         "Finished chunks are kept in OUT.parts/ beside the output, so running the same "
         "command again after an interruption computes only what is missing. Needs `pip "
@@ -781,15 +782,21 @@ def _add_sweep_command(commands: argparse._SubParsersAction) -> None:
                        "constituent[2].optics.optical_depth), over VALUES: A,B,C, "
                        "START:STOP:COUNT (ends included) or START:STOP:COUNT:log; repeat for "
                        "more axes (the dataset's dimensions, in this order)")
-    sweep.add_argument("--sun-zenith", type=_axis(checks.ZENITH_DEG), default=[30.0],
+    sweep.add_argument("--sun-zenith", type=_axis(checks.ZENITH_DEG), default=None,
                        metavar="VALUES", help="sun zenith angles in degrees, as VALUES "
-                       "(default 30)")
+                       "(default 30; or the sun's at the times of --start/--end)")
+    _add_time_range_arguments(sweep, "time", required=False)
+    sweep.add_argument("--lat", type=_number(checks.LATITUDE_DEG), default=None, metavar="DEG",
+                       help="observer latitude in degrees, north positive (with --start; "
+                       "Earth and Mars presets)")
+    sweep.add_argument("--lon", type=_number(checks.ANGLE_DEG), default=None, metavar="DEG",
+                       help="observer longitude in degrees, east positive (with --start)")
     sweep.add_argument("--view-zenith", type=_axis(checks.ZENITH_DEG), default=[0.0],
                        metavar="VALUES", help="view zenith angles in degrees, 0 straight up "
                        "(default 0)")
     sweep.add_argument("--azimuth", type=_axis(checks.ANGLE_DEG), default=[0.0],
                        metavar="VALUES", help="view azimuths in degrees relative to the sun, "
-                       "0 towards it (default 0)")
+                       "0 towards it, also over times (default 0)")
     sweep.add_argument("--wavelengths", type=_axis(checks.ANY_NUMBER),
                        default=[440.0, 550.0, 680.0], metavar="VALUES",
                        help="wavelengths in nm, each a 1 nm cell, within 280.5-1690 "
@@ -826,6 +833,21 @@ def _sweep(args: argparse.Namespace) -> None:
             raise InputError(f"--set {key} is given twice; give each key once, with all its "
                              "values", key="set", value=key)
         values[key] = text
+    times = None
+    if args.start is not None or args.end is not None:
+        if args.start is None or args.end is None:
+            raise InputError("a sweep over times needs both --start and --end (ISO 8601 with "
+                             "a time zone)", key="start", value=(args.start, args.end))
+        if args.sun_zenith is not None:
+            raise InputError("--sun-zenith and --start/--end both place the sun: give one",
+                             key="sun_zenith", value=args.sun_zenith)
+        times = _time_steps(args)
+    elif args.step is not None or args.frames is not None:
+        raise InputError("--step and --frames space the times of --start/--end: give those "
+                         "too", key="step", value=args.step or args.frames)
+    elif args.lat is not None or args.lon is not None:
+        raise InputError("--lat and --lon are the place of a sweep over times: give --start "
+                         "and --end too", key="lat", value=(args.lat, args.lon))
     start = time.perf_counter()
     with progress(1, "sweep", unit="chunk") as bar:
         def advance(done: int, total: int) -> None:
@@ -834,6 +856,7 @@ def _sweep(args: argparse.Namespace) -> None:
 
         result = api.sweep(
             args.atmosphere, values, args.sun_zenith, args.view_zenith, args.azimuth,
+            times=times, latitude_deg=args.lat, longitude_deg=args.lon,
             wavelengths_nm=args.wavelengths, output_path=args.output, altitude_m=args.altitude,
             solver=args.solver, orders=args.orders, n_samples=args.samples,
             cache_dir=args.cache_dir, use_cache=not args.no_cache, scheduler=args.scheduler,
@@ -1158,11 +1181,12 @@ def _time_steps(args: argparse.Namespace) -> list:
     return [start + datetime.timedelta(seconds=i * step) for i in range(count)]
 
 
-def _add_time_range_arguments(command: argparse.ArgumentParser, unit: str) -> None:
+def _add_time_range_arguments(command: argparse.ArgumentParser, unit: str,
+                              required: bool = True) -> None:
     """--start, --end and --step or --frames (`_time_steps`)."""
-    command.add_argument("--start", required=True, metavar="ISO8601",
+    command.add_argument("--start", required=required, metavar="ISO8601",
                          help=f"first {unit}'s time with a time zone")
-    command.add_argument("--end", required=True, metavar="ISO8601",
+    command.add_argument("--end", required=required, metavar="ISO8601",
                          help=f"last {unit}'s time with a time zone")
     steps = command.add_mutually_exclusive_group()
     steps.add_argument("--step", type=_duration_s, default=None, metavar="DURATION",

@@ -85,22 +85,37 @@ def rows_dataset(rows: Sequence[Mapping[str, float]], dimensions: Mapping[str, s
     return xarray.Dataset(variables, coords={**coords, **scalars}, attrs=attributes)
 
 
+# times (numpy datetime64, UTC) on disk: CF seconds since the Unix epoch, as float64 (NetCDF-3
+# has no int64, and int32 seconds end in 2038; float64 keeps microseconds for centuries)
+TIME_ENCODING = {"units": "seconds since 1970-01-01", "calendar": "proleptic_gregorian",
+                 "dtype": "float64"}
+
+
 def grid_dataset(variables: Mapping[str, tuple[Sequence[str], np.ndarray]],
                  coordinates: Mapping[str, tuple[Sequence[object], str | Mapping[str, str]]],
-                 metadata: Mapping[str, Any]):
+                 metadata: Mapping[str, Any], *,
+                 aligned: Mapping[str, tuple[str, Sequence[float], str]] | None = None):
     """A Dataset of `variables` (column name in `output_metadata.COLUMNS` -> (dimensions,
     array)) on `coordinates` (dimension -> (values, the column whose units and long name it
-    takes, or its attributes)); `metadata` gives the global attributes as in `rows_dataset`."""
+    takes, or its attributes)), with the non-dimension coordinates `aligned` (name ->
+    (dimension, values, column)); `metadata` gives the global attributes as in
+    `rows_dataset`."""
     xarray = import_xarray()
     coords = {}
     for name, (values, described) in coordinates.items():
         attributes = _attributes(described) if isinstance(described, str) else dict(described)
         coords[name] = (name, np.asarray(values), attributes)
+    for name, (dimension, values, column) in (aligned or {}).items():
+        coords[name] = (dimension, np.asarray(values, dtype=np.float64), _attributes(column))
     data = {name: (tuple(dims), np.asarray(values), _attributes(name))
             for name, (dims, values) in variables.items()}
     attributes = {"Conventions": "CF-1.8", **_flat_attributes(
         {key: value for key, value in metadata.items() if key != "columns"})}
-    return xarray.Dataset(data, coords=coords, attrs=attributes)
+    dataset = xarray.Dataset(data, coords=coords, attrs=attributes)
+    for name in coordinates:
+        if np.issubdtype(dataset[name].dtype, np.datetime64):
+            dataset[name].encoding.update(TIME_ENCODING)
+    return dataset
 
 
 def _attributes(column: str) -> dict[str, str]:

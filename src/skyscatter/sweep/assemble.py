@@ -1,7 +1,7 @@
 """The arrays of a whole sweep, put together from its chunk store.
 
 Dimensions, outermost first: one per config axis (`plan.dimension_name` of its key), then
-sun_zenith, view_zenith, azimuth (relative to the sun), wavelength:
+sun_zenith (a sweep over times: time), view_zenith, azimuth (relative to the sun), wavelength:
 
     radiance              (config..., sun_zenith, view_zenith, azimuth, wavelength)
     standard_error        as radiance (Monte Carlo solver only)
@@ -12,8 +12,10 @@ sun_zenith, view_zenith, azimuth (relative to the sun), wavelength:
 
 `grid_variables` returns them as name -> (dimensions, array), `grid_coordinates` the values
 of every dimension, with the attributes of the config axes (`config_key`: the dotted key).
+A sweep over times has a time coordinate (numpy datetime64 in UTC; xarray writes it as CF
+"<units> since <date>") and `time_coordinates` gives sun_zenith(time) and sun_azimuth(time).
 
-Public names: `grid_coordinates`, `grid_variables`.
+Public names: `grid_coordinates`, `grid_variables`, `time_coordinates`.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import numpy as np
 from skyscatter.sweep.plan import GEOMETRY_DIMENSIONS, SweepPlan
 from skyscatter.sweep.store import ChunkStore
 
-__all__ = ["grid_coordinates", "grid_variables"]
+__all__ = ["grid_coordinates", "grid_variables", "time_coordinates"]
 
 # column of the units and long name of each geometry dimension (`output_metadata.COLUMNS`)
 _GEOMETRY_COLUMNS = dict(zip(GEOMETRY_DIMENSIONS, ("sun_zenith_deg", "view_zenith_deg",
@@ -42,7 +44,22 @@ def grid_coordinates(plan: SweepPlan) -> dict[str, tuple[list, str | dict[str, s
                 plan.wavelengths_nm)
     for name, values in zip(GEOMETRY_DIMENSIONS, geometry, strict=True):
         coordinates[name] = (list(values), _GEOMETRY_COLUMNS[name])
+    if plan.times_utc:
+        del coordinates["sun_zenith"]
+        times = [np.datetime64(text.removesuffix("+00:00"), "ns") for text in plan.times_utc]
+        coordinates = {**dict(list(coordinates.items())[:len(plan.dimensions)]),
+                       "time": (times, {"standard_name": "time", "long_name": "time (UTC)"}),
+                       **dict(list(coordinates.items())[len(plan.dimensions):])}
     return coordinates
+
+
+def time_coordinates(plan: SweepPlan) -> dict[str, tuple[str, list[float], str]]:
+    """sun_zenith and sun_azimuth (from north towards east) [deg] along the time of a sweep
+    over times (none otherwise): name -> (dimension, values, column of its units)."""
+    if not plan.times_utc:
+        return {}
+    return {"sun_zenith": ("time", list(plan.sun_zeniths_deg), "sun_zenith_deg"),
+            "sun_azimuth": ("time", list(plan.sun_azimuths_deg), "sun_azimuth_deg")}
 
 
 def grid_variables(plan: SweepPlan, store: ChunkStore
@@ -52,8 +69,8 @@ def grid_variables(plan: SweepPlan, store: ChunkStore
     shape = plan.atmosphere_shape
     n_sun, n_view, n_az, n_wl = (len(plan.sun_zeniths_deg), len(plan.view_zeniths_deg),
                                  len(plan.relative_azimuths_deg), len(plan.wavelengths_nm))
-    sky = (*config, *GEOMETRY_DIMENSIONS)
-    surface = (*config, "sun_zenith", "wavelength")
+    sky = (*config, *plan.geometry_dimensions)
+    surface = (*config, plan.geometry_dimensions[0], "wavelength")
     cubes: dict[str, tuple[tuple[str, ...], np.ndarray]] = {}
     for chunk in range(plan.n_chunks):
         arrays = store.read(chunk)

@@ -1,11 +1,14 @@
 """What a sweep computes: its axes, its atmospheres, its chunks and its fingerprint.
 
 The grid is the product, outermost first, of the config axes (in the order given) and the
-geometry: sun zenith, view zenith, azimuth relative to the sun, wavelength. Atmosphere `a` is
-the combination at `numpy.unravel_index(a, atmosphere_shape)` of the config axes; chunk
-`c = a n_sun + s` is atmosphere `a` at sun zenith `s`, with every view direction and
-wavelength. The fingerprint (SHA-256 of everything that changes a number of the result) names
-the chunk store's sweep, so that chunks of another sweep are never mixed in.
+geometry: sun zenith, view zenith, azimuth relative to the sun, wavelength. A sweep over times
+(`times_utc`) has a time dimension in place of sun zenith: the sun's zenith angle and azimuth at
+each time, from the ephemeris, are given with it (`sun_zeniths_deg`, `sun_azimuths_deg`), and
+the view azimuths stay relative to the sun. Atmosphere `a` is the combination at
+`numpy.unravel_index(a, atmosphere_shape)` of the config axes; chunk `c = a n_sun + s` is
+atmosphere `a` at sun zenith (or time) `s`, with every view direction and wavelength. The
+fingerprint (SHA-256 of everything that changes a number of the result) names the chunk
+store's sweep, so that chunks of another sweep are never mixed in.
 
 Public names: `GEOMETRY_DIMENSIONS`, `SweepPlan`, `dimension_name`.
 """
@@ -45,7 +48,9 @@ class SweepPlan:
     """A sweep: the config `document` (read from `path`; `config` as the user named it), the
     config `axes` ((dotted key, values) pairs), the geometry [deg], wavelengths [nm], the
     observer's altitude [m] and the solver with its settings (`orders` None: each
-    atmosphere's config's; tables cached in `cache_dir` unless not `use_cache`)."""
+    atmosphere's config's; tables cached in `cache_dir` unless not `use_cache`). A sweep over
+    times has `times_utc` (ISO 8601 in UTC, one per sun zenith: the sun's zenith angle and
+    azimuth `sun_azimuths_deg` then) at `place_deg` (latitude, longitude)."""
 
     config: str
     document: dict[str, Any]
@@ -62,13 +67,16 @@ class SweepPlan:
     seed: int = 0
     cache_dir: str | None = None
     use_cache: bool = True
+    times_utc: tuple[str, ...] = ()
+    sun_azimuths_deg: tuple[float, ...] = ()
+    place_deg: tuple[float, float] | None = None
     dimensions: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
         names: dict[str, str] = {}
         for key, values in self.axes:
             name = dimension_name(key)
-            if name in names or name in GEOMETRY_DIMENSIONS:
+            if name in names or name in (*GEOMETRY_DIMENSIONS, "time"):
                 other = names.get(name, "the geometry")
                 raise InputError(f"--set {key} and {other} both make the dimension {name!r}; "
                                  "sweep each config value once", key="key", value=key)
@@ -79,6 +87,18 @@ class SweepPlan:
                                      "sweep numbers or words", key=key, value=value,
                                      allowed="numbers or words")
         object.__setattr__(self, "dimensions", tuple(names))
+        n_times = len(self.times_utc)
+        if n_times and (self.place_deg is None or not n_times == len(self.sun_zeniths_deg)
+                        == len(self.sun_azimuths_deg)):
+            raise ValueError("a sweep over times needs one sun zenith and azimuth per time "
+                             "and the place")
+
+    @property
+    def geometry_dimensions(self) -> tuple[str, ...]:
+        """The dimensions after the config axes: `GEOMETRY_DIMENSIONS`, with time in place of
+        sun_zenith in a sweep over times."""
+        first = "time" if self.times_utc else "sun_zenith"
+        return (first, *GEOMETRY_DIMENSIONS[1:])
 
     @property
     def atmosphere_shape(self) -> tuple[int, ...]:
@@ -129,5 +149,8 @@ class SweepPlan:
                      "wavelengths_nm": self.wavelengths_nm, "altitude_m": self.altitude_m,
                      "solver": self.solver, "orders": self.orders, "n_samples": self.n_samples,
                      "seed": self.seed}
+        if self.times_utc:
+            described.update(times_utc=self.times_utc, sun_azimuths_deg=self.sun_azimuths_deg,
+                             place_deg=self.place_deg)
         text = json.dumps(described, sort_keys=True, default=str, allow_nan=True)
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
