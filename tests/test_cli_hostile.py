@@ -55,6 +55,9 @@ NUMBERS = [
     (SWEEP, "--view-zenith", 0.0, 180.0, False, False),
     (SWEEP, "--azimuth", *FINITE, False, False),
     (SWEEP, "--workers", 1, 1024, False, True),
+    (SWEEP, "--lat", -90.0, 90.0, False, False),
+    (SWEEP, "--lon", *FINITE, False, False),
+    (SWEEP, "--frames", 1, 100_000, False, True),
     (["view"], "--port", 0, 65535, False, True),
     (["validate"], "--seed", 0, 2**32 - 1, False, True),
 ]
@@ -187,6 +190,11 @@ def test_orders_cap_is_the_configs_cap():
      "Mars Sol Date = 1000000000.0 is not allowed"),
     (["render", "earth", "--time", "MSD nan", "--lat", "0", "--lon", "0"],
      "Mars Sol Date = nan is not allowed"),
+    (SWEEP + ["--start", "0001-01-01T00:00+05:00", "--end", "0001-01-02T00:00+05:00", "--lat",
+              "0", "--lon", "0"], "is outside the years 1-9999 once converted to UTC"),
+    (SWEEP + ["--start", "2024-01-01T00:00Z", "--end", "2024-01-02T00:00Z", "--step",
+              "1e-300s", "--lat", "0", "--lon", "0"],
+     "more than 100000 frames; give a longer --step"),
 ])
 def test_costly_or_impossible_requests_are_refused_with_the_estimate(capsys, quiet_folder, argv,
                                                                      expected):
