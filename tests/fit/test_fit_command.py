@@ -133,6 +133,18 @@ def test_a_sweep_that_does_not_hold_the_free_key_is_refused(tmp_path):
         api.fit("earth", rows, [f"{KEY}=0:1"], model=path)
 
 
+def test_a_sweep_over_times_is_refused_with_what_to_sweep_instead(tmp_path):
+    path = tmp_path / "times.nc"
+    api.sweep("earth", {KEY: [0.05, 0.2]}, view_zeniths_deg=[60.0],
+              relative_azimuths_deg=[0.0, 90.0], wavelengths_nm=[440.0], solver="single",
+              times=["2026-06-21T10:00+02:00", "2026-06-21T12:00+02:00"], latitude_deg=52.5,
+              longitude_deg=13.4, output_path=path, workers=1)
+    rows = [{"sun_zenith_deg": 40, "view_zenith_deg": 60, "relative_azimuth_deg": 90,
+             "wavelength_nm": 440, "radiance": 1.0, "uncertainty": 0.1}]
+    with pytest.raises(InputError, match="sweep over times.*--sun-zenith"):
+        api.fit("earth", rows, [f"{KEY}=0:1"], model=path)
+
+
 ROWS = [{"sun_zenith_deg": 60, "wavelength_nm": 440, "direct_transmittance": 0.5,
          "uncertainty": 0.01}]
 

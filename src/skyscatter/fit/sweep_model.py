@@ -61,6 +61,10 @@ class SweepModel:
         radiance = dataset["radiance"]
         self.config_dims = [d for d in radiance.dims if d not in GEOMETRY_DIMENSIONS]
         missing = [d for d in GEOMETRY_DIMENSIONS if d not in radiance.dims]
+        if "time" in radiance.dims:
+            raise InputError(f"{label} is a sweep over times; a fit's sweep must be over sun "
+                             "zenith angles: sweep again with --sun-zenith instead of --start/"
+                             "--end", key="model", value=label, allowed="a sweep over --sun-zenith")
         if missing:
             raise InputError(f"{label}: radiance lacks the dimension(s) {', '.join(missing)}",
                              key="model", value=label)
