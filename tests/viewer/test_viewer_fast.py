@@ -91,18 +91,25 @@ def test_fast_description_round_trip(viewer_url):
     np.testing.assert_array_equal(direct["phase"], arrays["phase"])
 
 
+def _gpu_lut(page, viewer_url, name: str) -> np.ndarray:
+    """The fast model's LUT `name` read back from the GPU, (height, width, all wavelengths),
+    its wavelength groups side by side."""
+    _open(page, viewer_url, VIEWS["noon"], width=64, height=48)
+    groups = page.evaluate("window.skyscatter.viewer.fast.groups")
+    lut = np.array([page.evaluate(f"Array.from(window.skyscatter.viewer.fast.read("
+                                  f"'{name}', {g}))") for g in range(groups)])
+    width, height = FAST_SIZES[name]
+    return lut.reshape(groups, height, width, FAST_GROUP).transpose(1, 2, 0, 3).reshape(
+        height, width, groups * FAST_GROUP)
+
+
 def test_fast_transmittance_lut_matches_cpu(page, viewer_url):
     """Every texel of the GPU's transmittance LUT (all wavelengths) against
     `ray_marched_transmittance` (trapezoid, 256 samples, float64) of the same ray: within
     2e-3 absolute, measured 1.3e-3 (float16 storage: 2^-11 relative; 40 midpoint steps). The
     last column, the horizon's ray, is left out: the CPU counts it as meeting the ground."""
-    _open(page, viewer_url, VIEWS["noon"], width=64, height=48)
-    groups = page.evaluate("window.skyscatter.viewer.fast.groups")
-    lut = np.array([page.evaluate(f"Array.from(window.skyscatter.viewer.fast.read("
-                                  f"'transmittance', {g}))") for g in range(groups)])
-    width, height = FAST_SIZES["transmittance"]
-    gpu = lut.reshape(groups, height, width, FAST_GROUP).transpose(1, 2, 0, 3).reshape(
-        height, width, groups * FAST_GROUP)
+    gpu = _gpu_lut(page, viewer_url, "transmittance")
+    height, width = gpu.shape[:2]
     profile = fast_profile(viewer_url.service.atmosphere("earth"))
     bottom, top = profile.bottom_radius_m, profile.top_radius_m
     rows = [tp.transmittance_r_mu_from_x(i / (width - 1), j / (height - 1), bottom, top)
@@ -128,13 +135,7 @@ def test_fast_multiple_scattering_lut_matches_cpu(page, viewer_url):
     0.9 %, 95th percentile 8.8 %, at most 22 % (by day at the top, where rays cross the whole
     atmosphere: the GPU's 20 midpoint samples against the CPU's 32, float16 log Psi_ms, 2^-8
     of it); tolerances 2 %, 15 %, 30 %. Psi_ms = 0 (the night side) stays 0 (FAST_ZERO_LOG)."""
-    _open(page, viewer_url, VIEWS["noon"], width=64, height=48)
-    groups = page.evaluate("window.skyscatter.viewer.fast.groups")
-    lut = np.array([page.evaluate(f"Array.from(window.skyscatter.viewer.fast.read("
-                                  f"'multiple', {g}))") for g in range(groups)])
-    width, height = FAST_SIZES["multiple"]
-    gpu = lut.reshape(groups, height, width, FAST_GROUP).transpose(1, 2, 0, 3).reshape(
-        height, width, groups * FAST_GROUP)
+    gpu = _gpu_lut(page, viewer_url, "multiple")
     solver = HillaireSolver(fast_profile(viewer_url.service.atmosphere("earth")))
     cpu = solver.multiple_scattering  # (altitude, mu_s, wavelength), as the LUT's rows
     seen = cpu > 1e-4 * cpu.max()

@@ -33,12 +33,13 @@ import numpy as np
 from skyscatter.atmosphere.config_overrides import atmosphere_with
 from skyscatter.fit.measurements import Measurements
 from skyscatter.fit.model_error import model_error
+from skyscatter.render.radiance_grid import sky_radiance_and_error
 from skyscatter.render.scene import sun_direction
 from skyscatter.spectrum.colour import spectral_to_xyz, xy_chromaticity
 from skyscatter.spectrum.grid import checked_data_wavelengths, wavelength_grid
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.single_scattering import observer_position
-from skyscatter.transport.solvers import NoisySolver, SolverOptions, make_solver
+from skyscatter.transport.solvers import SolverOptions, make_solver
 from skyscatter.transport.transmittance import ray_marched_transmittance
 
 __all__ = ["COLOUR_BANDS", "FAST_SOLVERS", "SolverModel"]
@@ -141,9 +142,8 @@ class SolverModel:
             views = local_frame_directions(
                 np.radians(measurements.view_zenith_deg[index[at]]),
                 np.radians(folded_azimuth_deg(measurements.relative_azimuth_deg[index[at]])))
-            sun = sun_direction(float(sun_zenith), 0.0)
-            if isinstance(engine, NoisySolver):
-                radiance[at], error[at] = engine.sky_radiance_with_error(position, views, sun)
-            else:
-                radiance[at] = engine.sky_radiance(position, views, sun)
+            radiance[at], noise = sky_radiance_and_error(engine, position, views,
+                                                         sun_direction(float(sun_zenith), 0.0))
+            if noise is not None:
+                error[at] = noise
         return radiance, error

@@ -6,7 +6,7 @@ azimuth 0 (the sky is the same at every azimuth: density depends on altitude onl
 every (view zenith, azimuth relative to the sun) pair. Angles in degrees, as the API and the
 command line give them.
 
-Public names: `sky_radiance_grid`, `surface_irradiance_grid`.
+Public names: `sky_radiance_and_error`, `sky_radiance_grid`, `surface_irradiance_grid`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,16 @@ from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.solvers import NoisySolver, Solver, SurfaceSolver
 
-__all__ = ["sky_radiance_grid", "surface_irradiance_grid"]
+__all__ = ["sky_radiance_and_error", "sky_radiance_grid", "surface_irradiance_grid"]
+
+
+def sky_radiance_and_error(engine: Solver, position: np.ndarray, directions: np.ndarray,
+                           sun: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """Diffuse sky radiance [W m^-2 sr^-1 nm^-1] at `directions` (..., 3) seen from `position`,
+    shape (..., n_wl), and its standard error for a `NoisySolver` (Monte Carlo), else None."""
+    if isinstance(engine, NoisySolver):
+        return engine.sky_radiance_with_error(position, directions, sun)
+    return engine.sky_radiance(position, directions, sun), None
 
 
 def sky_radiance_grid(engine: Solver, altitude_m: float, sun_zeniths_deg: Sequence[float],
@@ -35,13 +44,11 @@ def sky_radiance_grid(engine: Solver, altitude_m: float, sun_zeniths_deg: Sequen
     directions = local_frame_directions(view_zenith, azimuth)
     radiances, errors = [], []
     for sun_zenith in sun_zeniths_deg:
-        sun = sun_direction(sun_zenith, 0.0)
-        if isinstance(engine, NoisySolver):
-            radiance, error = engine.sky_radiance_with_error(position, directions, sun)
-            errors.append(error)
-        else:
-            radiance = engine.sky_radiance(position, directions, sun)
+        radiance, error = sky_radiance_and_error(engine, position, directions,
+                                                 sun_direction(sun_zenith, 0.0))
         radiances.append(radiance)
+        if error is not None:
+            errors.append(error)
     return np.stack(radiances), (np.stack(errors) if errors else None)
 
 

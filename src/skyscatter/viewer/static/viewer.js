@@ -704,7 +704,6 @@ class Viewer {
   // held at least at the natural night sky's, less the night compensation of their log-average
   // (twin of render.tonemap.night_adapted_exposure)
   meter() {
-    const gl = this.gl;
     const header = this.header();
     const exposure = this.layout.exposure;
     if (this.state.altitude_m > header.top_radius_m - header.bottom_radius_m) {
@@ -713,12 +712,7 @@ class Viewer {
     }
     const [w, h] = METER_SIZE;
     if (!this.floatTargets) return null;  // no float render targets: exposure by hand
-    const meter = this.textureTargets("meter", w, h, 1);
-    gl.bindFramebuffer(gl.FRAMEBUFFER, meter.framebuffer);
-    this.drawSky(w, h, "meter");
-    const p = new Float32Array(w * h * 4);
-    gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, p);
-    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    const p = this.meterPixels("meter", w, h);
     // log-luminance sums of the pixels to meter, as render.scene.sky_image picks them: those
     // looking above the horizontal, else the lit ones, else all inside the image (alpha 1)
     const sums = {sky: [0, 0], lit: [0, 0], valid: [0, 0]};
@@ -738,16 +732,23 @@ class Viewer {
     return metered - nightCompensationEv(logAverage, exposure);
   }
 
-  // The luminance Y [cd m^-2] of the view at w x h as the sky pass computes it and whether
-  // each pixel looks up (output "meter": [Y, up] row-major from the bottom row), for tests
-  luminance(width, height) {
+  // The sky pass's "meter" output at width x height into the float target `name`, read back:
+  // RGBA floats [Y, up, -, alpha] row-major from the bottom row
+  meterPixels(name, width, height) {
     const gl = this.gl;
-    const target = this.textureTargets("luminance", width, height, 1);
+    const target = this.textureTargets(name, width, height, 1);
     gl.bindFramebuffer(gl.FRAMEBUFFER, target.framebuffer);
     this.drawSky(width, height, "meter");
     const p = new Float32Array(width * height * 4);
     gl.readPixels(0, 0, width, height, gl.RGBA, gl.FLOAT, p);
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    return p;
+  }
+
+  // The luminance Y [cd m^-2] of the view at w x h as the sky pass computes it and whether
+  // each pixel looks up (output "meter": [Y, up] row-major from the bottom row), for tests
+  luminance(width, height) {
+    const p = this.meterPixels("luminance", width, height);
     return Array.from({length: width * height}, (_, i) => [p[4 * i], p[4 * i + 1]]);
   }
 
