@@ -14,14 +14,22 @@ import numpy as np
 import pytest
 from transport_cases import EARTH_RADIUS_M, SMALL, exponential_earth, homogeneous_shell
 
+from skyscatter.atmosphere.config import load_atmosphere
+from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.optics.phase import HenyeyGreensteinPhase
+from skyscatter.transport import _monte_carlo_kernels
 from skyscatter.transport.code_fingerprint import reached_definitions
 from skyscatter.transport.geometry import local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
-from skyscatter.transport.monte_carlo import MonteCarloSolver
+from skyscatter.transport.monte_carlo import (
+    SUN_SAMPLING_PROBABILITY,
+    MonteCarloSolver,
+    default_sun_sampling,
+)
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
 from skyscatter.transport.solvers import SOLVERS, SolverOptions, make_solver
+from skyscatter.validate.disort import disort_sky_radiance, plane_parallel_layers
 
 GROUND = observer_position(0.0, EARTH_RADIUS_M)
 # Zenith, 45°, 80° up, and 95°/120° (the lit ground).
@@ -157,9 +165,10 @@ def test_a_conservative_peaked_shell_over_a_bright_ground_conserves_energy(
 def test_standard_errors_cover_the_spread_of_seeds_with_a_forward_peak():
     # HG g = 0.95 (forward peak 31 sr^-1, like Mie dust's 20-40), tau = 0.5, sun 60 deg: 20
     # runs of 2000 paths against one of 40 000. Honest standard errors put about 95 % of the
-    # runs within 2 combined standard errors (measured 97 %); with plain phase sampling
-    # (sun_sampling_probability=0) rare paths into the peak towards the sun made the estimate
-    # heavy-tailed and its standard error too small: 82 % on the same runs.
+    # runs within 2 combined standard errors (measured 96 %, median relative error 3.0 %);
+    # with plain phase sampling and no aureole walks (sun_sampling_probability=0,
+    # peak_truncation_deg=0) rare paths into the peak towards the sun made the estimate
+    # heavy-tailed and its standard error too small: 86 % (14 %) on the same runs.
     profile = _peaked_shell(0.95, 0.5, 0.3)
     sun = local_frame_directions(np.radians(60.0), 0.0)
     views = local_frame_directions(np.radians([0.0, 30.0, 50.0, 60.0, 70.0, 85.0, 60.0, 60.0]),
@@ -172,6 +181,75 @@ def test_standard_errors_cover_the_spread_of_seeds_with_a_forward_peak():
     z = (means - reference) / np.hypot(errors, reference_error)
     assert np.mean(np.abs(z) <= 2.0) >= 0.9
     assert np.median(errors / means) < 0.05  # the noise is low, not just honest (measured 3.7 %)
+
+
+def _droplet_deck(optical_depth: float) -> OpticalProfile:
+    """A deck of the `earth-overcast` preset's water droplets (Mie, effective radius 10 um:
+    forward peak 592 sr^-1 at 550 nm) between 600 and 1100 m, its edges ramped over one level
+    (12.5 m), in a faint isotropic haze of optical depth 0.02 (DISORT needs every layer to
+    scatter), 4 km of atmosphere over a ground of albedo 0.2; one band, 550 nm."""
+    preset = load_atmosphere("earth-overcast").optical_profile(np.array([550.0]))
+    z = np.arange(0.0, 4000.0 + 1.0, 12.5)
+    deck = np.clip(np.minimum(z - 600.0, 1100.0 - z) / 12.5 + 1.0, 0.0, 1.0)
+    extinction = np.array([[optical_depth / np.trapezoid(deck, z)], [0.02 / 4000.0]])
+    return OpticalProfile(
+        wavelengths_nm=np.array([550.0]), bottom_radius_m=EARTH_RADIUS_M,
+        top_radius_m=EARTH_RADIUS_M + 4000.0, altitudes_m=z,
+        density=np.stack([deck, np.ones_like(z)]), extinction_per_density=extinction,
+        scattering_per_density=extinction.copy(),
+        phases=(preset.phases[preset.names.index("cloud")], HenyeyGreensteinPhase(0.0)),
+        names=("deck", "haze"), ground_albedo=np.array([0.2]), toa_irradiance=np.ones(1),
+        sun_angular_radius_rad=0.0)
+
+
+def test_the_light_under_a_thick_droplet_deck_matches_disort():
+    # Optical depth 10 of droplets, sun 30 deg from the zenith, three of DISORT's directions
+    # (view zenith 10.8, 41.1, 70.5 deg, 135 deg from the sun's azimuth). Three things make
+    # this case hard for a backward Monte Carlo, each handled in the module: the forward peak
+    # (sunlight scattered only in the peaks is found by rare paths aligned with the sun),
+    # the depth (paths need ~100 orders to climb to the deck's sunlit top; a roulette capping
+    # survival below 1 grew their weights), and the deck's edges between the view ray's
+    # nodes. Before, 10 000 paths gave z = -0.3, -2.9, -7.6 (the last two 28 and 40 % too
+    # dark); now, with seeds 4, 5, 6, |z| <= 2.3 and standard errors of 1.5-2.4 %.
+    # Allowance 1 % for DISORT's own error: 64, 96 and 128 streams agree within 0.07 % at
+    # these views (linear in the view cosine), and a 4 km shell's curvature is smaller.
+    profile = _droplet_deck(10.0)
+    sun_zenith, azimuth = np.radians(30.0), np.radians(135.0)
+    layers = plane_parallel_layers(profile, n_moments=512)
+    view_zenith, disort = disort_sky_radiance(profile, sun_zenith, azimuth, np.pi / 2,
+                                              n_streams=64, layers=layers)
+    chosen = [int(np.argmin(np.abs(np.degrees(view_zenith) - a))) for a in (10.0, 40.0, 70.0)]
+    views = local_frame_directions(view_zenith[chosen], azimuth)
+    sun = local_frame_directions(sun_zenith, 0.0)
+    mc = MonteCarloSolver(profile, n_samples=20_000, seed=4)
+    assert mc.sun_sampling_probability == 0.0  # a thick column: no sun-centred sampling
+    mean, error = mc.sky_radiance_with_error(GROUND, views, sun)
+    reference = disort[chosen, 0]
+    assert np.all(np.abs(mean - reference) <= 4.0 * error + 0.01 * reference)
+    assert np.all(error < 0.03 * mean)  # the test has teeth: the old errors were 28-40 %
+
+
+def test_the_view_ray_nodes_hold_little_optical_depth_across_a_deck():
+    # The first collision's transmittance is linear in optical depth between the view ray's
+    # nodes: no interval may hold more than VIEW_INTERVAL_DEPTH (0.05) of the deck's 10.
+    profile = _droplet_deck(10.0)
+    mc = MonteCarloSolver(profile, n_samples=2)
+    views = local_frame_directions(np.radians([0.0, 40.0, 80.0]), 0.0)
+    count, _, t_nodes, view_column, *_ = _monte_carlo_kernels.view_ray_nodes(
+        np.tile(GROUND, (3, 1)), views, np.array([0.0, 0.0, 1.0]), mc.n_view_intervals,
+        profile.bottom_radius_m, profile.top_radius_m, 12.5, mc._density,
+        mc._level_extinction, 0.0, 8)
+    for i in range(3):
+        depth = view_column[i, :count[i]] @ profile.extinction_per_density[:, 0]
+        assert depth[-1] > 10.0  # the whole deck, obliquely
+        assert np.max(np.diff(depth)) <= _monte_carlo_kernels.VIEW_INTERVAL_DEPTH * 1.0001
+        assert np.all(np.diff(t_nodes[i, :count[i]]) > 0.0)
+
+
+def test_sun_centred_sampling_is_off_by_default_for_thick_columns(earth_profile):
+    assert default_sun_sampling(earth_profile) == SUN_SAMPLING_PROBABILITY
+    assert default_sun_sampling(_droplet_deck(10.0)) == 0.0
+    assert default_sun_sampling(_droplet_deck(1.5)) == SUN_SAMPLING_PROBABILITY
 
 
 def test_more_paths_go_where_the_relative_error_is_above_the_target(earth_profile):
@@ -188,9 +266,9 @@ def test_more_paths_go_where_the_relative_error_is_above_the_target(earth_profil
     long, long_error = MonteCarloSolver(earth_profile, n_samples=4000, seed=10
                                         ).sky_radiance_with_error(GROUND, VIEWS, sun)
     assert np.all(error <= 0.015 * mean)
-    # Without the target it would be noisier: measured 2.01 %, a thin margin, so a change to
-    # the case or the path count may need a new threshold here (the target is 1 %).
-    assert np.median(plain_error / plain) > 0.02
+    # Without the target it would be noisier than the target of 1 % (measured 1.93 %; 2.01 %
+    # before the forward peaks' aureole walks), so the extra paths have work to do.
+    assert np.median(plain_error / plain) > 0.015
     assert np.all(np.abs(mean - long) <= 4.0 * np.hypot(error, long_error))
     capped = MonteCarloSolver(earth_profile, n_samples=200, seed=9, target_relative_error=0.001,
                               max_samples=400)

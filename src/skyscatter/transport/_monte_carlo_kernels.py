@@ -35,6 +35,7 @@ from numba import njit, prange
 from skyscatter.transport._kernels import (
     columns_along_segment,
     density_at,
+    radius_along,
     ray_segment,
     sample_distance,
     sample_total,
@@ -47,7 +48,18 @@ from skyscatter.transport.geometry import (
 )
 
 TWO_PI = 2.0 * math.pi
-RR_WEIGHT_MAX = 0.95  # largest survival probability of Russian roulette
+# The view ray's intervals hold at most this optical depth (`interval_splits`), cut into at
+# most this many parts each: the first collision's transmittance is interpolated linearly in
+# optical depth inside an interval, exact only where the extinction is constant.
+VIEW_INTERVAL_DEPTH = 0.05
+MAX_VIEW_SPLITS = 64
+ROULETTE_SHARE = 0.1  # Russian roulette below this share of a path's starting weight
+# `aureole_estimate` runs wherever the forward-scattered beam T' - T is at least this share of
+# the sun's light, and with probability (T' - T) / AUREOLE_SHARE where it is weaker.
+AUREOLE_SHARE = 0.01
+# eps of the aureole walk's own directions (`aureole_light`): half of them about the sun, so
+# that a walk that has strayed a few degrees from it finds the peak towards it again.
+AUREOLE_SUN_SAMPLING = 0.5
 # States of a path in `random_walk`.
 FLIGHT, SCATTER, GROUND, LEAVE = 0, 1, 2, 3
 
@@ -192,13 +204,17 @@ def sun_attenuation(px, py, pz, sun, w, bottom_radius, top_radius, h_step, densi
 
 
 @njit(cache=True)
-def roulette(weight):
-    """Russian roulette: 0 (the path ends) with probability 1 - q, else weight / q, with
-    q = min(RR_WEIGHT_MAX, weight); unbiased."""
-    survive = min(RR_WEIGHT_MAX, weight)
-    if np.random.random() >= survive:
+def roulette(weight, floor):
+    """Russian roulette below `floor`: the path ends with probability 1 - weight / floor, else
+    goes on with the weight `floor`; unbiased. Weights above the floor are kept, so paths
+    through conservative, optically thick layers live until they leave them (a survival
+    capped below 1 would let the few long paths that reach a deck's sunlit top carry
+    exponentially growing weights: a heavy-tailed estimator)."""
+    if weight >= floor:
+        return weight
+    if np.random.random() * floor >= weight:
         return 0.0
-    return weight / survive
+    return floor
 
 
 @njit(cache=True)
@@ -329,17 +345,129 @@ def free_flight(ox, oy, oz, dx, dy, dz, w, bottom_radius, top_radius, h_step, de
 
 
 @njit(cache=True)
+def scattering_coefficient(w, dens, scattering, scatterers):
+    """beta_s [m^-1]: sum_c beta_s,c at the densities `dens`."""
+    total = 0.0
+    for s in range(scatterers.shape[0]):
+        total += scattering[scatterers[s], w] * dens[scatterers[s]]
+    return total
+
+
+@njit(cache=True)
+def aureole_share(attenuation, w, peak_scattering, column):
+    """T' - T [-] at a point whose sun columns are `column` and T_sun V = `attenuation`: the
+    sunlight that delta-M scaling counts as still direct there (the forward-scattered beam,
+    T' = T exp(tau_peak)), the size of what `aureole_light` estimates."""
+    return attenuation * math.expm1(optical_depth(peak_scattering, w, column))
+
+
+@njit(cache=True)
+def aureole_light(ox, oy, oz, dx, dy, dz, root_phase, w, sun, max_orders, bottom_radius,
+                  top_radius, h_step, density, extinction, scattering, scatterers, phase, cdf,
+                  cos_grid, majorant, sun_angular_radius, n_sun_samples, sun_share, peak,
+                  scratch):
+    """Sunlight [sr^-1 per unit sun irradiance] that reaches o after one or more scatterings in
+    the forward peaks only, weighted by the smooth scattering at o (module doc of
+    `transport/monte_carlo.py`): a direction w1 from the sun-centred proposal, weight
+    root(w1) / q(w1) with `root_phase` = 0 for a collision (its smooth phase function,
+    sum_c beta_s,c p*_c / beta_s at the densities in `scratch[2]`, coming along d) or 1 for
+    the ground (albedo folded in by the caller: mu / pi); then a walk whose every scattering
+    is a peak event: next-event estimates with the peak phase function, directions from the
+    whole phase function weighted by peak / whole. The ground ends the walk (not a peak)."""
+    dens = scratch[0]
+    column = scratch[1]
+    nx, ny, nz = sun_centred_direction(w, sun, sun_share, cdf, cos_grid)
+    q = sun_proposal_density(w, sun[0] * nx + sun[1] * ny + sun[2] * nz, sun_share, cdf,
+                             cos_grid)
+    if q <= 0.0:
+        return 0.0
+    if root_phase == 0:
+        root = scratch[2]
+        nu = dx * nx + dy * ny + dz * nz
+        bs = scattering_coefficient(w, root, scattering, scatterers)
+        value = (mixed_phase(w, nu, root, scattering, scatterers, phase)
+                 - mixed_phase(w, nu, root, scattering, scatterers, peak)) / bs
+    else:
+        r = math.sqrt(ox * ox + oy * oy + oz * oz)
+        value = max(0.0, (ox * nx + oy * ny + oz * nz) / r) / math.pi
+    weight = value / q
+    result = 0.0
+    for _ in range(max_orders):
+        if weight <= 0.0:
+            return result
+        state, ox, oy, oz = free_flight(ox, oy, oz, nx, ny, nz, w, bottom_radius, top_radius,
+                                        h_step, density, extinction, majorant, dens)
+        if state != SCATTER:
+            return result  # the ground does not scatter in a peak
+        be = 0.0
+        for c in range(density.shape[0]):
+            be += extinction[c, w] * dens[c]
+        bs = scattering_coefficient(w, dens, scattering, scatterers)
+        if be <= 0.0 or bs <= 0.0:
+            return result
+        weight *= bs / be
+        attenuation = sun_attenuation(ox, oy, oz, sun, w, bottom_radius, top_radius, h_step,
+                                      density, extinction, sun_angular_radius, n_sun_samples,
+                                      column)
+        if attenuation > 0.0:
+            nu_sun = nx * sun[0] + ny * sun[1] + nz * sun[2]
+            result += (weight * mixed_phase(w, nu_sun, dens, scattering, scatterers, peak) / bs
+                       * attenuation)
+        mx, my, mz, factor = scatter_direction(nx, ny, nz, w, bs, dens, scattering, scatterers,
+                                               phase, cdf, cos_grid, sun, sun_share,
+                                               AUREOLE_SUN_SAMPLING)
+        nu = nx * mx + ny * my + nz * mz
+        whole = mixed_phase(w, nu, dens, scattering, scatterers, phase)
+        weight *= factor * (mixed_phase(w, nu, dens, scattering, scatterers, peak) / whole
+                            if whole > 0.0 else 0.0)
+        nx, ny, nz = mx, my, mz
+    return result
+
+
+@njit(cache=True)
+def aureole_estimate(ox, oy, oz, dx, dy, dz, root_phase, attenuation, w, sun, max_orders,
+                     bottom_radius, top_radius, h_step, density, extinction, scattering,
+                     scatterers, phase, cdf, cos_grid, majorant, sun_angular_radius,
+                     n_sun_samples, sun_share, peak, peak_scattering, column, scratch):
+    """`aureole_light` at o with at most `max_orders` peak scatterings, run with probability
+    r = min(1, (T' - T) / AUREOLE_SHARE) and divided by r (unbiased): where the
+    forward-scattered beam is weak (clear air, deep in a thick layer) it is rarely run.
+    `column` holds the sun columns at o, `attenuation` its T_sun V."""
+    if attenuation <= 0.0 or max_orders <= 0:
+        return 0.0
+    share = aureole_share(attenuation, w, peak_scattering, column)
+    if share <= 0.0:
+        return 0.0
+    chance = min(1.0, share / AUREOLE_SHARE)
+    if np.random.random() >= chance:
+        return 0.0
+    return aureole_light(ox, oy, oz, dx, dy, dz, root_phase, w, sun, max_orders, bottom_radius,
+                         top_radius, h_step, density, extinction, scattering, scatterers,
+                         phase, cdf, cos_grid, majorant, sun_angular_radius, n_sun_samples,
+                         sun_share, peak, scratch) / chance
+
+
+@njit(cache=True)
 def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_start,
                 bottom_radius, top_radius, h_step, density, extinction, scattering, scatterers,
                 phase, cdf, cos_grid, majorant, albedo, sun_angular_radius, n_sun_samples,
-                sun_share, sun_probability, dens, column):
+                sun_share, sun_probability, peak, peak_scattering, dens, column, scratch):
     """Sum of the next-event estimates towards the sun [sr^-1, per unit sun irradiance] of a
     path that starts at o in `state`:
     SCATTER  a collision in the air at o, coming along d; `weight` is the path weight before
              the single-scattering albedo (for a collision drawn with density beta_e T: 1);
     GROUND   at the ground point o, reached along d, with `weight`;
-    FLIGHT   flying from o along d, with `weight`."""
+    FLIGHT   flying from o along d, with `weight`.
+    Forward peaks (`peak`, `peak_scattering`; module doc of `transport/monte_carlo.py`): once
+    the path has scattered smoothly (a ground reflection, or a scattering labelled smooth with
+    probability p* / p), its next-event estimates leave out the peak, and every event adds the
+    `aureole_estimate` instead."""
     n_c = density.shape[0]
+    peaked = False
+    for c in range(n_c):
+        peaked = peaked or peak_scattering[c, w] > 0.0
+    smooth = False
+    floor = ROULETTE_SHARE * weight
     result = 0.0
     order = 0
     while True:
@@ -354,11 +482,9 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
             density_at(math.sqrt(ox * ox + oy * oy + oz * oz) - bottom_radius, h_step, density,
                        dens)
             be = 0.0
-            bs = 0.0
             for c in range(n_c):
                 be += extinction[c, w] * dens[c]
-            for s in range(scatterers.shape[0]):
-                bs += scattering[scatterers[s], w] * dens[scatterers[s]]
+            bs = scattering_coefficient(w, dens, scattering, scatterers)
             if be <= 0.0 or bs <= 0.0:
                 return result
             weight *= bs / be
@@ -367,18 +493,34 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
                                           n_sun_samples, column)
             if attenuation > 0.0:
                 nu_sun = dx * sun[0] + dy * sun[1] + dz * sun[2]
-                result += (weight * mixed_phase(w, nu_sun, dens, scattering, scatterers, phase)
-                           / bs * attenuation)
+                p_sun = mixed_phase(w, nu_sun, dens, scattering, scatterers, phase)
+                if smooth:
+                    p_sun -= mixed_phase(w, nu_sun, dens, scattering, scatterers, peak)
+                result += weight * p_sun / bs * attenuation
+            if peaked:
+                for c in range(n_c):
+                    scratch[2, c] = dens[c]
+                result += weight * aureole_estimate(
+                    ox, oy, oz, dx, dy, dz, 0, attenuation, w, sun, max_orders - order - 1,
+                    bottom_radius, top_radius, h_step, density, extinction, scattering,
+                    scatterers, phase, cdf, cos_grid, majorant, sun_angular_radius,
+                    n_sun_samples, sun_share, peak, peak_scattering, column, scratch)
             order += 1
             if order >= max_orders:
                 return result
             if order >= rr_start:
-                weight = roulette(weight)
+                weight = roulette(weight, floor)
                 if weight == 0.0:
                     return result
-            dx, dy, dz, factor = scatter_direction(dx, dy, dz, w, bs, dens, scattering,
+            nx, ny, nz, factor = scatter_direction(dx, dy, dz, w, bs, dens, scattering,
                                                    scatterers, phase, cdf, cos_grid, sun,
                                                    sun_share, sun_probability)
+            if peaked and not smooth:
+                nu = dx * nx + dy * ny + dz * nz
+                whole = mixed_phase(w, nu, dens, scattering, scatterers, phase)
+                in_peak = mixed_phase(w, nu, dens, scattering, scatterers, peak)
+                smooth = np.random.random() * whole >= in_peak
+            dx, dy, dz = nx, ny, nz
             weight *= factor
             state = FLIGHT
             continue
@@ -390,6 +532,13 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
                                           h_step, density, extinction, sun_angular_radius,
                                           n_sun_samples, column)
             result += weight * albedo[w] / math.pi * mu_s * attenuation
+            if peaked:
+                result += weight * albedo[w] * aureole_estimate(
+                    ox, oy, oz, dx, dy, dz, 1, attenuation, w, sun, max_orders - order - 1,
+                    bottom_radius, top_radius, h_step, density, extinction, scattering,
+                    scatterers, phase, cdf, cos_grid, majorant, sun_angular_radius,
+                    n_sun_samples, sun_share, peak, peak_scattering, column, scratch)
+        smooth = True
         order += 1
         if order >= max_orders:
             return result
@@ -397,7 +546,7 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
         if weight <= 0.0:
             return result
         if order >= rr_start:
-            weight = roulette(weight)
+            weight = roulette(weight, floor)
             if weight == 0.0:
                 return result
         dx, dy, dz, factor = reflect_direction(nx, ny, nz, w, sun, sun_share, cdf, cos_grid,
@@ -408,21 +557,71 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
         state = FLIGHT
 
 
+@njit(cache=True)
+def interval_splits(r, mu, t_a, t_b, bottom_radius, h_step, level_extinction):
+    """Equal parts into which the view-ray interval [t_a, t_b] of the ray (r, mu) is cut so that
+    none holds more than VIEW_INTERVAL_DEPTH of optical depth, bounded by the largest level
+    extinction `level_extinction` (n_z,) [m^-1] over the interval's altitudes (its ends: the
+    lowest point of a ray is a node); at most MAX_VIEW_SPLITS."""
+    z_a = radius_along(r, mu, t_a) - bottom_radius
+    z_b = radius_along(r, mu, t_b) - bottom_radius
+    n_z = level_extinction.shape[0]
+    k_low = min(n_z - 1, max(0, int(min(z_a, z_b) / h_step)))
+    k_high = min(n_z - 1, max(0, int(max(z_a, z_b) / h_step) + 1))
+    beta = 0.0
+    for k in range(k_low, k_high + 1):
+        beta = max(beta, level_extinction[k])
+    return min(MAX_VIEW_SPLITS, max(1, int(math.ceil(beta * (t_b - t_a) / VIEW_INTERVAL_DEPTH))))
+
+
+@njit(cache=True)
+def view_ray_distances(ox, oy, oz, dx, dy, dz, n_intervals, bottom_radius, top_radius, h_step,
+                       level_extinction, out):
+    """(number of nodes, hits_ground, t_end [m]) of the view ray from o along d: the nodes of
+    `_kernels.sample_distance` (dense at the lowest point), each interval cut into
+    `interval_splits` equal parts, written into out when it is long enough (else only
+    counted); 0 nodes when the ray has no length inside the atmosphere."""
+    r, mu, t_start, t_end, hits_ground = ray_segment(ox, oy, oz, dx, dy, dz, bottom_radius,
+                                                     top_radius)
+    if t_end <= t_start:
+        return 0, hits_ground, t_end
+    t_split, m1, m2 = split_sample_count(r, mu, t_start, t_end, n_intervals)
+    total = sample_total(m1, m2, n_intervals)
+    n = 0
+    t_previous = t_start
+    for j in range(total):
+        t = sample_distance(j, r, mu, t_start, t_end, n_intervals, t_split, m1, m2)
+        parts = (interval_splits(r, mu, t_previous, t, bottom_radius, h_step, level_extinction)
+                 if j > 0 else 1)
+        for k in range(1, parts + 1):
+            if n < out.shape[0]:
+                out[n] = t_previous + (t - t_previous) * k / parts
+            n += 1
+        t_previous = t
+    return n, hits_ground, t_end
+
+
 @njit(parallel=True, cache=True)
 def view_ray_nodes(origins, directions, sun, n_intervals, bottom_radius, top_radius, h_step,
-                   density, sun_angular_radius, n_sun_samples):
+                   density, level_extinction, sun_angular_radius, n_sun_samples):
     """What the first collision along each view ray is drawn from, for all wavelengths at once
     (column densities do not depend on wavelength). Nodes t_j along the part of the ray inside
-    the atmosphere (`_kernels.sample_distance`: dense at the lowest point), returned as
-    (count (n_ray,), hits_ground (n_ray,), t (n_ray, n_max) [m], view column from the first
-    node (n_ray, n_max, n_c) [density x m] (trapezoid rule), density (n_ray, n_max, n_c),
-    column towards the sun (n_ray, n_max, n_c), visible part of the sun (n_ray, n_max)).
-    count = 0 when the ray has no length inside the atmosphere."""
+    the atmosphere (`view_ray_distances`), returned as (count (n_ray,), hits_ground (n_ray,),
+    t (n_ray, n_max) [m], view column from the first node (n_ray, n_max, n_c) [density x m]
+    (trapezoid rule), density (n_ray, n_max, n_c), column towards the sun (n_ray, n_max,
+    n_c), visible part of the sun (n_ray, n_max)). count = 0 when the ray has no length inside
+    the atmosphere."""
     n_ray = origins.shape[0]
     n_c = density.shape[0]
-    n_max = n_intervals + 3
     count = np.zeros(n_ray, dtype=np.int64)
     hits = np.zeros(n_ray, dtype=np.bool_)
+    ends = np.zeros(n_ray)
+    for i in prange(n_ray):
+        count[i], hits[i], ends[i] = view_ray_distances(
+            origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0], directions[i, 1],
+            directions[i, 2], n_intervals, bottom_radius, top_radius, h_step,
+            level_extinction, np.empty(0))
+    n_max = max(2, int(count.max()) if n_ray > 0 else 2)
     t_nodes = np.zeros((n_ray, n_max))
     view_column = np.zeros((n_ray, n_max, n_c))
     node_density = np.zeros((n_ray, n_max, n_c))
@@ -431,20 +630,15 @@ def view_ray_nodes(origins, directions, sun, n_intervals, bottom_radius, top_rad
     for i in prange(n_ray):
         ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        r, mu, t_start, t_end, hits_ground = ray_segment(ox, oy, oz, dx, dy, dz, bottom_radius,
-                                                         top_radius)
-        hits[i] = hits_ground
-        t_nodes[i, 0] = t_end  # the ground hit of a ray with no length (observer on the ground)
-        if t_end <= t_start:
+        t_nodes[i, 0] = ends[i]  # the ground hit of a ray with no length (observer on the ground)
+        if count[i] == 0:
             continue
-        t_split, m1, m2 = split_sample_count(r, mu, t_start, t_end, n_intervals)
-        total = sample_total(m1, m2, n_intervals)
-        count[i] = total
+        view_ray_distances(ox, oy, oz, dx, dy, dz, n_intervals, bottom_radius, top_radius,
+                           h_step, level_extinction, t_nodes[i])
         dens = np.empty(n_c)
         col = np.empty(n_c)
-        for j in range(total):
-            t = sample_distance(j, r, mu, t_start, t_end, n_intervals, t_split, m1, m2)
-            t_nodes[i, j] = t
+        for j in range(count[i]):
+            t = t_nodes[i, j]
             px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
             density_at(math.sqrt(px * px + py * py + pz * pz) - bottom_radius, h_step, density,
                        dens)
@@ -539,7 +733,7 @@ def first_collision(n, cdf, tau, t_nodes, u):
 def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_orders, rr_start,
                bottom_radius, top_radius, h_step, density, extinction, scattering, scatterers,
                phase, cdf, majorant, sun_irradiance, albedo, sun_angular_radius,
-               n_sun_samples, sun_share, sun_probability, nodes, first):
+               n_sun_samples, sun_share, sun_probability, peak, peak_scattering, nodes, first):
     """Sums and sums of squares (n_ray, n_wl, n_batch) of the path estimates [W m^-2 sr^-1
     nm^-1] of `n_paths` paths per ray and wavelength, in batches of `batch` paths; `nodes` and
     `first` are what `view_ray_nodes` and `first_collision_tables` return for these rays. Each path
@@ -566,6 +760,7 @@ def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_
         np.random.seed((seed * 1_000_003 + index * 7_919 + 12_345) % 4_294_967_296)
         dens = np.empty(n_c)
         column = np.empty(n_c)
+        scratch = np.zeros((3, n_c))
         n = count[i]
         in_air = in_air_all[i, w]
         tau = tau_all[i, w]
@@ -596,14 +791,15 @@ def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_
                     px, py, pz, dx, dy, dz, transmittance * be * inverse_pdf, SCATTER, w, sun,
                     max_orders, rr_start, bottom_radius, top_radius, h_step, density,
                     extinction, scattering, scatterers, phase, cdf, cos_grid, majorant, albedo,
-                    sun_angular_radius, n_sun_samples, sun_share, sun_probability, dens, column)
+                    sun_angular_radius, n_sun_samples, sun_share, sun_probability, peak,
+                    peak_scattering, dens, column, scratch)
             if hits[i]:
                 value += random_walk(
                     gx * scale, gy * scale, gz * scale, dx, dy, dz, ground_transmittance,
                     GROUND, w, sun, max_orders, rr_start, bottom_radius, top_radius, h_step,
                     density, extinction, scattering, scatterers, phase, cdf, cos_grid, majorant,
-                    albedo, sun_angular_radius, n_sun_samples, sun_share, sun_probability, dens,
-                    column)
+                    albedo, sun_angular_radius, n_sun_samples, sun_share, sun_probability, peak,
+                    peak_scattering, dens, column, scratch)
             value *= sun_irradiance[w]
             total += value
             total_sq += value * value

@@ -192,8 +192,8 @@ class CloudMonteCarlo:
             ray_directions = np.ascontiguousarray(directions[start:start + chunk])
             nodes = _monte_carlo_kernels.view_ray_nodes(
                 ray_origins, ray_directions, sun, self.n_view_intervals, p.bottom_radius_m,
-                p.top_radius_m, h_step, density, float(p.sun_angular_radius_rad),
-                self.n_sun_samples)
+                p.top_radius_m, h_step, density, np.max(density.T @ extinction, axis=1),
+                float(p.sun_angular_radius_rad), self.n_sun_samples)
             first = _monte_carlo_kernels.first_collision_tables(
                 nodes, sun, extinction, scattering, scatterers, phase, ray_directions)
             batch_sums, batch_squares = _cloud_monte_carlo_kernels.trace_rays(
