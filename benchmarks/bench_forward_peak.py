@@ -12,8 +12,13 @@ its standard error; the table reports median and 95th percentile of |tables / Mo
 per sun zenith (worst band), the aureole's worst |error|, and the Monte Carlo's median relative
 standard error beside them.
 
+With `--altitude A` the observer stands A metres up and looks up and down (view zenith 10, 40,
+70, 110, 140, 170 deg x the same azimuths): the sky above a cloud deck and the deck seen from
+above, e.g. `--atmospheres earth-overcast --altitude 3000 --suns 30 --bands 1
+--variants default`.
+
 Run: PYTHONPATH=src python benchmarks/bench_forward_peak.py [--paths 20000]
-     [--atmospheres earth mars-hg-dust mars-physical] [--suns 0 30 60 85]
+     [--atmospheres earth mars-hg-dust mars-physical] [--suns 0 30 60 85] [--altitude 0]
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ from skyscatter.transport.single_scattering import observer_position
 from skyscatter.transport.tables import TableResolution, precompute_tables
 
 VIEW_ZENITHS_DEG = (0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0)
+ABOVE_VIEW_ZENITHS_DEG = (10.0, 40.0, 70.0, 110.0, 140.0, 170.0)  # observers above the ground
 AZIMUTHS_DEG = (0.0, 45.0, 90.0, 135.0, 180.0)
 AUREOLE_DEG = (2.0, 5.0, 10.0, 20.0)
 
@@ -44,9 +50,10 @@ def atmosphere(name: str) -> Atmosphere:
     return mars_hg_dust() if name == "mars-hg-dust" else load_atmosphere(name)
 
 
-def directions(sun_zenith_deg: float) -> tuple[np.ndarray, np.ndarray]:
+def directions(sun_zenith_deg: float, altitude_m: float) -> tuple[np.ndarray, np.ndarray]:
     """(view directions (n, 3), aureole mask (n,)) in the frame with the sun at azimuth 0."""
-    z, a = np.meshgrid(VIEW_ZENITHS_DEG, AZIMUTHS_DEG, indexing="ij")
+    zeniths = ABOVE_VIEW_ZENITHS_DEG if altitude_m > 0.0 else VIEW_ZENITHS_DEG
+    z, a = np.meshgrid(zeniths, AZIMUTHS_DEG, indexing="ij")
     keep = (z > 0.0) | (a == 0.0)
     sky = local_frame_directions(np.radians(z[keep]), np.radians(a[keep]))
     sun = local_frame_directions(np.radians(sun_zenith_deg), 0.0)
@@ -63,19 +70,21 @@ def directions(sun_zenith_deg: float) -> tuple[np.ndarray, np.ndarray]:
     return views, mask
 
 
-def monte_carlo(profile, name: str, sun_zenith_deg: float, paths: int, cache: Path
-                ) -> tuple[np.ndarray, np.ndarray]:
+def monte_carlo(profile, name: str, sun_zenith_deg: float, paths: int, cache: Path,
+                altitude_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Monte Carlo mean and standard error (n, n_wl), computed once per case into `cache`."""
-    path = cache / f"mc_{name}_sz{sun_zenith_deg:g}_p{paths}.npz"
+    height = f"_z{altitude_m:g}" if altitude_m > 0.0 else ""
+    path = cache / (f"mc_{name}_sz{sun_zenith_deg:g}_p{paths}{height}"
+                    f"_w{profile.n_wavelengths}.npz")
     if path.exists():
         data = np.load(path)
         return data["mean"], data["error"]
-    views, _ = directions(sun_zenith_deg)
+    views, _ = directions(sun_zenith_deg, altitude_m)
     sun = local_frame_directions(np.radians(sun_zenith_deg), 0.0)
     start = time.perf_counter()
     solver = MonteCarloSolver(profile, n_samples=paths, seed=17)
-    mean, error = solver.sky_radiance_with_error(observer_position(0.0, profile.bottom_radius_m),
-                                                 views, sun)
+    mean, error = solver.sky_radiance_with_error(
+        observer_position(altitude_m, profile.bottom_radius_m), views, sun)
     print(f"  Monte Carlo {name} sun {sun_zenith_deg:g}: {time.perf_counter() - start:.0f} s")
     cache.mkdir(parents=True, exist_ok=True)
     np.savez(path, mean=mean, error=error)
@@ -101,6 +110,8 @@ def main() -> None:
     parser.add_argument("--variants", nargs="+", default=["0", "default"],
                         help="truncation angles [deg] to compare; 0: none (before), "
                              "default: TableResolution's")
+    parser.add_argument("--altitude", type=float, default=0.0,
+                        help="the observer's altitude [m]; above 0 it looks down too")
     args = parser.parse_args()
     wavelengths = wavelength_grid(args.bands)
     rows = []
@@ -115,18 +126,25 @@ def main() -> None:
             print(f"{name}: tables ({variant}) {seconds:.1f} s, process peak so far {peak:.0f} MB")
             solvers[variant] = solver
         for sun_zenith in args.suns:
-            mean, error = monte_carlo(profile, name, sun_zenith, args.paths, args.cache)
-            views, aureole = directions(sun_zenith)
+            mean, error = monte_carlo(profile, name, sun_zenith, args.paths, args.cache,
+                                      args.altitude)
+            views, aureole = directions(sun_zenith, args.altitude)
             sun = local_frame_directions(np.radians(sun_zenith), 0.0)
-            origin = observer_position(0.0, profile.bottom_radius_m)
-            noise = np.nanmedian(error / mean, axis=0).max()
+            origin = observer_position(args.altitude, profile.bottom_radius_m)
+            downward = views[:, 2] < 0.0
+            looks = [("up", ~downward), ("down", downward)] if args.altitude > 0.0 else [
+                ("", np.ones(len(views), dtype=bool))]
             for variant, solver in solvers.items():
                 ratio = solver.sky_radiance(origin, views, sun) / mean - 1.0
-                sky = np.abs(ratio[~aureole])
-                rows.append((name, sun_zenith, variant, np.median(sky, axis=0).max(),
-                             np.percentile(sky, 95, axis=0).max(), np.mean(ratio[~aureole]),
-                             np.abs(ratio[aureole]).max(), noise,
-                             np.mean(np.abs(ratio) <= 2.0 * error / mean)))
+                for look, chosen in looks:
+                    sky = np.abs(ratio[chosen & ~aureole])
+                    rows.append((name + (f", looking {look}" if look else ""), sun_zenith,
+                                 variant, np.median(sky, axis=0).max(),
+                                 np.percentile(sky, 95, axis=0).max(),
+                                 np.mean(ratio[chosen & ~aureole]),
+                                 np.abs(ratio[aureole]).max(),
+                                 np.nanmedian(error[chosen] / mean[chosen], axis=0).max(),
+                                 np.mean(np.abs(ratio[chosen]) <= 2.0 * (error / mean)[chosen])))
     print("\n| atmosphere | sun zenith | truncation | median | 95th pct | mean bias "
           "| aureole max | MC noise | within 2 SE |")
     print("|---|---|---|---|---|---|---|---|---|")

@@ -106,12 +106,28 @@ def legendre_moments(phase: PhaseFunction, wavelengths_nm: np.ndarray, n_moments
     return 2.0 * np.pi * (basis * weight[:, None]).T @ p
 
 
+def _layer_edges(density: np.ndarray) -> np.ndarray:
+    """Level indices where a constituent that is absent somewhere in the column begins and
+    ends: the last empty level below its matter and the first empty level above it."""
+    edges = []
+    for row in np.asarray(density, dtype=np.float64):
+        present = np.flatnonzero(row > 0.0)
+        if present.size == 0 or present.size == row.size:
+            continue
+        edges += [max(present[0] - 1, 0), min(present[-1] + 1, row.size - 1)]
+    return np.array(edges, dtype=int)
+
+
 def _layer_boundaries(profile: OpticalProfile, n_layers: int) -> np.ndarray:
     """Indices into `profile.altitudes_m` of the layer boundaries, ground (0) to top.
 
     Half the boundaries split the extinction column (summed over wavelengths) into equal parts,
     the other half are equally spaced in altitude, so that layers follow both the dense air
-    and aerosol near the ground and the ozone layer higher up."""
+    and aerosol near the ground and the ozone layer higher up. The base and top of every
+    constituent that fills only part of the column (a cloud deck, a fog) are boundaries too:
+    otherwise a layer reaching from inside a deck of optical depth 20 to 3.3 km spread the
+    deck's top droplets over the clear air above it (DISORT's sky above `earth-overcast` came
+    out 1.4-2.5 x too bright)."""
     z = profile.altitudes_m
     extinction = (profile.density.T @ profile.extinction_per_density).sum(axis=1)
     column = np.concatenate([[0.0], np.cumsum(0.5 * (extinction[1:] + extinction[:-1])
@@ -119,7 +135,7 @@ def _layer_boundaries(profile: OpticalProfile, n_layers: int) -> np.ndarray:
     n_tau = n_layers // 2
     by_tau = np.searchsorted(column, np.linspace(0.0, column[-1], n_tau + 1)[1:-1])
     by_z = np.rint(np.linspace(0, z.size - 1, n_layers - n_tau + 1)).astype(int)
-    levels = np.unique(np.concatenate([by_tau, by_z]))
+    levels = np.unique(np.concatenate([by_tau, by_z, _layer_edges(profile.density)]))
     if levels.size < 2:
         raise InputError("the profile has too few altitude levels for plane-parallel layers",
                          key="n_layers", value=n_layers)
