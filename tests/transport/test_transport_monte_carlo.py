@@ -231,7 +231,7 @@ def test_the_light_under_a_thick_droplet_deck_matches_disort():
 
 def test_the_view_ray_nodes_hold_little_optical_depth_across_a_deck():
     # The first collision's transmittance is linear in optical depth between the view ray's
-    # nodes: no interval may hold more than VIEW_INTERVAL_DEPTH (0.05) of the deck's 10.
+    # nodes: no interval may hold more than INTERVAL_DEPTH (0.05) of the deck's 10.
     profile = _droplet_deck(10.0)
     mc = MonteCarloSolver(profile, n_samples=2)
     views = local_frame_directions(np.radians([0.0, 40.0, 80.0]), 0.0)
@@ -242,7 +242,7 @@ def test_the_view_ray_nodes_hold_little_optical_depth_across_a_deck():
     for i in range(3):
         depth = view_column[i, :count[i]] @ profile.extinction_per_density[:, 0]
         assert depth[-1] > 10.0  # the whole deck, obliquely
-        assert np.max(np.diff(depth)) <= _monte_carlo_kernels.VIEW_INTERVAL_DEPTH * 1.0001
+        assert np.max(np.diff(depth)) <= _monte_carlo_kernels.INTERVAL_DEPTH * 1.0001
         assert np.all(np.diff(t_nodes[i, :count[i]]) > 0.0)
 
 

@@ -280,7 +280,7 @@ def sun_transmittance(x, y, z, w, sun, air, cloud, regions, light, work):
     if clouds <= 0.0:
         return 0.0
     return clouds * sun_attenuation(x, y, z, sun, w, bottom_radius, top_radius, air[0], air[1],
-                                    air[2], sun_radius, n_sun_samples, work[1])
+                                    air[2], air[8], sun_radius, n_sun_samples, work[1])
 
 
 @njit(cache=True)

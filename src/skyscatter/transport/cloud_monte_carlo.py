@@ -192,8 +192,8 @@ class CloudMonteCarlo:
             ray_directions = np.ascontiguousarray(directions[start:start + chunk])
             nodes = _monte_carlo_kernels.view_ray_nodes(
                 ray_origins, ray_directions, sun, self.n_view_intervals, p.bottom_radius_m,
-                p.top_radius_m, h_step, density, np.max(density.T @ extinction, axis=1),
-                float(p.sun_angular_radius_rad), self.n_sun_samples)
+                p.top_radius_m, h_step, density, self._air[8], float(p.sun_angular_radius_rad),
+                self.n_sun_samples)
             first = _monte_carlo_kernels.first_collision_tables(
                 nodes, sun, extinction, scattering, scatterers, phase, ray_directions)
             batch_sums, batch_squares = _cloud_monte_carlo_kernels.trace_rays(
@@ -259,8 +259,8 @@ def _air_arrays(profile: OpticalProfile, n_angle: int) -> tuple:
     """The air for the kernels, as `MonteCarloSolver` prepares it: (h_step [m], density
     (n_c, n_z), extinction and scattering per density (n_c, n_wl) (zero for the constituents
     that do not scatter), the scatterers' indices (n_s,), their phase tables (n_s, n_wl,
-    n_angle) [sr^-1] at theta = pi i / (n_angle - 1), the tables' cumulative proposal masses
-    and cos(theta_i))."""
+    n_angle) [sr^-1] at theta = pi i / (n_angle - 1), the tables' cumulative proposal masses,
+    cos(theta_i) and the levels' largest extinction over the bands (n_z,) [m^-1])."""
     scatterers = np.array(scattering_constituents(profile), dtype=np.int64)
     phase = sample_phase_functions(profile, tuple(scatterers), n_angle)
     if scatterers.size == 0:  # nothing scatters: one dummy isotropic row
@@ -270,11 +270,12 @@ def _air_arrays(profile: OpticalProfile, n_angle: int) -> tuple:
     scattering = np.asarray(profile.scattering_per_density, dtype=np.float64).copy()
     scattering[np.setdiff1d(np.arange(scattering.shape[0]),
                             scattering_constituents(profile))] = 0.0
-    return (float(profile.altitudes_m[1] - profile.altitudes_m[0]),
-            np.ascontiguousarray(profile.density, dtype=np.float64),
-            np.ascontiguousarray(profile.extinction_per_density, dtype=np.float64),
+    density = np.ascontiguousarray(profile.density, dtype=np.float64)
+    extinction = np.ascontiguousarray(profile.extinction_per_density, dtype=np.float64)
+    return (float(profile.altitudes_m[1] - profile.altitudes_m[0]), density, extinction,
             np.ascontiguousarray(scattering), scatterers, phase,
-            _monte_carlo_kernels.phase_cdf(phase), np.cos(np.linspace(0.0, np.pi, n_angle)))
+            _monte_carlo_kernels.phase_cdf(phase), np.cos(np.linspace(0.0, np.pi, n_angle)),
+            np.ascontiguousarray(np.max(density.T @ extinction, axis=1)))
 
 
 def _cloud_arrays(field: CloudField) -> tuple:

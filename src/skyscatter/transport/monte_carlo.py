@@ -46,7 +46,8 @@ with the collision estimator. Each path has two branches:
 
 Forward peaks (issue 17). Each phase function is split at `peak_truncation_deg` (theta_c) into
 a smooth part p*_c, equal to p_c beyond theta_c and clipped to p_c(theta_c) inside it, and a
-peak P_c = p_c - p*_c (`phase_truncation.truncate_forward_peak`). Sunlight that reaches a point
+peak P_c = p_c - p*_c (the clip of `phase_truncation.truncate_forward_peak`; the kernels use
+p* = p - P, so the two parts sum to p exactly whatever the clip). Sunlight that reaches a point
 after scatterings in the peaks alone (the forward-scattered beam that delta-M scaling counts
 as direct; in a cloud deck of optical depth 20 it carries most of the light in the top
 layers) would otherwise be found only by paths whose direction happens to lie within a
@@ -59,7 +60,8 @@ before the sun (a scattering through p* or a ground reflection):
 - at each collision and ground reflection an aureole walk (`aureole_light`) estimates the
   light arriving there by one or more peak scatterings, weighted by that event's smooth
   scattering: a direction from the sun-centred proposal, then scatterings in the peaks only
-  (directions from p weighted by P / p), each with a next-event estimate through P. The walk
+  (directions half from p about the walk's direction, half from the sun-centred proposal,
+  weighted by P / q), each with a next-event estimate through P. The walk
   runs with probability min(1, (T' - T) / 0.01), T' - T = T_sun (exp(tau_peak) - 1) the
   forward-scattered beam of delta-M at the point, and is divided by it (unbiased, and rarely
   run in clear air or deep in a thick layer, where the beam is weak).
@@ -68,19 +70,20 @@ Measured against DISORT (delta-M with 64 streams, 512 moments) for water droplet
 depth 10 (tests/transport/test_transport_monte_carlo.py; docs/validation.md). theta_c = 0
 gives the plain estimator.
 
-The first collision's table: the view ray's intervals (`n_view_intervals`, dense at the lowest
-point) are each cut into equal parts holding at most 0.05 optical depth
-(`_monte_carlo_kernels.interval_splits`), as the transmittance is interpolated linearly in
-optical depth between nodes: 256 intervals put 70 m and 2.8 optical depths of a stratus deck
-into one interval, whose trapezoid column across the deck's edges made the radiance 25 % too
-dark 40 deg from the zenith.
+The view ray's intervals (`n_view_intervals`, dense at the lowest point) and the sun's
+(`n_sun_samples`) are each cut into equal parts holding at most 0.05 optical depth
+(`_monte_carlo_kernels.interval_splits`): 256 view intervals put 70 m and 2.8 optical depths
+of a stratus deck into one interval, whose trapezoid column across the deck's edges made the
+radiance 25 % too dark 40 deg from the zenith, and 128 sun intervals crossed the deck's top in
+30-50 m steps from inside it (T_sun 5-13 % too small, the light under and above the deck 4-8 %).
 
 T_sun is ray marched to the top of the atmosphere with `n_sun_samples` intervals (dense at the
-lowest point, trapezoid rule; `_kernels.columns_along_segment`), and T along the view ray from
-the same rule on `n_view_intervals` intervals: the only discretisations, 2e-4 in optical depth
-for the zenith and 2e-3 for a sun 5 deg high at the defaults (measured against 20 000
-intervals). The sun is a point source unless the profile gives it a radius,
-in which case V is the part of its disk above the geometric horizon
+lowest point, trapezoid rule, cut as above; `_monte_carlo_kernels.refined_columns`), and T
+along the view ray from the same rule on `n_view_intervals` intervals: the only
+discretisations, 2e-4 in optical depth for the zenith and 2e-3 for a sun 5 deg high at the
+defaults in clear air (measured against 20 000 intervals), T_sun within 0.25 % of 16 384
+intervals inside the top of `earth-overcast`'s deck. The sun is a point source unless the
+profile gives it a radius, in which case V is the part of its disk above the geometric horizon
 (`geometry.sun_visible_fraction`) and a sun below the horizon is attenuated like the horizon
 ray, as in the other solvers; the sun disk's own radiance is not included. Phase functions are
 tabulated at `n_angle` scattering angles (`scatterers.sample_phase_functions`) and interpolated
@@ -91,14 +94,13 @@ more paths, predicted from their variance, in up to `ADAPTIVE_ROUNDS` rounds and
 `max_samples` (stopping on the estimated error biases the mean by a small fraction of a
 standard error; the rounds start from `n_samples` paths so that the estimate is settled).
 
-Noise (docs/validation.md, benchmarks/bench_monte_carlo.py; 16 rays x 3 bands, 16 seeds of
-4000 paths against one run of 64 000): `mars-physical` (Mie dust) median relative standard
-error 1.1 % (sun zenith 0 and 30), 1.6 % (60), 3.3 % (85), 95-96 % of the seeds within 2
-standard errors of the long run (before, with plain phase sampling: 2.6, 3.2, 5.3, 12.9 % and
-83-92 %); the clear sky unchanged. Weights p / q grow by up to
-1 / (1 - eps) per order, so in optically thick layers the sampling gains nothing (measured
-with a homogeneous shell of tau 5, HG g 0.9, sun zenith 60: the same noise, and 82 % of 10
-seeds within 2 standard errors against 100 % with eps = 0): use `sun_sampling_probability=0`.
+Noise (docs/validation.md, benchmarks/bench_monte_carlo.py; 16 rays x 3 bands, 4 seeds of
+2000 paths against one run of 16 000): `mars-physical` (Mie dust) median relative standard
+error 1.3, 1.4, 1.9, 3.6 % at sun zenith 0, 30, 60, 85 (with eps = 0 alone 1.3, 1.4, 2.2,
+4.6 %; before the aureole walks 1.5, 1.6, 2.2, 4.7 %, and with plain sampling 3.0, 4.0, 6.5,
+15.4 %), 93-95 % of the seeds within 2 standard errors of the long run. Thick layers
+(benchmarks/compare_monte_carlo_thick.py): droplet slabs and the `earth-overcast` deck within
+two standard errors of DISORT, 1-3 % with 20 000 paths.
 """
 
 from __future__ import annotations
@@ -332,7 +334,8 @@ class MonteCarloSolver:
                 ray_origins, ray_directions, unit_offset + start * units_per_ray, sun, n_paths,
                 self.batch, self.seed, self.max_orders, self.rr_start, p.bottom_radius_m,
                 p.top_radius_m, self._h_step, self._density, self._extinction,
-                self._scattering, self._scatterers, self._phase, self._cdf, self._majorant,
+                self._level_extinction, self._scattering, self._scatterers, self._phase,
+                self._cdf, self._majorant,
                 np.ascontiguousarray(p.toa_irradiance, dtype=np.float64),
                 np.ascontiguousarray(p.ground_albedo, dtype=np.float64),
                 float(p.sun_angular_radius_rad), self.n_sun_samples, self._sun_share,
