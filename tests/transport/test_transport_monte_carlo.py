@@ -238,7 +238,7 @@ def test_the_view_ray_nodes_hold_little_optical_depth_across_a_deck():
     count, _, t_nodes, view_column, *_ = _monte_carlo_kernels.view_ray_nodes(
         np.tile(GROUND, (3, 1)), views, np.array([0.0, 0.0, 1.0]), mc.n_view_intervals,
         profile.bottom_radius_m, profile.top_radius_m, 12.5, mc._density,
-        mc._level_extinction, 0.0, 8)
+        mc._extinction_maxima, 0.0, 8)
     for i in range(3):
         depth = view_column[i, :count[i]] @ profile.extinction_per_density[:, 0]
         assert depth[-1] > 10.0  # the whole deck, obliquely

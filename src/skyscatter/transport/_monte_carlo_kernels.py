@@ -161,11 +161,11 @@ def rotate(dx, dy, dz, mu, phi):
 
 
 @njit(cache=True)
-def refined_columns(r, mu, t_end, n_samples, bottom_radius, h_step, density, level_extinction,
+def refined_columns(r, mu, t_end, n_samples, bottom_radius, h_step, density, extinction_maxima,
                     out):
     """Column densities [density x m] of each constituent along the ray (r, mu) from 0 to
     t_end, into out (n_c,): the nodes of `_kernels.columns_along_segment` (dense at the lowest
-    point), each interval cut into `interval_splits` equal parts, trapezoid rule on each. With
+    point), each interval cut into `altitude_splits` equal parts, trapezoid rule on each. With
     128 nodes alone the sun's columns from inside a deck of optical depth 20 crossed its top
     edge in intervals of 30-50 m: T_sun 5-13 % too small there."""
     n_c = density.shape[0]
@@ -177,30 +177,33 @@ def refined_columns(r, mu, t_end, n_samples, bottom_radius, h_step, density, lev
     total = sample_total(m1, m2, n_samples)
     previous = np.empty(n_c)
     current = np.empty(n_c)
-    density_at(r - bottom_radius, h_step, density, previous)
+    z_previous = r - bottom_radius
+    density_at(z_previous, h_step, density, previous)
     t_previous = 0.0
     for j in range(1, total):
         t = sample_distance(j, r, mu, 0.0, t_end, n_samples, t_split, m1, m2)
-        parts = interval_splits(r, mu, t_previous, t, bottom_radius, h_step, level_extinction)
+        z = radius_along(r, mu, t) - bottom_radius
+        parts = altitude_splits(z_previous, z, t - t_previous, h_step, extinction_maxima)
         step = (t - t_previous) / parts
         for k in range(1, parts + 1):
-            density_at(radius_along(r, mu, t_previous + step * k) - bottom_radius, h_step,
-                       density, current)
+            height = z if k == parts else radius_along(r, mu, t_previous + step * k) - bottom_radius
+            density_at(height, h_step, density, current)
             for c in range(n_c):
                 out[c] += 0.5 * (previous[c] + current[c]) * step
                 previous[c] = current[c]
         t_previous = t
+        z_previous = z
 
 
 @njit(cache=True)
-def sun_columns(px, py, pz, sun, bottom_radius, top_radius, h_step, density, level_extinction,
+def sun_columns(px, py, pz, sun, bottom_radius, top_radius, h_step, density, extinction_maxima,
                 sun_angular_radius, n_sun_samples, column):
     """Visible part of the sun disk V [-] at the point p (`geometry.sun_visible_fraction`; a
     point sun when the radius is 0), with the column densities towards the sun to the top of
-    the atmosphere in `column` (n_c,), ray marched (`refined_columns`, the levels' largest
-    extinction `level_extinction` (n_z,) [m^-1]). As in the other solvers a sun below the
-    horizon is attenuated like the horizon ray. Returns 0 (and leaves `column` alone) where
-    the sun is hidden."""
+    the atmosphere in `column` (n_c,), ray marched (`refined_columns`; `extinction_maxima`
+    as `extinction_maxima` returns). As in the other solvers a sun below the horizon is
+    attenuated like the horizon ray. Returns 0 (and leaves `column` alone) where the sun is
+    hidden."""
     r = math.sqrt(px * px + py * py + pz * pz)
     mu_s = (px * sun[0] + py * sun[1] + pz * sun[2]) / r
     visible = sun_visible_fraction(r, mu_s, bottom_radius, sun_angular_radius)
@@ -210,7 +213,7 @@ def sun_columns(px, py, pz, sun, bottom_radius, top_radius, h_step, density, lev
     mu = max(mu_s, horizon_cos_zenith(r, bottom_radius))
     t_top = distance_to_sphere(r, mu, top_radius, True)
     refined_columns(r, mu, t_top, n_sun_samples, bottom_radius, h_step, density,
-                    level_extinction, column)
+                    extinction_maxima, column)
     return visible
 
 
@@ -225,11 +228,11 @@ def optical_depth(extinction, w, column):
 
 @njit(cache=True)
 def sun_attenuation(px, py, pz, sun, w, bottom_radius, top_radius, h_step, density,
-                    extinction, level_extinction, sun_angular_radius, n_sun_samples, column):
+                    extinction, extinction_maxima, sun_angular_radius, n_sun_samples, column):
     """T_sun V at the point p [-]: transmittance to the top of the atmosphere towards the sun
     times the visible part of its disk (`sun_columns`)."""
     visible = sun_columns(px, py, pz, sun, bottom_radius, top_radius, h_step, density,
-                          level_extinction, sun_angular_radius, n_sun_samples, column)
+                          extinction_maxima, sun_angular_radius, n_sun_samples, column)
     if visible <= 0.0:
         return 0.0
     return math.exp(-optical_depth(extinction, w, column)) * visible
@@ -395,7 +398,7 @@ def aureole_share(attenuation, w, peak_scattering, column):
 
 @njit(cache=True)
 def aureole_light(ox, oy, oz, dx, dy, dz, root_phase, w, sun, max_orders, bottom_radius,
-                  top_radius, h_step, density, extinction, level_extinction, scattering,
+                  top_radius, h_step, density, extinction, extinction_maxima, scattering,
                   scatterers, phase, cdf, cos_grid, majorant, sun_angular_radius, n_sun_samples,
                   sun_share, peak, scratch):
     """Sunlight [sr^-1 per unit sun irradiance] that reaches o after one or more scatterings in
@@ -439,7 +442,7 @@ def aureole_light(ox, oy, oz, dx, dy, dz, root_phase, w, sun, max_orders, bottom
             return result
         weight *= bs / be
         attenuation = sun_attenuation(ox, oy, oz, sun, w, bottom_radius, top_radius, h_step,
-                                      density, extinction, level_extinction,
+                                      density, extinction, extinction_maxima,
                                       sun_angular_radius, n_sun_samples, column)
         if attenuation > 0.0:
             nu_sun = nx * sun[0] + ny * sun[1] + nz * sun[2]
@@ -458,7 +461,7 @@ def aureole_light(ox, oy, oz, dx, dy, dz, root_phase, w, sun, max_orders, bottom
 
 @njit(cache=True)
 def aureole_estimate(ox, oy, oz, dx, dy, dz, root_phase, attenuation, w, sun, max_orders,
-                     bottom_radius, top_radius, h_step, density, extinction, level_extinction,
+                     bottom_radius, top_radius, h_step, density, extinction, extinction_maxima,
                      scattering, scatterers, phase, cdf, cos_grid, majorant, sun_angular_radius,
                      n_sun_samples, sun_share, peak, peak_scattering, column, scratch):
     """`aureole_light` at o with at most `max_orders` peak scatterings, run with probability
@@ -474,14 +477,14 @@ def aureole_estimate(ox, oy, oz, dx, dy, dz, root_phase, attenuation, w, sun, ma
     if np.random.random() >= chance:
         return 0.0
     return aureole_light(ox, oy, oz, dx, dy, dz, root_phase, w, sun, max_orders, bottom_radius,
-                         top_radius, h_step, density, extinction, level_extinction, scattering,
+                         top_radius, h_step, density, extinction, extinction_maxima, scattering,
                          scatterers, phase, cdf, cos_grid, majorant, sun_angular_radius,
                          n_sun_samples, sun_share, peak, scratch) / chance
 
 
 @njit(cache=True)
 def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_start,
-                bottom_radius, top_radius, h_step, density, extinction, level_extinction,
+                bottom_radius, top_radius, h_step, density, extinction, extinction_maxima,
                 scattering, scatterers, phase, cdf, cos_grid, majorant, albedo,
                 sun_angular_radius, n_sun_samples, sun_share, sun_probability, peak,
                 peak_scattering, dens, column, scratch):
@@ -522,7 +525,7 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
                 return result
             weight *= bs / be
             attenuation = sun_attenuation(ox, oy, oz, sun, w, bottom_radius, top_radius,
-                                          h_step, density, extinction, level_extinction,
+                                          h_step, density, extinction, extinction_maxima,
                                           sun_angular_radius, n_sun_samples, column)
             if attenuation > 0.0:
                 nu_sun = dx * sun[0] + dy * sun[1] + dz * sun[2]
@@ -535,7 +538,7 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
                     scratch[2, c] = dens[c]
                 result += weight * aureole_estimate(
                     ox, oy, oz, dx, dy, dz, 0, attenuation, w, sun, max_orders - order - 1,
-                    bottom_radius, top_radius, h_step, density, extinction, level_extinction,
+                    bottom_radius, top_radius, h_step, density, extinction, extinction_maxima,
                     scattering, scatterers, phase, cdf, cos_grid, majorant, sun_angular_radius,
                     n_sun_samples, sun_share, peak, peak_scattering, column, scratch)
             order += 1
@@ -562,13 +565,13 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
         mu_s = nx * sun[0] + ny * sun[1] + nz * sun[2]
         if mu_s > 0.0:
             attenuation = sun_attenuation(ox, oy, oz, sun, w, bottom_radius, top_radius,
-                                          h_step, density, extinction, level_extinction,
+                                          h_step, density, extinction, extinction_maxima,
                                           sun_angular_radius, n_sun_samples, column)
             result += weight * albedo[w] / math.pi * mu_s * attenuation
             if peaked:
                 result += weight * albedo[w] * aureole_estimate(
                     ox, oy, oz, dx, dy, dz, 1, attenuation, w, sun, max_orders - order - 1,
-                    bottom_radius, top_radius, h_step, density, extinction, level_extinction,
+                    bottom_radius, top_radius, h_step, density, extinction, extinction_maxima,
                     scattering, scatterers, phase, cdf, cos_grid, majorant, sun_angular_radius,
                     n_sun_samples, sun_share, peak, peak_scattering, column, scratch)
         smooth = True
@@ -590,26 +593,62 @@ def random_walk(ox, oy, oz, dx, dy, dz, weight, state, w, sun, max_orders, rr_st
         state = FLIGHT
 
 
+def extinction_maxima(level_extinction: np.ndarray) -> np.ndarray:
+    """Tables (1 + n_log, n_z) of the levels' extinction `level_extinction` (n_z,) [m^-1] for
+    `altitude_splits`: row 0 holds the largest value at or above each level; row 1 + j the
+    largest over levels i .. i + 2^j - 1 (a sparse table: the largest over any range of levels
+    in two lookups, `largest_extinction`; Bender & Farach-Colton 2000, "The LCA problem
+    revisited", LATIN 2000, doi:10.1007/10719839_9)."""
+    rows = [np.asarray(level_extinction, dtype=np.float64)]
+    while 2 ** len(rows) <= rows[0].size:
+        previous, half = rows[-1], 2 ** (len(rows) - 1)
+        row = previous.copy()
+        row[:-half] = np.maximum(previous[:-half], previous[half:])
+        rows.append(row)
+    above = np.maximum.accumulate(rows[0][::-1])[::-1]
+    return np.ascontiguousarray(np.stack([above] + rows))
+
+
 @njit(cache=True)
-def interval_splits(r, mu, t_a, t_b, bottom_radius, h_step, level_extinction):
-    """Equal parts into which the view-ray interval [t_a, t_b] of the ray (r, mu) is cut so that
-    none holds more than INTERVAL_DEPTH of optical depth, bounded by the largest level
-    extinction `level_extinction` (n_z,) [m^-1] over the interval's altitudes (its ends: the
-    lowest point of a ray is a node); at most MAX_INTERVAL_SPLITS."""
-    z_a = radius_along(r, mu, t_a) - bottom_radius
-    z_b = radius_along(r, mu, t_b) - bottom_radius
-    n_z = level_extinction.shape[0]
+def largest_extinction(maxima, k_low, k_high):
+    """The largest extinction [m^-1] over levels k_low .. k_high of the tables `maxima`
+    (`extinction_maxima`)."""
+    j = 0
+    span = (k_high - k_low + 1) >> 1
+    while span > 0:
+        j += 1
+        span >>= 1
+    return max(maxima[1 + j, k_low], maxima[1 + j, k_high - (1 << j) + 1])
+
+
+@njit(cache=True)
+def altitude_splits(z_a, z_b, length, h_step, extinction_maxima):
+    """Equal parts into which an interval of `length` [m] between the altitudes z_a and z_b
+    (monotonic along it: the lowest point of a ray is a node) is cut so that none holds more
+    than INTERVAL_DEPTH of optical depth, bounded by the largest level extinction over those
+    altitudes (`largest_extinction`); at most MAX_INTERVAL_SPLITS."""
+    n_z = extinction_maxima.shape[1]
     k_low = min(n_z - 1, max(0, int(min(z_a, z_b) / h_step)))
+    if extinction_maxima[0, k_low] * length <= INTERVAL_DEPTH:
+        return 1  # not even the largest extinction above the interval's bottom fills it
     k_high = min(n_z - 1, max(0, int(max(z_a, z_b) / h_step) + 1))
-    beta = 0.0
-    for k in range(k_low, k_high + 1):
-        beta = max(beta, level_extinction[k])
-    return min(MAX_INTERVAL_SPLITS, max(1, int(math.ceil(beta * (t_b - t_a) / INTERVAL_DEPTH))))
+    depth = largest_extinction(extinction_maxima, k_low, k_high) * length
+    if depth <= INTERVAL_DEPTH:
+        return 1
+    return min(MAX_INTERVAL_SPLITS, int(math.ceil(depth / INTERVAL_DEPTH)))
+
+
+@njit(cache=True)
+def interval_splits(r, mu, t_a, t_b, bottom_radius, h_step, extinction_maxima):
+    """`altitude_splits` of the interval [t_a, t_b] of the ray (r, mu)."""
+    return altitude_splits(radius_along(r, mu, t_a) - bottom_radius,
+                           radius_along(r, mu, t_b) - bottom_radius, t_b - t_a, h_step,
+                           extinction_maxima)
 
 
 @njit(cache=True)
 def view_ray_distances(ox, oy, oz, dx, dy, dz, n_intervals, bottom_radius, top_radius, h_step,
-                       level_extinction, out):
+                       extinction_maxima, out):
     """(number of nodes, hits_ground, t_end [m]) of the view ray from o along d: the nodes of
     `_kernels.sample_distance` (dense at the lowest point), each interval cut into
     `interval_splits` equal parts, written into out when it is long enough (else only
@@ -624,7 +663,7 @@ def view_ray_distances(ox, oy, oz, dx, dy, dz, n_intervals, bottom_radius, top_r
     t_previous = t_start
     for j in range(total):
         t = sample_distance(j, r, mu, t_start, t_end, n_intervals, t_split, m1, m2)
-        parts = (interval_splits(r, mu, t_previous, t, bottom_radius, h_step, level_extinction)
+        parts = (interval_splits(r, mu, t_previous, t, bottom_radius, h_step, extinction_maxima)
                  if j > 0 else 1)
         for k in range(1, parts + 1):
             if n < out.shape[0]:
@@ -636,7 +675,7 @@ def view_ray_distances(ox, oy, oz, dx, dy, dz, n_intervals, bottom_radius, top_r
 
 @njit(parallel=True, cache=True)
 def view_ray_nodes(origins, directions, sun, n_intervals, bottom_radius, top_radius, h_step,
-                   density, level_extinction, sun_angular_radius, n_sun_samples):
+                   density, extinction_maxima, sun_angular_radius, n_sun_samples):
     """What the first collision along each view ray is drawn from, for all wavelengths at once
     (column densities do not depend on wavelength). Nodes t_j along the part of the ray inside
     the atmosphere (`view_ray_distances`), returned as (count (n_ray,), hits_ground (n_ray,),
@@ -653,7 +692,7 @@ def view_ray_nodes(origins, directions, sun, n_intervals, bottom_radius, top_rad
         count[i], hits[i], ends[i] = view_ray_distances(
             origins[i, 0], origins[i, 1], origins[i, 2], directions[i, 0], directions[i, 1],
             directions[i, 2], n_intervals, bottom_radius, top_radius, h_step,
-            level_extinction, np.empty(0))
+            extinction_maxima, np.empty(0))
     n_max = max(2, int(count.max()) if n_ray > 0 else 2)
     t_nodes = np.zeros((n_ray, n_max))
     view_column = np.zeros((n_ray, n_max, n_c))
@@ -667,7 +706,7 @@ def view_ray_nodes(origins, directions, sun, n_intervals, bottom_radius, top_rad
         if count[i] == 0:
             continue
         view_ray_distances(ox, oy, oz, dx, dy, dz, n_intervals, bottom_radius, top_radius,
-                           h_step, level_extinction, t_nodes[i])
+                           h_step, extinction_maxima, t_nodes[i])
         dens = np.empty(n_c)
         col = np.empty(n_c)
         for j in range(count[i]):
@@ -681,7 +720,7 @@ def view_ray_nodes(origins, directions, sun, n_intervals, bottom_radius, top_rad
                     view_column[i, j, c] = (view_column[i, j - 1, c] + 0.5 * (
                         node_density[i, j - 1, c] + dens[c]) * (t - t_nodes[i, j - 1]))
             visible[i, j] = sun_columns(px, py, pz, sun, bottom_radius, top_radius, h_step,
-                                        density, level_extinction, sun_angular_radius,
+                                        density, extinction_maxima, sun_angular_radius,
                                         n_sun_samples, col)
             if visible[i, j] > 0.0:
                 for c in range(n_c):
@@ -765,7 +804,7 @@ def first_collision(n, cdf, tau, t_nodes, u):
 
 @njit(parallel=True, cache=True)
 def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_orders, rr_start,
-               bottom_radius, top_radius, h_step, density, extinction, level_extinction,
+               bottom_radius, top_radius, h_step, density, extinction, extinction_maxima,
                scattering, scatterers,
                phase, cdf, majorant, sun_irradiance, albedo, sun_angular_radius,
                n_sun_samples, sun_share, sun_probability, peak, peak_scattering, nodes, first):
@@ -825,7 +864,7 @@ def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_
                 value += random_walk(
                     px, py, pz, dx, dy, dz, transmittance * be * inverse_pdf, SCATTER, w, sun,
                     max_orders, rr_start, bottom_radius, top_radius, h_step, density,
-                    extinction, level_extinction, scattering, scatterers, phase, cdf, cos_grid,
+                    extinction, extinction_maxima, scattering, scatterers, phase, cdf, cos_grid,
                     majorant, albedo,
                     sun_angular_radius, n_sun_samples, sun_share, sun_probability, peak,
                     peak_scattering, dens, column, scratch)
@@ -833,7 +872,7 @@ def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_
                 value += random_walk(
                     gx * scale, gy * scale, gz * scale, dx, dy, dz, ground_transmittance,
                     GROUND, w, sun, max_orders, rr_start, bottom_radius, top_radius, h_step,
-                    density, extinction, level_extinction, scattering, scatterers, phase, cdf,
+                    density, extinction, extinction_maxima, scattering, scatterers, phase, cdf,
                     cos_grid, majorant,
                     albedo, sun_angular_radius, n_sun_samples, sun_share, sun_probability, peak,
                     peak_scattering, dens, column, scratch)

@@ -260,7 +260,8 @@ def _air_arrays(profile: OpticalProfile, n_angle: int) -> tuple:
     (n_c, n_z), extinction and scattering per density (n_c, n_wl) (zero for the constituents
     that do not scatter), the scatterers' indices (n_s,), their phase tables (n_s, n_wl,
     n_angle) [sr^-1] at theta = pi i / (n_angle - 1), the tables' cumulative proposal masses,
-    cos(theta_i) and the levels' largest extinction over the bands (n_z,) [m^-1])."""
+    cos(theta_i) and the levels' largest extinction over the bands as
+    `_monte_carlo_kernels.extinction_maxima`)."""
     scatterers = np.array(scattering_constituents(profile), dtype=np.int64)
     phase = sample_phase_functions(profile, tuple(scatterers), n_angle)
     if scatterers.size == 0:  # nothing scatters: one dummy isotropic row
@@ -275,7 +276,7 @@ def _air_arrays(profile: OpticalProfile, n_angle: int) -> tuple:
     return (float(profile.altitudes_m[1] - profile.altitudes_m[0]), density, extinction,
             np.ascontiguousarray(scattering), scatterers, phase,
             _monte_carlo_kernels.phase_cdf(phase), np.cos(np.linspace(0.0, np.pi, n_angle)),
-            np.ascontiguousarray(np.max(density.T @ extinction, axis=1)))
+            _monte_carlo_kernels.extinction_maxima(np.max(density.T @ extinction, axis=1)))
 
 
 def _cloud_arrays(field: CloudField) -> tuple:
