@@ -434,9 +434,7 @@ def aureole_light(ox, oy, oz, dx, dy, dz, root_phase, w, sun, max_orders, bottom
                                         h_step, density, extinction, majorant, dens)
         if state != SCATTER:
             return result  # the ground does not scatter in a peak
-        be = 0.0
-        for c in range(density.shape[0]):
-            be += extinction[c, w] * dens[c]
+        be = optical_depth(extinction, w, dens)  # sum_c beta_e,c n_c [m^-1]
         bs = scattering_coefficient(w, dens, scattering, scatterers)
         if be <= 0.0 or bs <= 0.0:
             return result
