@@ -24,6 +24,14 @@ Where the context offers OpenGL 4.3, the one-pass sky (clear, or every pixel mar
 the clouds) is also timed as a compute shader of the same code (`Frame.compute_sky`): an
 H100's or H200's pixel shaders run on two of its TPCs, compute on all of them.
 
+The fast model (issue 21, viewer.js applyFast): a parameter change (the aerosol's amount
+alternating x2 and x1) made into an image as fast.js does: the transmittance, multiple-scattering
+and ground-irradiance LUTs and the sky-view LUT, one pass a LUT and group of four wavelengths
+into a layer of an RGBA16F texture array, then the frame (fast_sky + composite) at 1920 x 1080;
+timed as a whole (the change-to-image latency's GPU part), the LUTs alone and the frame alone
+(a still view: its sky-view LUT kept), from the description the server sends (`/api/fast`,
+fast-earth.npz).
+
 The viewer shows one atmosphere at a time; "one more atmosphere on screen" is measured as a
 second sky pass from a second, separately uploaded copy of the same tables, added into the same
 target (what drawing a second body's atmosphere over the first would cost at full screen).
@@ -34,7 +42,8 @@ Two steps, so that the GPU machine needs neither skyscatter's dependencies nor i
      when missing: about a minute on 2 cores):
        PYTHONPATH=src python benchmarks/bench_viewer_gpu.py prepare --out .bench_gpu
      writes .bench_gpu/earth-full.npz and earth-preview.npz (the decoded table message and the
-     view's uniforms: bench_viewer.py's view, 2 m above ground at 45 deg N, sun zenith 60 deg);
+     view's uniforms: bench_viewer.py's view, 2 m above ground at 45 deg N, sun zenith 60 deg),
+     clouds-NAME.npz and fast-earth.npz (the fast model's description);
   2. on the GPU machine (numpy and moderngl only):
        python benchmarks/bench_viewer_gpu.py run --tables .bench_gpu [--frames 500]
      prints the GL renderer and driver and one line per case; --png DIR saves the frames.
@@ -72,7 +81,18 @@ PROGRAMS = {"sky": (SKY, "", None), "cloudy_sky": (SKY, "#define CLOUDS\n", None
             "cloud_level": ([*CLOUDY, "shaders/cloud_level.frag"], "", None),
             "cloud_scatter": (["shaders/cloud_scatter.frag"], "", "shaders/cloud_scatter.vert"),
             "composite": (["generated/constants.glsl", "shaders/tonemap.glsl",
-                           "shaders/composite.frag"], "", None)}
+                           "shaders/composite.frag"], "", None),
+            "fast_sky": ([*CLOUDY, "shaders/fast_model.glsl", "shaders/main.frag"],
+                         "#define FAST_MODEL\n", None),
+            **{f"fast_{lut}": ([*LIBRARY, "shaders/fast_model.glsl", f"shaders/fast_{lut}.frag"],
+                               "", None)
+               for lut in ("transmittance", "multiple", "irradiance", "sky_view")}}
+# fast.js: the LUTs in the order `compute` makes them (the sky-view last, `skyView`), texture
+# units of its samplers, the LUT sizes (lut_layout.json "fast")
+FAST_LUTS = ("transmittance", "multiple", "irradiance", "sky_view")
+FAST_UNITS = {"u_fast_transmittance": 0, "u_fast_multiple": 1, "u_fast_sky_view": 2,
+              "u_fast_density": 3, "u_fast_phase": 4, "u_fast_irradiance": 5}
+LAYOUT = STATIC / "generated" / "lut_layout.json"
 # bench_viewer.py's VIEW and the page's defaults (controls.js NUMBERS)
 VIEW = {"sun_zenith": 60.0, "sun_azimuth": 200.0, "heading": 180.0, "pitch": 10.0,
         "roll": 0.0, "fov": 60.0, "fisheye_fov": 180.0, "altitude_m": 2.0, "lat": 45.0,
@@ -144,6 +164,12 @@ def prepare(out: Path, cache_dir: str | None) -> None:
                  map=json.dumps(_map_uniforms(params, site, view)),
                  spacing=json.dumps(_spacings(site)), **arrays)
         print(f"clouds {name}: {len(message) / 2**20:.1f} MiB message")
+    from skyscatter.viewer.gpu_fast import decode_fast
+    message = service.fast_message("earth")
+    header, arrays = decode_fast(message)
+    np.savez(out / "fast-earth.npz", header=json.dumps(header), message_bytes=len(message),
+             **arrays)
+    print(f"fast model: {len(message) / 2**10:.1f} KiB description, {header['groups']} groups")
 
 
 def _cloud_uniforms(gpu, site, seconds: float) -> tuple[np.ndarray, dict]:
@@ -271,6 +297,7 @@ class Frame:
         self.clouds = self._upload_clouds(None)
         self.map = None  # the clouds' shadow map (`set_clouds`)
         self.view = None  # the tables' view; the clouds' own with clouds (`set_clouds`)
+        self.fast = None  # the fast model drawing the sky instead of the tables (FastModel)
 
     def set_clouds(self, data: dict | None) -> None:
         """Draw `data`'s clouds (a clouds-NAME.npz, loaded) in its view, or none; with clouds,
@@ -468,12 +495,22 @@ class Frame:
                 texture.use(location=unit)
                 self._set(program, {f"u_cloud_map_{name}": unit})
             self._set(program, self.map["uniforms"])
-        view = dict(tables["view"] if self.view is None else self.view)
+        self._set_view(program, projection, tables)
+        return program
+
+    def view_of(self, tables: dict | None) -> dict:
+        """The view's uniforms: the clouds' view, else that of `tables` (or the first's)."""
+        if self.view is not None:
+            return self.view
+        return (self.tables[0] if tables is None else tables)["view"]
+
+    def _set_view(self, program, projection: int, tables: dict | None) -> None:
+        """viewer.js viewUniforms for this target's size, output "exposed"."""
+        view = dict(self.view_of(tables))
         tan_v = view.pop("u_tan_half_fov")
         self._set(program, {**view, "u_resolution": (self.width, self.height),
                             "u_projection": projection, "u_output": 2,  # OUTPUT_EXPOSED
                             "u_half_extent": (tan_v * self.width / self.height, tan_v)})
-        return program
 
     def _bind_refinement(self, program, samplers: list) -> None:
         """viewer.js bindRefinement: (name, texture) pairs on units 11-13."""
@@ -483,6 +520,9 @@ class Frame:
 
     def draw_sky(self, tables: dict, projection: int) -> None:
         """Viewer.drawSky(w, h, "exposed") with `tables` bound (into the bound target)."""
+        if self.fast is not None:
+            self.fast.draw(projection)
+            return
         if self.map is None or not self.refined:
             key = "sky" if self.map is None else "cloudy_sky"
             self._setup(key, tables, projection)
@@ -563,6 +603,130 @@ class Frame:
             self.quads["composite"].render(vertices=3)
 
 
+class FastModel:
+    """fast.js FastModel in `frame`'s context: the description's density and phase textures,
+    the LUTs as RGBA16F texture arrays (a layer per group) with a framebuffer per layer."""
+
+    def __init__(self, frame: Frame, data: dict) -> None:
+        import moderngl
+
+        ctx = frame.ctx
+        self.frame = frame
+        self.header = header = data["header"]
+        self.groups = header["groups"]
+        sizes = json.loads(LAYOUT.read_text())["fast"]
+        self.max_constituents = sizes["max_constituents"]
+        self.max_groups = sizes["max_groups"]
+        self.sizes = {lut: tuple(sizes["sizes"][lut]) for lut in FAST_LUTS}
+        self.data = {}
+        for name, components in (("density", 1), ("phase", 4)):  # tables.js floatTexture
+            array = np.ascontiguousarray(data[name], dtype="f4")
+            texture = ctx.texture((array.shape[1], array.shape[0]), components, array.tobytes(),
+                                  dtype="f4", alignment=1)
+            texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.data[f"u_fast_{name}"] = texture
+        self.none = ctx.texture_array((1, 1, 1), 4, dtype="f2")  # bound for the LUT written
+        self.luts, self.framebuffers = {}, {}
+        attach = _framebuffer_texture_layer()
+        for lut in FAST_LUTS:
+            width, height = self.sizes[lut]
+            array = ctx.texture_array((width, height, self.groups), 4, dtype="f2")
+            array.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            array.repeat_x = array.repeat_y = False
+            self.luts[f"u_fast_{lut}"] = array
+            self.framebuffers[lut] = []
+            for g in range(self.groups):  # fast.js: framebufferTextureLayer(..., texture, 0, g)
+                framebuffer = ctx.framebuffer([ctx.texture((width, height), 4, dtype="f2")])
+                framebuffer.use()
+                attach(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, array.glo, 0, g)
+                self.framebuffers[lut].append(framebuffer)
+        to_xyz = np.zeros((self.max_groups * 4, 3), dtype="f4")  # mat4x3 columns C_w E_w
+        weights = np.asarray(header["xyz_weights"]) * np.asarray(header["sun_irradiance"])[:, None]
+        to_xyz[:len(weights)] = weights
+        self.to_xyz = to_xyz.reshape(-1)
+        self.amounts: dict = {}
+
+    def uniforms(self, group: int) -> dict:
+        """fast.js bind's uniforms: each group's coefficients times the amounts' factors."""
+        h = self.header
+        extinction = np.zeros((self.max_groups, self.max_constituents, 4), dtype="f4")
+        scattering = np.zeros_like(extinction)
+        for c, name in enumerate(h["names"]):
+            factor = self.amounts.get(name, 1.0)
+            extinction[:self.groups, c] = factor * np.reshape(h["extinction_m"][c], (-1, 4))
+            scattering[:self.groups, c] = factor * np.reshape(h["scattering_m"][c], (-1, 4))
+        albedo = np.zeros((self.max_groups, 4), dtype="f4")
+        albedo[:self.groups] = np.reshape(h["ground_albedo"], (-1, 4))
+        return {"u_fast_extinction": extinction.reshape(-1), "u_fast_scattering":
+                scattering.reshape(-1), "u_fast_albedo": albedo.reshape(-1),
+                "u_fast_group": group, "u_fast_groups": self.groups,
+                "u_fast_constituents": len(h["names"]), "u_fast_altitudes": h["altitudes"],
+                "u_fast_density_rows": h["density_rows"],
+                "u_fast_altitude_step": h["altitude_step_m"], "u_fast_to_xyz": self.to_xyz,
+                "u_bottom_radius": h["bottom_radius_m"], "u_top_radius": h["top_radius_m"],
+                "u_fast_mu_s_centre": h["multiple_scattering_mu_s_centre"],
+                "u_sun_irradiance": h["sun_irradiance_xyz"],
+                "u_sun_angular_radius": h["sun_angular_radius_rad"],
+                "u_sun_solid_angle": h["sun_solid_angle_sr"],
+                "u_sun_disk": np.asarray(h["sun_disk_xyz"]).reshape(-1)}
+
+    def bind(self, program, group: int, writing: str | None = None) -> None:
+        """fast.js bind: textures on their units (none on the LUT being written), uniforms."""
+        textures = {**self.luts, **self.data}
+        for name, unit in FAST_UNITS.items():
+            (self.none if name == writing else textures[name]).use(location=unit)
+            self.frame._set(program, {name: unit})
+        self.frame._set(program, self.uniforms(group))
+
+    def pass_(self, lut: str, extra: dict | None = None) -> None:
+        """fast.js pass: one pass per group into `lut`."""
+        key = f"fast_{lut}"
+        program = self.frame.programs[key]
+        for g in range(self.groups):
+            self.framebuffers[lut][g].use()
+            self.frame.ctx.viewport = (0, 0, *self.sizes[lut])
+            self.bind(program, g, f"u_fast_{lut}")
+            self.frame._set(program, extra or {})
+            self.frame.quads[key].render(vertices=3)
+
+    def compute(self, amounts: dict) -> None:
+        """fast.js compute (a physical parameter changed), then skyView for the frame's view."""
+        self.amounts = dict(amounts)
+        for lut in FAST_LUTS[:-1]:
+            self.pass_(lut)
+        self.sky_view()
+
+    def sky_view(self) -> None:
+        """fast.js skyView for the camera of the frame's view."""
+        view = self.frame.view_of(None)
+        position = np.asarray(view["u_camera_position"])
+        r = float(np.linalg.norm(position))
+        mu_s = float(position @ np.asarray(view["u_sun_direction"]) / r)
+        self.pass_("sky_view", {"u_fast_view_radius": r, "u_fast_view_mu_s": mu_s})
+
+    def draw(self, projection: int) -> None:
+        """Viewer.drawSky with the fast model (a view from the ground: fast_sky)."""
+        program = self.frame.programs["fast_sky"]
+        self.bind(program, 0)
+        self.frame._set_view(program, projection, None)
+        self.frame.quads["fast_sky"].render(vertices=3)
+
+
+GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 = 0x8D40, 0x8CE0
+
+
+def _framebuffer_texture_layer():
+    """glFramebufferTextureLayer of the current EGL context (moderngl attaches no layers)."""
+    import ctypes
+
+    egl = ctypes.CDLL("libEGL.so.1")
+    egl.eglGetProcAddress.restype = ctypes.c_void_p
+    egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
+    address = egl.eglGetProcAddress(b"glFramebufferTextureLayer")
+    return ctypes.CFUNCTYPE(None, ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_int,
+                            ctypes.c_int)(address)
+
+
 def _time(ctx, draw, frames: int, warm_up: int) -> tuple[np.ndarray, np.ndarray]:
     """(GPU ms, wall ms) of `frames` calls of `draw` after `warm_up` untimed ones."""
     query = ctx.query(time=True)
@@ -599,8 +763,11 @@ def _load(path: Path) -> dict:
     return data
 
 
-def run(directory: Path, frames: int, warm_up: int, png: Path | None) -> None:
-    """Times every case and prints one line each; ends with a summary table."""
+def run(directory: Path, frames: tuple[int, int], warm_up: tuple[int, int],
+        png: Path | None, cloud_presets: tuple[str, ...] = CLOUD_PRESETS) -> None:
+    """Times every case and prints one line each (the clear and fast-model cases over
+    frames[0] after warm_up[0], the cloud cases over frames[1] after warm_up[1]); ends with a
+    summary table."""
     import moderngl
 
     try:  # compute shaders (`Frame.compute_sky`) need OpenGL 4.3
@@ -611,8 +778,8 @@ def run(directory: Path, frames: int, warm_up: int, png: Path | None) -> None:
     print(f"GL_RENDERER {ctx.info['GL_RENDERER']}; GL_VERSION {ctx.info['GL_VERSION']}")
     rows = []
 
-    def timed(quality: str, image: str, case: str, draw) -> None:
-        gpu, wall = _time(ctx, draw, frames, warm_up)
+    def timed(quality: str, image: str, case: str, draw, cloudy: bool = False) -> None:
+        gpu, wall = _time(ctx, draw, frames[cloudy], warm_up[cloudy])
         rows.append((quality, image, case, np.median(gpu), np.percentile(gpu, 95),
                      np.median(wall), np.percentile(wall, 95)))
         print(f"{quality} {image} {case}: GPU {rows[-1][3]:.3f} ms (p95 {rows[-1][4]:.3f}), "
@@ -637,36 +804,72 @@ def run(directory: Path, frames: int, warm_up: int, png: Path | None) -> None:
                                        frame, index)
             frame.draw(index, 1)
             _check(frame, f"{quality}-{projection}", png)
+    _time_fast(directory, ctx, timed, png)
     data = _load(directory / "earth-preview.npz")
     frame = Frame(ctx, [data])
-    for name in CLOUD_PRESETS:
+    for name in cloud_presets:
         clouds = _load_clouds(directory / f"clouds-{name}.npz")
         frame.set_clouds(clouds)
         n_u, n_w = clouds["map"]["u_map_size"]
-        timed("preview", f"map {n_u}x{n_w}", f"{name}: shadow map", frame.draw_map)
+        timed("preview", f"map {n_u}x{n_w}", f"{name}: shadow map", frame.draw_map, True)
         for projection, width, height in CLOUD_CASES:
             frame.resize(width, height)
             image = f"{projection} {width}x{height}"
             frame.refined = False
-            timed("preview", image, f"{name}, every pixel", partial(frame.draw, 0, 1))
+            timed("preview", image, f"{name}, every pixel", partial(frame.draw, 0, 1), True)
             every_pixel = _screen(frame)
             if compute:
                 compute = _try_compute(partial(timed, "preview", image,
                                                f"{name}, every pixel, compute",
-                                               partial(frame.compute_sky, frame.tables[0], 0)),
+                                               partial(frame.compute_sky, frame.tables[0], 0),
+                                               True),
                                        frame, 0)
             frame.refined = True
-            timed("preview", image, f"{name}, map redrawn", partial(_map_and_frame, frame))
-            timed("preview", image, f"frame with {name}", partial(frame.draw, 0, 1))
+            timed("preview", image, f"{name}, map redrawn", partial(_map_and_frame, frame), True)
+            timed("preview", image, f"frame with {name}", partial(frame.draw, 0, 1), True)
             _check(frame, f"clouds-{name}-{width}x{height}", png)
             error = _screen(frame).astype(float) - every_pixel
             print(f"  refined against every pixel marched: PSNR "
                   f"{10 * np.log10(255.0**2 / np.mean(error**2)):.1f} dB")
     print(f"\n{'tables':8s} {'image':22s} {'case':36s} {'GPU median':>10s} {'p95':>7s} "
-          f"{'wall median':>11s} {'p95':>7s}  [ms], {frames} frames")
+          f"{'wall median':>11s} {'p95':>7s}  [ms], {frames[0]} frames ({frames[1]} with "
+          f"clouds)")
     for row in rows:
         print(f"{row[0]:8s} {row[1]:22s} {row[2]:36s} {row[3]:10.3f} {row[4]:7.3f} "
               f"{row[5]:11.3f} {row[6]:7.3f}")
+
+
+def _time_fast(directory: Path, ctx, timed, png: Path | None) -> None:
+    """The fast model's change-to-image cases (module docstring), and how far its frame lies
+    from the preview tables' (the tables the page shows after it)."""
+    path = directory / "fast-earth.npz"
+    if not path.exists():
+        print(f"no {path.name}: no fast-model cases (run `prepare` again)")
+        return
+    with np.load(path) as npz:
+        fast_data = {"density": npz["density"], "phase": npz["phase"],
+                     "header": json.loads(str(npz["header"]))}
+    data = _load(directory / "earth-preview.npz")
+    frame = Frame(ctx, [data])
+    frame.resize(1920, 1080)
+    frame.draw(0, 1)
+    tables_image = _screen(frame).astype(float)
+    frame.fast = fast = FastModel(frame, fast_data)
+    factors = iter(np.resize([2.0, 1.0], 10**6))
+
+    def change() -> None:  # a slider moved: the aerosol's amount, then the image
+        fast.compute({"aerosol": next(factors)})
+        frame.draw(0, 1)
+
+    image = "perspective 1920x1080"
+    timed("fast", image, "change to image (LUTs, sky view, frame)", change)
+    timed("fast", image, "LUTs and sky view", partial(fast.compute, {"aerosol": 1.5}))
+    fast.compute({})
+    timed("fast", image, "frame (sky view kept)", partial(frame.draw, 0, 1))
+    _check(frame, "fast-perspective", png)
+    error = _screen(frame).astype(float) - tables_image
+    print(f"  fast model against the preview tables: PSNR "
+          f"{10 * np.log10(255.0**2 / np.mean(error**2)):.1f} dB")
 
 
 def _warm_clocks(ctx, data: dict, seconds: float = 3.0) -> None:
@@ -746,12 +949,17 @@ def main() -> None:
     step.add_argument("--tables", type=Path, default=Path(".bench_gpu"))
     step.add_argument("--frames", type=int, default=500)
     step.add_argument("--warm-up", type=int, default=50)
+    step.add_argument("--cloud-frames", type=int, default=12,
+                      help="frames of each cloud case (up to a second each on an H200)")
+    step.add_argument("--cloud-warm-up", type=int, default=2)
+    step.add_argument("--no-clouds", action="store_true", help="leave the cloud cases out")
     step.add_argument("--png", type=Path, default=None, help="save each case's frame here")
     args = parser.parse_args()
     if args.command == "prepare":
         prepare(args.out, args.cache_dir)
     else:
-        run(args.tables, args.frames, args.warm_up, args.png)
+        run(args.tables, (args.frames, args.cloud_frames), (args.warm_up, args.cloud_warm_up),
+            args.png, () if args.no_clouds else CLOUD_PRESETS)
 
 
 if __name__ == "__main__":
