@@ -70,7 +70,8 @@ def main() -> None:
     print(f"{args.atmosphere}: tables at {len(WAVELENGTHS_NM)} bands in "
           f"{time.perf_counter() - start:.1f} s, {tables.orders_computed} orders iterated")
     solver = LutSolver(profile, tables=tables)
-    layers = plane_parallel_layers(profile, n_moments=args.moments)
+    layers = plane_parallel_layers(profile, n_moments=args.moments,
+                                   boundaries_m=args.altitudes)
     print(f"\n|tables / DISORT - 1| (DISORT {args.streams} streams, {args.moments} moments; "
           f"views > {AWAY_DEG:g} deg from the sun, {len(WAVELENGTHS_NM)} bands "
           f"{', '.join(f'{w:g}' for w in WAVELENGTHS_NM)} nm), in %:\n")

@@ -8,7 +8,8 @@ delta-M with the Nakajima-Tanaka corrections; `validate.disort.disort_sky_radian
   forward peak 592 sr^-1) of optical depth 8 and 20 over a black ground, seen from below, and
   the 20 from above (`validate.slab.slab_profile` with the droplets' phase function);
 - `earth-overcast` itself (a stratus of optical depth 20 between 600 and 1100 m under air,
-  ozone and aerosol) from the ground looking up and from 3000 m looking down.
+  ozone and aerosol) from the ground looking up and from 3000 m looking down and up (the
+  observer a boundary of DISORT's layers).
 DISORT is computed here, once, with this tree's code; each tree's `MonteCarloSolver` runs in
 its own process (`PYTHONPATH=TREE/src`) with `sun_sampling_probability=0` (what `skyscatter
 validate` used for thick layers before the default became 0 there) and `--paths` paths per
@@ -73,7 +74,7 @@ def droplet_slab(optical_depth: float):
 def case(name: str, profile, altitude_m: float, zeniths_deg: tuple[float, ...]):
     """(name, profile, observer position, views (3, 3), sun, DISORT radiance (3,)) on the
     DISORT directions nearest `zeniths_deg`."""
-    layers = plane_parallel_layers(profile, n_moments=512)
+    layers = plane_parallel_layers(profile, n_moments=512, boundaries_m=(altitude_m,))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         zenith, radiance = disort_sky_radiance(
@@ -94,7 +95,8 @@ def cases():
             case("droplet slab, optical depth 20, from above", droplet_slab(20.0), top,
                  DOWN_DEG),
             case("earth-overcast, ground, looking up", overcast, 0.0, UP_DEG),
-            case("earth-overcast, 3000 m, looking down", overcast, 3000.0, DOWN_DEG)]
+            case("earth-overcast, 3000 m, looking down", overcast, 3000.0, DOWN_DEG),
+            case("earth-overcast, 3000 m, looking up", overcast, 3000.0, UP_DEG)]
 
 
 def run_tree(tree: Path, chosen, paths: int, seed: int):

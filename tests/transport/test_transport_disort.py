@@ -117,6 +117,30 @@ def test_disort_radiance_at_an_altitude_meets_the_boundary_conditions():
         disort_sky_radiance(profile, sun_zenith, azimuth, layers=layers, altitude_m=top + 1.0)
 
 
+
+def test_an_observer_above_a_deck_is_a_layer_boundary_with_the_column_above_it():
+    # Above `earth-overcast` the deck takes the layers that split the optical depth, and the
+    # clear air is cut every 3.3 km: an observer inside such a layer saw its air spread evenly
+    # over it (10 % too much aerosol above 3000 m: DISORT's sky 2-4 % too bright against the
+    # Monte Carlo). The observer is now a boundary, so the optical depth above it is the
+    # profile's own column (trapezoids over its levels, as the layers' columns: rounding only).
+    profile = load_atmosphere("earth-overcast").optical_profile(np.array([680.0]))
+    layers = plane_parallel_layers(profile, boundaries_m=(3000.0,))
+    boundaries = layers.altitudes_m[::-1]
+    above = np.concatenate([[0.0], layers.optical_depth[:, 0]])[::-1]
+    z = profile.altitudes_m
+    extinction = profile.density.T @ profile.extinction_per_density[:, 0]
+    level = int(np.argmin(np.abs(z - 3000.0)))
+    column = np.trapezoid(extinction[level:], z[level:])
+    assert z[level] in boundaries
+    np.testing.assert_allclose(np.interp(3000.0, boundaries, above), column, rtol=1e-9)
+    # the layers without it: the observer between boundaries is refused, not interpolated
+    plain = plane_parallel_layers(profile)
+    assert not np.isclose(plain.altitudes_m, z[level]).any()
+    with pytest.raises(InputError, match="boundaries_m"):
+        disort_sky_radiance(profile, 0.5, np.zeros(1), layers=plain, altitude_m=3000.0)
+
+
 # --------------------------------------------------------------------------------------------
 # The table solver against DISORT
 # --------------------------------------------------------------------------------------------

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,7 +119,8 @@ def _layer_edges(density: np.ndarray) -> np.ndarray:
     return np.array(edges, dtype=int)
 
 
-def _layer_boundaries(profile: OpticalProfile, n_layers: int) -> np.ndarray:
+def _layer_boundaries(profile: OpticalProfile, n_layers: int,
+                      boundaries_m: Sequence[float] = ()) -> np.ndarray:
     """Indices into `profile.altitudes_m` of the layer boundaries, ground (0) to top.
 
     Half the boundaries split the extinction column (summed over wavelengths) into equal parts,
@@ -127,7 +129,7 @@ def _layer_boundaries(profile: OpticalProfile, n_layers: int) -> np.ndarray:
     constituent that fills only part of the column (a cloud deck, a fog) are boundaries too:
     otherwise a layer reaching from inside a deck of optical depth 20 to 3.3 km spread the
     deck's top droplets over the clear air above it (DISORT's sky above `earth-overcast` came
-    out 1.4-2.5 x too bright)."""
+    out 1.4-2.5 x too bright). So are the profile levels nearest `boundaries_m` (observers)."""
     z = profile.altitudes_m
     extinction = (profile.density.T @ profile.extinction_per_density).sum(axis=1)
     column = np.concatenate([[0.0], np.cumsum(0.5 * (extinction[1:] + extinction[:-1])
@@ -135,15 +137,23 @@ def _layer_boundaries(profile: OpticalProfile, n_layers: int) -> np.ndarray:
     n_tau = n_layers // 2
     by_tau = np.searchsorted(column, np.linspace(0.0, column[-1], n_tau + 1)[1:-1])
     by_z = np.rint(np.linspace(0, z.size - 1, n_layers - n_tau + 1)).astype(int)
-    levels = np.unique(np.concatenate([by_tau, by_z, _layer_edges(profile.density)]))
+    observers = [_nearest_level(z, altitude) for altitude in boundaries_m]
+    levels = np.unique(np.concatenate([by_tau, by_z, _layer_edges(profile.density),
+                                       np.array(observers, dtype=int)]))
     if levels.size < 2:
         raise InputError("the profile has too few altitude levels for plane-parallel layers",
                          key="n_layers", value=n_layers)
     return levels
 
 
+def _nearest_level(altitudes_m: np.ndarray, altitude_m: float) -> int:
+    """Index of the level of `altitudes_m` nearest `altitude_m`."""
+    return int(np.argmin(np.abs(altitudes_m - altitude_m)))
+
+
 def plane_parallel_layers(profile: OpticalProfile, n_layers: int = 60,
-                          n_moments: int = 128) -> PlaneParallelLayers:
+                          n_moments: int = 128, *,
+                          boundaries_m: Sequence[float] = ()) -> PlaneParallelLayers:
     """The profile as homogeneous plane-parallel layers (module docstring for the formulas).
 
     Parameters
@@ -154,8 +164,11 @@ def plane_parallel_layers(profile: OpticalProfile, n_layers: int = 60,
         About how many layers (boundaries that coincide are merged). [-]
     n_moments : int
         Legendre moments kept per layer. [-]
+    boundaries_m : sequence of float
+        Altitudes that must be layer boundaries (at the nearest level of the profile): those
+        of the observers `disort_sky_radiance` is asked about. [m]
     """
-    levels = _layer_boundaries(profile, n_layers)
+    levels = _layer_boundaries(profile, n_layers, boundaries_m)
     z = profile.altitudes_m
     wl = profile.wavelengths_nm
     # Column of each constituent in each layer, trapezoid on the profile's levels.
@@ -221,8 +234,11 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
     layers : PlaneParallelLayers, optional
         Layers made before (default: `plane_parallel_layers(profile)`).
     altitude_m : float
-        The observer's altitude, at the optical depth interpolated linearly in altitude
-        between the layers' boundaries (exact inside a homogeneous layer). [m]
+        The observer's altitude: a boundary of the layers (`plane_parallel_layers`'s
+        `boundaries_m`; the default layers have it). Inside a homogeneous layer the air's
+        density would be spread evenly over the layer: above `earth-overcast` the layers
+        of 3.3 km put 10 % too much aerosol above an observer at 3000 m, and DISORT's sky
+        there came out 2-4 % too bright against the Monte Carlo. [m]
 
     Returns
     -------
@@ -236,7 +252,8 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
                          "[0, pi/2)", key="sun_zenith_rad", value=sun_zenith_rad,
                          allowed="[0, pi/2)")
     if layers is None:
-        layers = plane_parallel_layers(profile, n_moments=max(128, 2 * n_streams))
+        layers = plane_parallel_layers(profile, n_moments=max(128, 2 * n_streams),
+                                       boundaries_m=(altitude_m,))
     if layers.moments.shape[1] <= n_streams:
         raise InputError(f"disort_sky_radiance: {n_streams} streams need more than "
                          f"{n_streams} Legendre moments; the layers have "
@@ -248,6 +265,12 @@ def disort_sky_radiance(profile: OpticalProfile, sun_zenith_rad: float,
                          f"layers ({boundaries[0]:g} to {boundaries[-1]:g} m)",
                          key="altitude_m", value=altitude_m,
                          allowed=f"[{boundaries[0]:g}, {boundaries[-1]:g}]")
+    level = profile.altitudes_m[_nearest_level(profile.altitudes_m, altitude_m)]
+    if altitude_m > boundaries[0] and not np.any(np.isclose(boundaries, level)):
+        raise InputError(f"disort_sky_radiance: altitude_m = {altitude_m:g} is not a boundary "
+                         "of the layers; make them with plane_parallel_layers(profile, "
+                         f"boundaries_m=[{altitude_m:g}])", key="altitude_m", value=altitude_m,
+                         allowed="a boundary of the layers")
     phi = np.mod(np.atleast_1d(np.asarray(relative_azimuth_rad, dtype=np.float64)), 2.0 * np.pi)
     mu0 = float(np.cos(sun_zenith_rad))
     half = n_streams // 2
