@@ -186,6 +186,8 @@ def test_solver_help_lists_every_registered_solver(capsys, command):
     (["render", "earth", "--camera", "cubmap"], "did you mean 'cubemap'?"),
     (["render", "earth", "--sun-elevaton", "5"],
      "did you mean --sun-elevation for --sun-elevaton?"),
+    (["radiance", "earth", "--sun-zenith", "30", "--paths", "100"],
+     "--paths is an option of compare, not of radiance"),
     (["render", "earth", "--time", "2024-06-21T21:30[Europe/Berln]", "--lat", "52", "--lon",
       "13"], "not a zone of the IANA time zone database"),
     (["render", "earth", "--sun-zenith", "30", "--sun-elevation", "60"], "not allowed with"),

@@ -384,7 +384,9 @@ class _Parser(argparse.ArgumentParser):
 
 def _did_you_mean(message: str, parser: argparse.ArgumentParser) -> str:
     """"; did you mean ...?" for argparse's `message` about an invalid choice or unrecognized
-    options, from the choices it lists or the options of `parser` and its commands; or ""."""
+    options, from the choices it lists or the options of `parser` and of the command run
+    (`parser.argv`, set by `main`; all commands' without it), and which commands have an
+    option the command run lacks; or ""."""
     invalid = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
     if invalid:
         choices = [choice.strip("'") for choice in invalid.group(2).split(", ")]
@@ -392,17 +394,26 @@ def _did_you_mean(message: str, parser: argparse.ArgumentParser) -> str:
         return f"; did you mean {close[0]!r}?" if close else ""
     if "unrecognized arguments:" not in message:
         return ""
-    options = {option for action in parser._actions for option in action.option_strings}
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            options.update(option for command in action.choices.values()
-                           for sub in command._actions for option in sub.option_strings)
-    hints = []
+    own = {option for action in parser._actions for option in action.option_strings}
+    commands = {name: {option for sub in command._actions for option in sub.option_strings}
+                for action in parser._actions if isinstance(action, argparse._SubParsersAction)
+                for name, command in action.choices.items()}
+    used = next((token for token in getattr(parser, "argv", ()) if token in commands), None)
+    options = own | (commands[used] if used else set().union(*commands.values()))
+    hints, elsewhere = [], []
     for token in message.split("unrecognized arguments:", 1)[1].split():
-        close = difflib.get_close_matches(token.split("=", 1)[0], sorted(options), n=1)
-        if token.startswith("--") and close:
+        if not token.startswith("--"):
+            continue
+        name = token.split("=", 1)[0]
+        others = sorted(command for command, theirs in commands.items() if name in theirs)
+        close = difflib.get_close_matches(name, sorted(options), n=1)
+        if used and others and name not in options:
+            elsewhere.append(f"{name} is an option of {', '.join(others)}, not of {used} "
+                             f"(`skyscatter {used} --help` lists its options)")
+        elif close:
             hints.append(f"{close[0]} for {token}")
-    return f"; did you mean {', '.join(hints)}?" if hints else ""
+    text = f"; did you mean {', '.join(hints)}?" if hints else ""
+    return text + "".join(f"; {line}" for line in elsewhere)
 
 
 def _add_sun_zeniths_argument(command: argparse.ArgumentParser) -> None:
@@ -1802,8 +1813,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not (sys.argv[1:] if argv is None else argv):
         parser.print_help()  # `skyscatter` alone: what it can do
         return 0
+    parser.argv = list(sys.argv[1:] if argv is None else argv)  # for `_did_you_mean`
     args = parser.parse_args(argv)
-    args.command_line = list(sys.argv[1:] if argv is None else argv)
+    args.command_line = parser.argv
     first_run = False
     if args.command in COMPILING_COMMANDS:
         from skyscatter import compile_ahead
