@@ -382,6 +382,30 @@ class _Parser(argparse.ArgumentParser):
         return super().format_help()
 
 
+def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+    """`parser.parse_args(argv)`, except that an optional positional (`fit`'s MEASUREMENTS)
+    may also come after the options: argparse fills it, empty, together with the positional
+    before it, and then refuses the file at the end as unrecognized."""
+    args, extra = parser.parse_known_args(argv)
+    if len(extra) == 1 and not extra[0].startswith("-"):
+        for action in _command_actions(parser, args.command):
+            if (not action.option_strings and action.nargs == "?"
+                    and action.default is None and getattr(args, action.dest) is None):
+                setattr(args, action.dest, action.type(extra[0]) if action.type else extra[0])
+                return args
+    if extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
+
+
+def _command_actions(parser: argparse.ArgumentParser, command: str) -> list[argparse.Action]:
+    """The arguments of `parser`'s command `command`."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction) and command in action.choices:
+            return list(action.choices[command]._actions)
+    return []
+
+
 def _did_you_mean(message: str, parser: argparse.ArgumentParser) -> str:
     """"; did you mean ...?" for argparse's `message` about an invalid choice or unrecognized
     options, from the choices it lists or the options of `parser` and of the command run
@@ -1814,7 +1838,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()  # `skyscatter` alone: what it can do
         return 0
     parser.argv = list(sys.argv[1:] if argv is None else argv)  # for `_did_you_mean`
-    args = parser.parse_args(argv)
+    args = _parse(parser, parser.argv)
     args.command_line = parser.argv
     first_run = False
     if args.command in COMPILING_COMMANDS:

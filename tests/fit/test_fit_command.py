@@ -119,6 +119,18 @@ def test_garbled_json_and_a_missing_file(capsys, tmp_path):
     assert code == 2 and "no such file" in err
 
 
+def test_the_measurements_may_come_after_the_options(capsys, tmp_path):
+    # argparse fills the optional MEASUREMENTS, empty, with the preset before it; the file
+    # after the options is taken as the measurements (it is read: the garbled JSON is refused
+    # as such), and a second file is still an unrecognized argument
+    path = tmp_path / "rows.json"
+    path.write_text("{not json")
+    code, _, err = run_cli(capsys, ["fit", "earth", "--free", f"{KEY}=0:1", str(path)])
+    assert code == 2 and "cannot read it" in err and err.count("\n") == 1
+    code, _, err = run_cli(capsys, ["fit", "earth", "--free", f"{KEY}=0:1", str(path), "b.csv"])
+    assert code == 2 and "unrecognized arguments" in err
+
+
 def test_a_sweep_that_does_not_hold_the_free_key_is_refused(tmp_path):
     xarray = pytest.importorskip("xarray")
     dims = ("sun_zenith", "view_zenith", "azimuth", "wavelength")
