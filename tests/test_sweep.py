@@ -31,6 +31,7 @@ import pytest
 
 import skyscatter
 from skyscatter import api, dask_cluster
+from skyscatter.api_constants import AU_M
 from skyscatter.atmosphere.config import PRESETS_DIR, parse_atmosphere
 from skyscatter.cli import main
 from skyscatter.errors import InputError
@@ -250,9 +251,9 @@ def test_the_command_line_writes_the_dataset_of_the_api(cluster, tmp_path, monke
     assert written.attrs["sweep_command"].startswith("skyscatter sweep earth --set")
 
 
-def _astropy_sun(utc: str, latitude: float, longitude: float) -> tuple[float, float]:
-    """Zenith angle and azimuth [deg] of the sun's centre, topocentric and airless (pressure 0)
-    from astropy with its built-in ephemeris (no download)."""
+def _astropy_sun(utc: str, latitude: float, longitude: float) -> tuple[float, float, float]:
+    """Zenith angle and azimuth [deg] of the sun's centre, topocentric and airless (pressure 0),
+    and its distance [m], from astropy with its built-in ephemeris (no download)."""
     import warnings
 
     from astropy import units
@@ -268,7 +269,7 @@ def _astropy_sun(utc: str, latitude: float, longitude: float) -> tuple[float, fl
         warnings.simplefilter("ignore")  # IERS table age: UT1 - UTC to well under a second
         sun = get_body("sun", moment, place).transform_to(
             AltAz(obstime=moment, location=place, pressure=0 * units.hPa))
-    return 90.0 - float(sun.alt.deg), float(sun.az.deg)
+    return 90.0 - float(sun.alt.deg), float(sun.az.deg), float(sun.distance.to(units.m).value)
 
 
 def test_a_sweep_over_times_has_the_suns_of_astropy_and_the_radiance_of_their_zeniths(
@@ -293,20 +294,30 @@ def test_a_sweep_over_times_has_the_suns_of_astropy_and_the_radiance_of_their_ze
     assert written["sun_azimuth"].attrs["units"] == "degree"
     # Reference: astropy's airless topocentric sun; skyscatter's ephemeris agreed to 4e-5 deg
     # in zenith angle and 2.2e-4 deg in azimuth here (tests/astro: <= 4" over other cases),
-    # so 1e-3 deg.
-    for utc, zenith, azimuth in zip(expected_utc, written["sun_zenith"].values,
-                                     written["sun_azimuth"].values, strict=True):
-        reference_zenith, reference_azimuth = _astropy_sun(utc, 52.52, 13.40)
+    # so 1e-3 deg; its topocentric distance to 1e-7 (1.0163 AU at midsummer), so 1e-6.
+    assert written["sun_distance"].attrs["units"] == "m"
+    for utc, zenith, azimuth, distance in zip(
+            expected_utc, written["sun_zenith"].values, written["sun_azimuth"].values,
+            written["sun_distance"].values, strict=True):
+        reference_zenith, reference_azimuth, reference_distance = _astropy_sun(utc, 52.52, 13.40)
         assert abs(zenith - reference_zenith) < 1e-3 and abs(azimuth - reference_azimuth) < 1e-3
+        assert distance == pytest.approx(reference_distance, rel=1e-6)
     assert written["sun_zenith"].values.max() > 100.0  # a night row is there, radiance ~0
-    # the radiance at those times is the rows' at those sun zenith angles: same solver, same
-    # kernels, only the way the sun was placed differs (1e-12: rounding)
-    rows = api.sky_radiance_rows(api.load_atmosphere("earth"), written["sun_zenith"].values,
-                                 [0.0, 80.0], [0.0, 90.0], [450.0, 650.0], solver="single",
-                                 options=api.SolverOptions(n_samples=16))
-    np.testing.assert_allclose(written["radiance"].values,
-                               np.reshape([row["radiance"] for row in rows], (8, 2, 2, 2)),
-                               rtol=1e-12, atol=0)
+    # the radiance at those times is the rows' at those sun zenith angles, lit by the sun at
+    # that distance: same solver, same kernels, only the way the sun was placed differs
+    # (1e-12: rounding); toa_irradiance stays the config's (1 AU)
+    earth = api.load_atmosphere("earth")
+    for t, (zenith, distance) in enumerate(zip(written["sun_zenith"].values,
+                                               written["sun_distance"].values, strict=True)):
+        rows = api.sky_radiance_rows(earth, [zenith], [0.0, 80.0], [0.0, 90.0], [450.0, 650.0],
+                                     solver="single", options=api.SolverOptions(n_samples=16),
+                                     sun_distance_m=distance)
+        np.testing.assert_allclose(written["radiance"].values[t],
+                                   np.reshape([row["radiance"] for row in rows], (2, 2, 2)),
+                                   rtol=1e-12, atol=0)
+        scale = (AU_M / distance) ** 2  # ~0.968: 3 % less light than at 1 AU
+        np.testing.assert_allclose([row["toa_irradiance"] for row in rows[:2]],
+                                   scale * written["toa_irradiance"].values, rtol=1e-12)
     # the time on disk is CF: float64 seconds since the Unix epoch, read back the same by Zarr
     import scipy.io
     with scipy.io.netcdf_file(output, mmap=False) as raw:

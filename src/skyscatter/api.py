@@ -228,6 +228,7 @@ __all__ = [
     "timelapse",
     "save_mip_chain",
     "sky_radiance_rows",
+    "sun_distance_scale",
     "solver_options",
     "sun_direction",
     "sweep",
@@ -335,6 +336,16 @@ def _checked_engine(atmosphere: Atmosphere, camera: Camera, wavelengths_nm: Sequ
 def _check_atmosphere(atmosphere: Atmosphere) -> None:
     checked_instance("atmosphere", atmosphere, Atmosphere, "an Atmosphere",
                      ", e.g. load_atmosphere('earth')")
+
+
+def sun_distance_scale(atmosphere: Atmosphere, sun_distance_m: float | None) -> float:
+    """(d_config / d)^2: the factor by which a star at distance `sun_distance_m` [m] (a date's,
+    `sky_ephemeris(...).sun.distance_m`) lights the planet more than at the config's distance
+    (1 for None). Sky radiance and irradiance are linear in it; the tables are not recomputed."""
+    if sun_distance_m is None:
+        return 1.0
+    distance = checked_number("sun_distance_m", sun_distance_m, 0.0, low_open=True)
+    return atmosphere.planet.star.irradiance_scale_at(distance)
 
 
 def _check_camera(camera: Camera) -> None:
@@ -995,16 +1006,19 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                       view_zeniths_deg: Sequence[float], relative_azimuths_deg: Sequence[float],
                       wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
                       solver: str = "lut", options: SolverOptions | None = None,
-                      allow_large: bool = False) -> list[dict[str, float]]:
+                      allow_large: bool = False,
+                      sun_distance_m: float | None = None) -> list[dict[str, float]]:
     """Diffuse sky radiance for every combination of the inputs, one dict per row with the keys
     sun_zenith_deg, view_zenith_deg, relative_azimuth_deg, wavelength_nm, radiance
     [W m^-2 sr^-1 nm^-1] and toa_irradiance [W m^-2 nm^-1], plus standard_error of the radiance
     for the Monte Carlo solver. Relative azimuth 0 looks towards the sun. Each wavelength is
     monochromatic (a 1 nm cell), within 280.5-1690 nm. `options`: `solver_options(atmosphere)`
-    by default. InputError, before any work, for an empty list, a value out of range
-    (zenith angles [0, 180], finite azimuths) or a table too large (`render.budget`;
-    `allow_large`)."""
+    by default. `sun_distance_m`: the star that far (a date's) instead of the config's
+    distance (`sun_distance_scale`). InputError, before any work, for an empty list, a value
+    out of range (zenith angles [0, 180], finite azimuths) or a table too large
+    (`render.budget`; `allow_large`)."""
     _check_atmosphere(atmosphere)
+    scale = sun_distance_scale(atmosphere, sun_distance_m)
     sun_zeniths_deg = _angle_list("sun_zeniths_deg", sun_zeniths_deg, ZENITH_DEG)
     view_zeniths_deg = _angle_list("view_zeniths_deg", view_zeniths_deg, ZENITH_DEG)
     relative_azimuths_deg = _angle_list("relative_azimuths_deg", relative_azimuths_deg,
@@ -1026,10 +1040,10 @@ def sky_radiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
         for k, wavelength in enumerate(profile.wavelengths_nm):
             row = {"sun_zenith_deg": float(sun_zenith), "view_zenith_deg": float(vz),
                    "relative_azimuth_deg": float(az), "wavelength_nm": float(wavelength),
-                   "radiance": float(radiance[s, i, j, k]),
-                   "toa_irradiance": float(profile.toa_irradiance[k])}
+                   "radiance": float(scale * radiance[s, i, j, k]),
+                   "toa_irradiance": float(scale * profile.toa_irradiance[k])}
             if error is not None:
-                row["standard_error"] = float(error[s, i, j, k])
+                row["standard_error"] = float(scale * error[s, i, j, k])
             rows.append(row)
     return rows
 
@@ -1038,8 +1052,8 @@ def irradiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                     wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
                     solver: str = "lut", options: SolverOptions | None = None,
                     transmittance: bool = False, tilt_deg: float | None = None,
-                    plane_azimuth_deg: float = 180.0, sun_azimuth_deg: float = 180.0
-                    ) -> list[dict[str, float]]:
+                    plane_azimuth_deg: float = 180.0, sun_azimuth_deg: float = 180.0,
+                    sun_distance_m: float | None = None) -> list[dict[str, float]]:
     """Spectral irradiance at the observer for each sun zenith angle and wavelength, one dict
     per row with the keys sun_zenith_deg, wavelength_nm, direct_normal (the sun's direct light
     on a surface facing it, its hidden part left out), diffuse_horizontal (the sky's light on a
@@ -1051,9 +1065,11 @@ def irradiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     sun at `sun_azimuth_deg`): direct_transmittance, sun_azimuth_deg, tilt_deg,
     plane_azimuth_deg, then plane_direct, plane_sky_diffuse (from the solver's sky radiance
     distribution), plane_ground_reflected and plane_global [W m^-2 nm^-1]
-    (`transport.plane_irradiance`). InputError, before any work, for an empty list, a value
-    out of range, or a solver that does not light surfaces (the Monte Carlo's)."""
+    (`transport.plane_irradiance`). `sun_distance_m` as `sky_radiance_rows` (the
+    transmittances stay). InputError, before any work, for an empty list, a value out of
+    range, or a solver that does not light surfaces (the Monte Carlo's)."""
     _check_atmosphere(atmosphere)
+    scale = sun_distance_scale(atmosphere, sun_distance_m)
     sun_zeniths_deg = _angle_list("sun_zeniths_deg", sun_zeniths_deg, ZENITH_DEG)
     ALTITUDE_M.check("altitude_m", altitude_m)
     ANGLE_DEG.check("sun_azimuth_deg", sun_azimuth_deg)
@@ -1079,20 +1095,20 @@ def irradiance_rows(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                  plane_irradiance(engine, sun_direction(sun_zenith, 0.0), normal, altitude_m))
         for k, wavelength in enumerate(profile.wavelengths_nm):
             row = {"sun_zenith_deg": float(sun_zenith), "wavelength_nm": float(wavelength),
-                   "direct_normal": float(direct_normal[k]),
-                   "diffuse_horizontal": float(diffuse[k]),
-                   "global_horizontal": float(global_[k]),
-                   "toa_irradiance": float(profile.toa_irradiance[k])}
+                   "direct_normal": float(scale * direct_normal[k]),
+                   "diffuse_horizontal": float(scale * diffuse[k]),
+                   "global_horizontal": float(scale * global_[k]),
+                   "toa_irradiance": float(scale * profile.toa_irradiance[k])}
             if transmittance or plane is not None:
                 row["direct_transmittance"] = float(direct_normal[k] / profile.toa_irradiance[k])
             if plane is not None:
                 row.update({"sun_azimuth_deg": float(sun_azimuth_deg),
                             "tilt_deg": float(tilt_deg),
                             "plane_azimuth_deg": float(plane_azimuth_deg),
-                            "plane_direct": float(plane.beam[k]),
-                            "plane_sky_diffuse": float(plane.sky_diffuse[k]),
-                            "plane_ground_reflected": float(plane.ground_reflected[k]),
-                            "plane_global": float(plane.total[k])})
+                            "plane_direct": float(scale * plane.beam[k]),
+                            "plane_sky_diffuse": float(scale * plane.sky_diffuse[k]),
+                            "plane_ground_reflected": float(scale * plane.ground_reflected[k]),
+                            "plane_global": float(scale * plane.total[k])})
             rows.append(row)
     return rows
 
@@ -1101,7 +1117,7 @@ def radiance_dataset(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                      view_zeniths_deg: Sequence[float], azimuths_deg: Sequence[float],
                      wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
                      solver: str = "lut", options: SolverOptions | None = None,
-                     allow_large: bool = False):
+                     allow_large: bool = False, sun_distance_m: float | None = None):
     """`sky_radiance_rows` as an `xarray.Dataset` (`datasets.rows_dataset`): radiance (and
     standard_error) over (sun_zenith, view_zenith, azimuth relative to the sun, wavelength),
     toa_irradiance over wavelength, with CF `units`/`long_name` and the run's
@@ -1110,9 +1126,10 @@ def radiance_dataset(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     import_xarray()  # before any work
     rows = sky_radiance_rows(atmosphere, sun_zeniths_deg, view_zeniths_deg, azimuths_deg,
                              wavelengths_nm, altitude_m=altitude_m, solver=solver,
-                             options=options, allow_large=allow_large)
+                             options=options, allow_large=allow_large,
+                             sun_distance_m=sun_distance_m)
     inputs = (sun_zeniths_deg, view_zeniths_deg, azimuths_deg, wavelengths_nm)
-    geometry = {"altitude_m": float(altitude_m)}
+    geometry = _distance_geometry({"altitude_m": float(altitude_m)}, sun_distance_m)
     metadata = output_metadata(atmosphere, list(rows[0]), wavelengths_nm, solver=solver,
                                options=options, geometry=geometry)
     return rows_dataset(rows, {"sun_zenith_deg": "sun_zenith", "view_zenith_deg": "view_zenith",
@@ -1125,7 +1142,7 @@ def irradiance_dataset(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                        wavelengths_nm: Sequence[float], *, altitude_m: float = 0.0,
                        solver: str = "lut", options: SolverOptions | None = None,
                        tilt_deg: float | None = None, plane_azimuth_deg: float = 180.0,
-                       sun_azimuth_deg: float = 180.0):
+                       sun_azimuth_deg: float = 180.0, sun_distance_m: float | None = None):
     """`irradiance_rows` (with direct_transmittance, and the plane's columns for `tilt_deg`) as
     an `xarray.Dataset` over (sun_zenith, wavelength); toa_irradiance over wavelength, the
     plane's angles scalar coordinates; attributes as `radiance_dataset`."""
@@ -1133,8 +1150,8 @@ def irradiance_dataset(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
     rows = irradiance_rows(atmosphere, sun_zeniths_deg, wavelengths_nm, altitude_m=altitude_m,
                            solver=solver, options=options, transmittance=True,
                            tilt_deg=tilt_deg, plane_azimuth_deg=plane_azimuth_deg,
-                           sun_azimuth_deg=sun_azimuth_deg)
-    geometry = {"altitude_m": float(altitude_m)}
+                           sun_azimuth_deg=sun_azimuth_deg, sun_distance_m=sun_distance_m)
+    geometry = _distance_geometry({"altitude_m": float(altitude_m)}, sun_distance_m)
     metadata = output_metadata(atmosphere, list(rows[0]), wavelengths_nm, solver=solver,
                                options=options, geometry=geometry)
     return rows_dataset(rows, {"sun_zenith_deg": "sun_zenith", "wavelength_nm": "wavelength"},
@@ -1144,6 +1161,12 @@ def irradiance_dataset(atmosphere: Atmosphere, sun_zeniths_deg: Sequence[float],
                         ).rename({name: name.removesuffix("_deg") for name in
                                   ("sun_azimuth_deg", "tilt_deg", "plane_azimuth_deg")
                                   if name in rows[0]})
+
+
+def _distance_geometry(geometry: dict, sun_distance_m: float | None) -> dict:
+    """`geometry` with the star's distance of the run [m] where a date set it."""
+    return geometry if sun_distance_m is None else {**geometry,
+                                                    "sun_distance_m": float(sun_distance_m)}
 
 
 @dataclass(frozen=True)
@@ -1329,7 +1352,8 @@ def _sweep_over_times(plan: SweepPlan, sun_zeniths_deg: Sequence[float] | None,
         plan, sun_zeniths_deg=tuple(float(sky.sun_zenith_deg) for sky in suns),
         sun_azimuths_deg=tuple(float(sky.sun.azimuth_deg) for sky in suns),
         times_utc=tuple(sky.observer.time_utc.isoformat() for sky in suns),
-        place_deg=(float(latitude_deg), float(longitude_deg)))
+        place_deg=(float(latitude_deg), float(longitude_deg)),
+        sun_distances_m=tuple(float(sky.sun.distance_m) for sky in suns))
 
 
 def _check_sweep_values(plan: SweepPlan) -> None:

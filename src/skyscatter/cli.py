@@ -25,6 +25,7 @@ from typing import NoReturn
 
 from skyscatter import __version__, checks
 from skyscatter.api_constants import (  # no solver
+    AU_M,
     COLOUR_RANGE_NM,
     CUBE_LAYOUTS,
     DEFAULT_WAVELENGTH_BINS,
@@ -447,7 +448,8 @@ def _add_sun_zeniths_argument(command: argparse.ArgumentParser) -> None:
                      help="sun zenith angles in degrees")
     sun.add_argument("--time", default=None, metavar="ISO8601",
                      help="date and time with a time zone: the sun's zenith angle there and "
-                     "then for --lat/--lon (Earth and Mars presets)")
+                     "then for --lat/--lon, its light scaled to its distance that day (Earth "
+                     "and Mars presets)")
 
 
 def _add_rows_arguments(command: argparse.ArgumentParser) -> None:
@@ -1186,7 +1188,7 @@ def _sky_objects(args: argparse.Namespace):
 def _sky_summary(sky) -> str:
     """One line on where the sun (and moon) stand."""
     line = (f"sun: altitude {sky.sun.altitude_deg:.2f} deg, azimuth {sky.sun.azimuth_deg:.2f} "
-            f"deg")
+            f"deg, distance {sky.sun.distance_m / AU_M:.5f} AU")
     if sky.moon is not None:
         line += (f"; moon: altitude {sky.moon.altitude_deg:.2f} deg, azimuth "
                  f"{sky.moon.azimuth_deg:.2f} deg")
@@ -1415,34 +1417,41 @@ def _camera(args: argparse.Namespace):
                                  pitch_deg=args.pitch)
 
 
-def _sun_zeniths(args: argparse.Namespace, atmosphere) -> list[float]:
-    """--sun-zenith, or the sun's zenith angle at --time for --lat/--lon (said on stderr)."""
+def _sun_zeniths(args: argparse.Namespace, atmosphere) -> tuple[list[float], float | None]:
+    """(--sun-zenith, None), or the sun's zenith angle at --time for --lat/--lon and its
+    distance then [m] (said on stderr)."""
     from skyscatter import api
     if args.time is None:
-        return args.sun_zenith
+        return args.sun_zenith, None
     sky = api.sky_ephemeris(atmosphere, _observer(args))
     print(_sky_summary(sky), file=sys.stderr)
-    return [sky.sun_zenith_deg]
+    return [sky.sun_zenith_deg], sky.sun.distance_m
+
+
+def _with_distance(geometry: dict, distance_m: float | None) -> dict:
+    """The rows' metadata `geometry` with the sun's distance at --time [m]."""
+    return geometry if distance_m is None else {**geometry, "sun_distance_m": distance_m}
 
 
 def _radiance(args: argparse.Namespace) -> None:
     from skyscatter import api
     output_format = _rows_format(args)
     atmosphere = api.load_atmosphere(args.atmosphere)
-    sun_zenith = _sun_zeniths(args, atmosphere)
+    sun_zenith, distance = _sun_zeniths(args, atmosphere)
     with _solver_options(args, atmosphere) as options:
         if output_format == "netcdf":
             api.write_netcdf(api.radiance_dataset(
                 atmosphere, sun_zenith, args.view_zenith, args.view_azimuth, args.wavelengths,
                 altitude_m=args.altitude, solver=args.solver, options=options,
-                allow_large=args.allow_large), args.output)
+                allow_large=args.allow_large, sun_distance_m=distance), args.output)
             return
         rows = api.sky_radiance_rows(atmosphere, sun_zenith, args.view_zenith,
                                      args.view_azimuth, args.wavelengths,
                                      altitude_m=args.altitude, solver=args.solver,
-                                     options=options, allow_large=args.allow_large)
-        geometry = {"view_zeniths_deg": args.view_zenith,
-                    "relative_azimuths_deg": args.view_azimuth}
+                                     options=options, allow_large=args.allow_large,
+                                     sun_distance_m=distance)
+        geometry = _with_distance({"view_zeniths_deg": args.view_zenith,
+                                   "relative_azimuths_deg": args.view_azimuth}, distance)
         _write_rows(args, output_format, rows, _rows_metadata(args, atmosphere, rows, options,
                                                               sun_zenith, geometry))
 
@@ -1458,7 +1467,7 @@ def _irradiance(args: argparse.Namespace) -> None:
             raise InputError(f"--{name.replace('_', '-')} is for the plane of --tilt: give "
                              "--tilt DEG too", key=name, value=getattr(args, name))
     atmosphere = api.load_atmosphere(args.atmosphere)
-    sun_zenith = _sun_zeniths(args, atmosphere)
+    sun_zenith, distance = _sun_zeniths(args, atmosphere)
     sun_azimuth = 180.0 if args.sun_azimuth is None else args.sun_azimuth
     if args.time is not None:
         sun_azimuth = api.sky_ephemeris(atmosphere, _observer(args)).sun.azimuth_deg
@@ -1470,13 +1479,15 @@ def _irradiance(args: argparse.Namespace) -> None:
         if output_format == "netcdf":
             api.write_netcdf(api.irradiance_dataset(
                 atmosphere, sun_zenith, args.wavelengths, altitude_m=args.altitude,
-                solver=args.solver, options=options, **plane), args.output)
+                solver=args.solver, options=options, sun_distance_m=distance, **plane),
+                args.output)
             return
         rows = api.irradiance_rows(atmosphere, sun_zenith, args.wavelengths,
                                    altitude_m=args.altitude, solver=args.solver, options=options,
-                                   transmittance=args.transmittance, **plane)
-        _write_rows(args, output_format, rows,
-                    _rows_metadata(args, atmosphere, rows, options, sun_zenith, plane))
+                                   transmittance=args.transmittance, sun_distance_m=distance,
+                                   **plane)
+        _write_rows(args, output_format, rows, _rows_metadata(
+            args, atmosphere, rows, options, sun_zenith, _with_distance(plane, distance)))
 
 
 def _add_fit_command(commands) -> None:

@@ -47,6 +47,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "direct_transmittance": ("1", "transmittance of the direct beam from the top of the "
                              "atmosphere (direct_normal / toa_irradiance)"),
     "sun_azimuth_deg": ("degree", "sun azimuth from north towards east"),
+    "sun_distance_m": ("m", "distance of the star at the time, by which the light is scaled "
+                       "(inverse-square law) from the config's distance"),
     "tilt_deg": ("degree", "tilt of the plane from the horizontal"),
     "plane_azimuth_deg": ("degree", "azimuth the plane faces, from north towards east"),
     "plane_direct": ("W m-2 nm-1", "direct spectral irradiance on the plane"),

@@ -221,7 +221,7 @@ def render_sky_at(solver, camera: Camera, viewpoint: Viewpoint, star: Star, sky:
     position = viewpoint.position_m
     directions, valid = camera.directions()
     sun_today = dataclasses.replace(star, distance_m=sky.sun.distance_m)
-    distance_scale = (star.distance_m / sky.sun.distance_m) ** 2
+    distance_scale = star.irradiance_scale_at(sky.sun.distance_m)
     sun_true = sky.sun.direction()
     lights = []
     moon = None

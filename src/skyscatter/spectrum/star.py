@@ -257,6 +257,11 @@ class Star:
         """Solid angle of the disk, Ω = 2π (1 - cos α). [sr]"""
         return 2.0 * math.pi * (1.0 - math.cos(self.angular_radius_rad))
 
+    def irradiance_scale_at(self, distance_m: float) -> float:
+        """(d / distance_m)^2: how much more the star lights a planet `distance_m` [m] away (a
+        date's, from the ephemeris) than one at its own distance d (inverse-square law)."""
+        return (self.distance_m / distance_m) ** 2
+
     def irradiance_toa(self, wavelengths_nm: ArrayLike) -> np.ndarray:
         """Spectral irradiance from the whole disk, normal to the beam, at the planet (no air).
 

@@ -13,7 +13,9 @@ sun_zenith (a sweep over times: time), view_zenith, azimuth (relative to the sun
 `grid_variables` returns them as name -> (dimensions, array), `grid_coordinates` the values
 of every dimension, with the attributes of the config axes (`config_key`: the dotted key).
 A sweep over times has a time coordinate (numpy datetime64 in UTC; xarray writes it as CF
-"<units> since <date>") and `time_coordinates` gives sun_zenith(time) and sun_azimuth(time).
+"<units> since <date>") and `time_coordinates` gives sun_zenith(time), sun_azimuth(time) and
+sun_distance(time) [m] (the radiance and surface irradiances are at that distance, the
+toa_irradiance at the config's).
 
 Public names: `grid_coordinates`, `grid_variables`, `time_coordinates`.
 """
@@ -54,12 +56,14 @@ def grid_coordinates(plan: SweepPlan) -> dict[str, tuple[list, str | dict[str, s
 
 
 def time_coordinates(plan: SweepPlan) -> dict[str, tuple[str, list[float], str]]:
-    """sun_zenith and sun_azimuth (from north towards east) [deg] along the time of a sweep
-    over times (none otherwise): name -> (dimension, values, column of its units)."""
+    """sun_zenith and sun_azimuth (from north towards east) [deg] and sun_distance [m] along
+    the time of a sweep over times (none otherwise): name -> (dimension, values, column of its
+    units)."""
     if not plan.times_utc:
         return {}
     return {"sun_zenith": ("time", list(plan.sun_zeniths_deg), "sun_zenith_deg"),
-            "sun_azimuth": ("time", list(plan.sun_azimuths_deg), "sun_azimuth_deg")}
+            "sun_azimuth": ("time", list(plan.sun_azimuths_deg), "sun_azimuth_deg"),
+            "sun_distance": ("time", list(plan.sun_distances_m), "sun_distance_m")}
 
 
 def grid_variables(plan: SweepPlan, store: ChunkStore

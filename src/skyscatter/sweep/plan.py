@@ -50,7 +50,8 @@ class SweepPlan:
     observer's altitude [m] and the solver with its settings (`orders` None: each
     atmosphere's config's; tables cached in `cache_dir` unless not `use_cache`). A sweep over
     times has `times_utc` (ISO 8601 in UTC, one per sun zenith: the sun's zenith angle and
-    azimuth `sun_azimuths_deg` then) at `place_deg` (latitude, longitude)."""
+    azimuth `sun_azimuths_deg` then, and its distance `sun_distances_m` [m], which scales the
+    light by the inverse-square law) at `place_deg` (latitude, longitude)."""
 
     config: str
     document: dict[str, Any]
@@ -70,6 +71,7 @@ class SweepPlan:
     times_utc: tuple[str, ...] = ()
     sun_azimuths_deg: tuple[float, ...] = ()
     place_deg: tuple[float, float] | None = None
+    sun_distances_m: tuple[float, ...] = ()
     dimensions: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -151,6 +153,6 @@ class SweepPlan:
                      "seed": self.seed}
         if self.times_utc:
             described.update(times_utc=self.times_utc, sun_azimuths_deg=self.sun_azimuths_deg,
-                             place_deg=self.place_deg)
+                             place_deg=self.place_deg, sun_distances_m=self.sun_distances_m)
         text = json.dumps(described, sort_keys=True, default=str, allow_nan=True)
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
