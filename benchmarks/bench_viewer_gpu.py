@@ -93,6 +93,9 @@ FAST_LUTS = ("transmittance", "multiple", "irradiance", "sky_view")
 FAST_UNITS = {"u_fast_transmittance": 0, "u_fast_multiple": 1, "u_fast_sky_view": 2,
               "u_fast_density": 3, "u_fast_phase": 4, "u_fast_irradiance": 5}
 LAYOUT = STATIC / "generated" / "lut_layout.json"
+# the fast model's atmospheres: Earth (the PSNR against its tables), Mars's Mie dust, and the
+# fog's 13 335 density levels (the largest description)
+FAST_ATMOSPHERES = ("earth", "mars-physical", "earth-fog")
 # bench_viewer.py's VIEW and the page's defaults (controls.js NUMBERS)
 VIEW = {"sun_zenith": 60.0, "sun_azimuth": 200.0, "heading": 180.0, "pitch": 10.0,
         "roll": 0.0, "fov": 60.0, "fisheye_fov": 180.0, "altitude_m": 2.0, "lat": 45.0,
@@ -165,11 +168,14 @@ def prepare(out: Path, cache_dir: str | None) -> None:
                  spacing=json.dumps(_spacings(site)), **arrays)
         print(f"clouds {name}: {len(message) / 2**20:.1f} MiB message")
     from skyscatter.viewer.gpu_fast import decode_fast
-    message = service.fast_message("earth")
-    header, arrays = decode_fast(message)
-    np.savez(out / "fast-earth.npz", header=json.dumps(header), message_bytes=len(message),
-             **arrays)
-    print(f"fast model: {len(message) / 2**10:.1f} KiB description, {header['groups']} groups")
+    for name in FAST_ATMOSPHERES:
+        message = service.fast_message(name)
+        header, arrays = decode_fast(message)
+        view, _ = view_uniforms(VIEW, header["bottom_radius_m"])
+        np.savez(out / f"fast-{name}.npz", header=json.dumps(header), view=json.dumps(view),
+                 message_bytes=len(message), **arrays)
+        print(f"fast model {name}: {len(message) / 2**10:.1f} KiB description, "
+              f"{header['groups']} groups, {header['altitudes']} density levels")
 
 
 def _cloud_uniforms(gpu, site, seconds: float) -> tuple[np.ndarray, dict]:
@@ -764,7 +770,8 @@ def _load(path: Path) -> dict:
 
 
 def run(directory: Path, frames: tuple[int, int], warm_up: tuple[int, int],
-        png: Path | None, cloud_presets: tuple[str, ...] = CLOUD_PRESETS) -> None:
+        png: Path | None, cloud_presets: tuple[str, ...] = CLOUD_PRESETS, *,
+        fast_only: bool = False) -> None:
     """Times every case and prints one line each (the clear and fast-model cases over
     frames[0] after warm_up[0], the cloud cases over frames[1] after warm_up[1]); ends with a
     summary table."""
@@ -786,7 +793,7 @@ def run(directory: Path, frames: tuple[int, int], warm_up: tuple[int, int],
               f"wall {rows[-1][5]:.3f} ms (p95 {rows[-1][6]:.3f})")
 
     _warm_clocks(ctx, _load(directory / "earth-preview.npz"))
-    for quality in ("full", "preview"):
+    for quality in () if fast_only else ("full", "preview"):
         data = _load(directory / f"earth-{quality}.npz")
         header = data["header"]
         print(f"earth {quality}: {header['n_wavelengths']} wavelengths, scattering "
@@ -840,36 +847,43 @@ def run(directory: Path, frames: tuple[int, int], warm_up: tuple[int, int],
 
 
 def _time_fast(directory: Path, ctx, timed, png: Path | None) -> None:
-    """The fast model's change-to-image cases (module docstring), and how far its frame lies
-    from the preview tables' (the tables the page shows after it)."""
-    path = directory / "fast-earth.npz"
-    if not path.exists():
-        print(f"no {path.name}: no fast-model cases (run `prepare` again)")
-        return
-    with np.load(path) as npz:
-        fast_data = {"density": npz["density"], "phase": npz["phase"],
-                     "header": json.loads(str(npz["header"]))}
+    """The fast model's change-to-image cases (module docstring) for each of FAST_ATMOSPHERES
+    prepared, in the view of each's own radius, and for Earth how far its frame lies from the
+    preview tables' (the tables the page shows after it)."""
     data = _load(directory / "earth-preview.npz")
-    frame = Frame(ctx, [data])
-    frame.resize(1920, 1080)
-    frame.draw(0, 1)
-    tables_image = _screen(frame).astype(float)
-    frame.fast = fast = FastModel(frame, fast_data)
-    factors = iter(np.resize([2.0, 1.0], 10**6))
-
-    def change() -> None:  # a slider moved: the aerosol's amount, then the image
-        fast.compute({"aerosol": next(factors)})
+    for name in FAST_ATMOSPHERES:
+        path = directory / f"fast-{name}.npz"
+        if not path.exists():
+            print(f"no {path.name}: no fast-model case for {name} (run `prepare` again)")
+            continue
+        with np.load(path) as npz:
+            fast_data = {"density": npz["density"], "phase": npz["phase"],
+                         "header": json.loads(str(npz["header"]))}
+            view = json.loads(str(npz["view"]))
+        frame = Frame(ctx, [data])
+        frame.resize(1920, 1080)
         frame.draw(0, 1)
+        tables_image = _screen(frame).astype(float)
+        frame.view = view
+        frame.fast = fast = FastModel(frame, fast_data)
+        changed = fast_data["header"]["names"][-1]  # the particles (aerosol, dust, fog)
+        factors = iter(np.resize([2.0, 1.0], 10**6))
 
-    image = "perspective 1920x1080"
-    timed("fast", image, "change to image (LUTs, sky view, frame)", change)
-    timed("fast", image, "LUTs and sky view", partial(fast.compute, {"aerosol": 1.5}))
-    fast.compute({})
-    timed("fast", image, "frame (sky view kept)", partial(frame.draw, 0, 1))
-    _check(frame, "fast-perspective", png)
-    error = _screen(frame).astype(float) - tables_image
-    print(f"  fast model against the preview tables: PSNR "
-          f"{10 * np.log10(255.0**2 / np.mean(error**2)):.1f} dB")
+        def change(fast=fast, frame=frame, changed=changed, factors=factors) -> None:
+            fast.compute({changed: next(factors)})  # a slider moved, then the image
+            frame.draw(0, 1)
+
+        image = "perspective 1920x1080"
+        timed(f"fast {name}", image, f"change ({changed}) to image", change)
+        timed(f"fast {name}", image, "LUTs and sky view",
+              partial(fast.compute, {changed: 1.5}))
+        fast.compute({})
+        timed(f"fast {name}", image, "frame (sky view kept)", partial(frame.draw, 0, 1))
+        _check(frame, f"fast-{name}", png)
+        if name == "earth":
+            error = _screen(frame).astype(float) - tables_image
+            print(f"  fast model against the preview tables: PSNR "
+                  f"{10 * np.log10(255.0**2 / np.mean(error**2)):.1f} dB")
 
 
 def _warm_clocks(ctx, data: dict, seconds: float = 3.0) -> None:
@@ -953,13 +967,16 @@ def main() -> None:
                       help="frames of each cloud case (up to a second each on an H200)")
     step.add_argument("--cloud-warm-up", type=int, default=2)
     step.add_argument("--no-clouds", action="store_true", help="leave the cloud cases out")
+    step.add_argument("--fast-only", action="store_true",
+                      help="only the fast model's cases (no clear-sky or cloud frames)")
     step.add_argument("--png", type=Path, default=None, help="save each case's frame here")
     args = parser.parse_args()
     if args.command == "prepare":
         prepare(args.out, args.cache_dir)
     else:
         run(args.tables, (args.frames, args.cloud_frames), (args.warm_up, args.cloud_warm_up),
-            args.png, () if args.no_clouds else CLOUD_PRESETS)
+            args.png, () if args.no_clouds or args.fast_only else CLOUD_PRESETS,
+            fast_only=args.fast_only)
 
 
 if __name__ == "__main__":
