@@ -30,7 +30,8 @@ and ground-irradiance LUTs and the sky-view LUT, one pass a LUT and group of fou
 into a layer of an RGBA16F texture array, then the frame (fast_sky + composite) at 1920 x 1080;
 timed as a whole (the change-to-image latency's GPU part), the LUTs alone and the frame alone
 (a still view: its sky-view LUT kept), from the description the server sends (`/api/fast`,
-fast-earth.npz).
+fast-NAME.npz), for each of FAST_ATMOSPHERES (the particles' factor changed; each in the view
+at its own radius); `--fast-only` times only these.
 
 The viewer shows one atmosphere at a time; "one more atmosphere on screen" is measured as a
 second sky pass from a second, separately uploaded copy of the same tables, added into the same
@@ -43,7 +44,7 @@ Two steps, so that the GPU machine needs neither skyscatter's dependencies nor i
        PYTHONPATH=src python benchmarks/bench_viewer_gpu.py prepare --out .bench_gpu
      writes .bench_gpu/earth-full.npz and earth-preview.npz (the decoded table message and the
      view's uniforms: bench_viewer.py's view, 2 m above ground at 45 deg N, sun zenith 60 deg),
-     clouds-NAME.npz and fast-earth.npz (the fast model's description);
+     clouds-NAME.npz and fast-NAME.npz (the fast model's descriptions);
   2. on the GPU machine (numpy and moderngl only):
        python benchmarks/bench_viewer_gpu.py run --tables .bench_gpu [--frames 500]
      prints the GL renderer and driver and one line per case; --png DIR saves the frames.
