@@ -1477,7 +1477,8 @@ def viewer_server(config: str | Path | None = None, host: str = "127.0.0.1", por
     def sky_at(atmosphere: Atmosphere, time: str, latitude_deg: float,
                longitude_deg: float) -> dict:
         return sky_message(atmosphere.planet.body,
-                           make_observer(time, latitude_deg, longitude_deg))
+                           make_observer(time, latitude_deg, longitude_deg),
+                           atmosphere.planet.star)
 
     return make_server(service, sky_at, host, port, log)
 

@@ -619,6 +619,10 @@ def test_sun_position_agrees_with_pyephem(server):
     sun = ephem.Sun(observer)
     assert abs(sky["sun_zenith_deg"] - (90.0 - math.degrees(sun.alt))) < 0.005
     assert abs(sky["sun_azimuth_deg"] - math.degrees(sun.az)) < 0.05
+    # the sun's light at its distance that day over 1 AU (the earth preset's): PyEphem's
+    # Earth-Sun distance (geocentric; ours is topocentric, 4.3e-5 closer at most), so 1e-4
+    assert sky["sun_light_scale"] == pytest.approx(1.0 / sun.earth_distance**2, rel=1e-4)
+    assert sky["sun_light_scale"] < 0.97  # near aphelion: 3 % less light
 
 
 # 8. Who may ask: Host, Origin, token ------------------------------------------------------------

@@ -117,6 +117,11 @@ def test_night_stars_match_cpu_renderer(page, viewer_url, tmp_path):
                                        "lon": lon, "time": time}, width=size, height=size,
                     ev100=ev100, compensation=1)
     assert page.evaluate("window.skyscatter.viewer.stars.count") > 4000
+    # the sky at a date is lit by the sun at its distance then (10 January: 0.9834 AU,
+    # +3.4 % over the preset's 1 AU), as render_sky_at lights it
+    scale = page.evaluate("window.skyscatter.viewer.state.sun_light_scale")
+    stops = page.evaluate("window.skyscatter.viewer.viewUniforms(1, 1).u_sun_light_stops")
+    assert 1.03 < scale < 1.04 and stops == pytest.approx(np.log2(scale), rel=1e-9)
     assert np.count_nonzero(cpu.max(axis=-1) > 40) > 100  # stars were drawn
     assert psnr_db(gpu, cpu) >= MIN_PSNR_DB
 

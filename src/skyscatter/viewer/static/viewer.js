@@ -542,6 +542,7 @@ class Viewer {
       u_camera_position: position,
       u_sun_direction: sun,
       u_exposure: Math.pow(2, s.compensation) / (this.layout.exposure.saturation_factor * Math.pow(2, s.ev100)),
+      u_sun_light_stops: s.time ? Math.log2(s.sun_light_scale ?? 1) : 0,
       u_operator: this.layout.operators.indexOf(s.operator),
     };
   }
@@ -820,6 +821,7 @@ async function applySky(viewer, time, lat, lon) {
   if (state.mode === "ground") { state.lat = state.site_lat; state.lon = state.site_lon; }
   state.sun_zenith = answer.sun_zenith_deg;
   state.sun_azimuth = answer.sun_azimuth_deg;
+  state.sun_light_scale = answer.sun_light_scale;  // the sun's distance that day
   state.time = time;
   viewer.setStars(answer.stars);
   return answer;

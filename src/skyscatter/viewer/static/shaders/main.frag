@@ -9,6 +9,9 @@
 // tables. u_camera_position and u_sun_direction (world) are declared in clouds.glsl.
 
 uniform float u_exposure;        // exposure_scale(EV100, compensation)
+// the sun's light at a date's distance over the config's, in stops (0 without a date:
+// /api/sky's sun_light_scale, as render --time scales the sky); not the disk's radiance
+uniform float u_sun_light_stops;
 uniform int u_operator;
 uniform int u_output;            // OUTPUT_DISPLAY, OUTPUT_METER or OUTPUT_EXPOSED
 uniform vec3 u_sun_disk[SUN_DISK_SAMPLES];  // XYZ disk radiance at cos(limb) = 0 .. 1
@@ -69,6 +72,7 @@ void main() {
 #else
     vec3 radiance = sky_radiance(u_camera_position, dir, u_sun_direction, 1.0);
 #endif
+    radiance *= exp2(u_sun_light_stops);
 #ifdef FAST_MODEL
     vec3 transmittance = fast_sun_transmittance(u_camera_position, u_sun_direction);
 #else
