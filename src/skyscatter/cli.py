@@ -1417,43 +1417,43 @@ def _camera(args: argparse.Namespace):
                                  pitch_deg=args.pitch)
 
 
-def _sun_zeniths(args: argparse.Namespace, atmosphere) -> tuple[list[float], float | None]:
-    """(--sun-zenith, None), or the sun's zenith angle at --time for --lat/--lon and its
-    distance then [m] (said on stderr)."""
+def _sun_zeniths(args: argparse.Namespace, atmosphere) -> tuple[list[float], object]:
+    """(--sun-zenith, None), or the sun's zenith angle at --time for --lat/--lon and the
+    `api.sky_ephemeris` it comes from (said on stderr)."""
     from skyscatter import api
     if args.time is None:
         return args.sun_zenith, None
     sky = api.sky_ephemeris(atmosphere, _observer(args))
     print(_sky_summary(sky), file=sys.stderr)
-    return [sky.sun_zenith_deg], sky.sun.distance_m
+    return [sky.sun_zenith_deg], sky
 
 
-def _with_distance(geometry: dict, distance_m: float | None) -> dict:
-    """The rows' metadata `geometry` with the sun's distance at --time [m]."""
-    return geometry if distance_m is None else {**geometry, "sun_distance_m": distance_m}
+def _sun_distance(sky) -> float | None:
+    """The sun's distance [m] at --time (`_sun_zeniths`'s ephemeris), None without a date."""
+    return None if sky is None else sky.sun.distance_m
 
 
 def _radiance(args: argparse.Namespace) -> None:
     from skyscatter import api
     output_format = _rows_format(args)
     atmosphere = api.load_atmosphere(args.atmosphere)
-    sun_zenith, distance = _sun_zeniths(args, atmosphere)
+    sun_zenith, sky = _sun_zeniths(args, atmosphere)
     with _solver_options(args, atmosphere) as options:
         if output_format == "netcdf":
             api.write_netcdf(api.radiance_dataset(
                 atmosphere, sun_zenith, args.view_zenith, args.view_azimuth, args.wavelengths,
                 altitude_m=args.altitude, solver=args.solver, options=options,
-                allow_large=args.allow_large, sun_distance_m=distance), args.output)
+                allow_large=args.allow_large, sun_distance_m=_sun_distance(sky)), args.output)
             return
         rows = api.sky_radiance_rows(atmosphere, sun_zenith, args.view_zenith,
                                      args.view_azimuth, args.wavelengths,
                                      altitude_m=args.altitude, solver=args.solver,
                                      options=options, allow_large=args.allow_large,
-                                     sun_distance_m=distance)
-        geometry = _with_distance({"view_zeniths_deg": args.view_zenith,
-                                   "relative_azimuths_deg": args.view_azimuth}, distance)
+                                     sun_distance_m=_sun_distance(sky))
+        geometry = {"view_zeniths_deg": args.view_zenith,
+                    "relative_azimuths_deg": args.view_azimuth}
         _write_rows(args, output_format, rows, _rows_metadata(args, atmosphere, rows, options,
-                                                              sun_zenith, geometry))
+                                                              sun_zenith, geometry, sky))
 
 
 def _irradiance(args: argparse.Namespace) -> None:
@@ -1467,10 +1467,10 @@ def _irradiance(args: argparse.Namespace) -> None:
             raise InputError(f"--{name.replace('_', '-')} is for the plane of --tilt: give "
                              "--tilt DEG too", key=name, value=getattr(args, name))
     atmosphere = api.load_atmosphere(args.atmosphere)
-    sun_zenith, distance = _sun_zeniths(args, atmosphere)
+    sun_zenith, sky = _sun_zeniths(args, atmosphere)
     sun_azimuth = 180.0 if args.sun_azimuth is None else args.sun_azimuth
-    if args.time is not None:
-        sun_azimuth = api.sky_ephemeris(atmosphere, _observer(args)).sun.azimuth_deg
+    if sky is not None:
+        sun_azimuth = sky.sun.azimuth_deg
     plane = {} if args.tilt is None else {"tilt_deg": args.tilt,
                                           "plane_azimuth_deg": 180.0 if args.plane_azimuth
                                           is None else args.plane_azimuth,
@@ -1479,15 +1479,15 @@ def _irradiance(args: argparse.Namespace) -> None:
         if output_format == "netcdf":
             api.write_netcdf(api.irradiance_dataset(
                 atmosphere, sun_zenith, args.wavelengths, altitude_m=args.altitude,
-                solver=args.solver, options=options, sun_distance_m=distance, **plane),
-                args.output)
+                solver=args.solver, options=options, sun_distance_m=_sun_distance(sky),
+                **plane), args.output)
             return
         rows = api.irradiance_rows(atmosphere, sun_zenith, args.wavelengths,
                                    altitude_m=args.altitude, solver=args.solver, options=options,
-                                   transmittance=args.transmittance, sun_distance_m=distance,
-                                   **plane)
-        _write_rows(args, output_format, rows, _rows_metadata(
-            args, atmosphere, rows, options, sun_zenith, _with_distance(plane, distance)))
+                                   transmittance=args.transmittance,
+                                   sun_distance_m=_sun_distance(sky), **plane)
+        _write_rows(args, output_format, rows,
+                    _rows_metadata(args, atmosphere, rows, options, sun_zenith, plane, sky))
 
 
 def _add_fit_command(commands) -> None:
@@ -1634,14 +1634,16 @@ def _rows_format(args: argparse.Namespace) -> str:
 
 
 def _rows_metadata(args: argparse.Namespace, atmosphere, rows: list[dict[str, float]],
-                   options, sun_zeniths: list[float], geometry: dict) -> dict | None:
-    """The run's `api.output_metadata` when --metadata asks for it, else None."""
+                   options, sun_zeniths: list[float], geometry: dict, sky) -> dict | None:
+    """The run's `api.output_metadata` when --metadata asks for it, else None; `sky`: the
+    ephemeris of --time (`_sun_zeniths`), or None."""
     from skyscatter import api
     if args.metadata is None:
         return None
     place = {"altitude_m": args.altitude, "sun_zeniths_deg": sun_zeniths}
-    if args.time is not None:
-        place.update(time=args.time, latitude_deg=args.lat, longitude_deg=args.lon)
+    if sky is not None:
+        place.update(time=args.time, latitude_deg=args.lat, longitude_deg=args.lon,
+                     sun_distance_m=sky.sun.distance_m)
     return api.output_metadata(atmosphere, list(rows[0]), args.wavelengths, solver=args.solver,
                                options=options, geometry={**place, **geometry})
 

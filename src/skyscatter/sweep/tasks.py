@@ -5,28 +5,42 @@ other machines). `build_solver` is the expensive, once-per-atmosphere part (with
 solver: the precomputed tables, from the table cache where the worker can see one);
 `compute_chunk` the per-chunk part, `render.radiance_grid` on one sun zenith.
 
-Public names: `build_solver`, `compute_chunk`.
+Public names: `AtmosphereSolver`, `build_solver`, `compute_chunk`.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from skyscatter.render.radiance_grid import sky_radiance_grid, surface_irradiance_grid
+from skyscatter.spectrum.star import Star
 from skyscatter.sweep.plan import SweepPlan
 from skyscatter.transport.solvers import Solver, SurfaceSolver, make_solver
 
-__all__ = ["build_solver", "compute_chunk"]
+__all__ = ["AtmosphereSolver", "build_solver", "compute_chunk"]
 
 
-def build_solver(plan: SweepPlan, atmosphere: int) -> Solver:
+@dataclass(frozen=True)
+class AtmosphereSolver:
+    """What `build_solver` makes for one atmosphere: its `solver` and its `star` (at the
+    config's distance: a sweep over times scales the light to each time's distance)."""
+
+    solver: Solver
+    star: Star
+
+
+def build_solver(plan: SweepPlan, atmosphere: int) -> AtmosphereSolver:
     """The solver of atmosphere `atmosphere` of `plan` on its monochromatic wavelengths."""
     model = plan.atmosphere(atmosphere)
     profile = model.optical_profile(np.asarray(plan.wavelengths_nm), monochromatic=True)
-    return make_solver(plan.solver, profile, plan.solver_options(model))
+    return AtmosphereSolver(make_solver(plan.solver, profile, plan.solver_options(model)),
+                            model.planet.star)
 
 
-def compute_chunk(engine: Solver, plan: SweepPlan, chunk: int) -> dict[str, np.ndarray]:
+def compute_chunk(built: AtmosphereSolver, plan: SweepPlan, chunk: int
+                  ) -> dict[str, np.ndarray]:
     """The arrays of chunk `chunk` (one atmosphere at one sun zenith) from its solver:
     radiance (n_view, n_azimuth, n_wl) [W m^-2 sr^-1 nm^-1], toa_irradiance (n_wl,)
     [W m^-2 nm^-1]; standard_error (as radiance) from a Monte Carlo solver; direct_normal,
@@ -35,12 +49,11 @@ def compute_chunk(engine: Solver, plan: SweepPlan, chunk: int) -> dict[str, np.n
     the irradiances on surfaces are those of the star at the time's distance
     (`Star.irradiance_scale_at`); toa_irradiance stays the config's (the dataset's
     sun_distance(time) gives the scale)."""
-    atmosphere, index = plan.chunk(chunk)
+    engine = built.solver
+    index = plan.chunk(chunk)[1]
     sun = [plan.sun_zeniths_deg[index]]
-    scale = 1.0
-    if plan.sun_distances_m:
-        star = plan.atmosphere(atmosphere).planet.star
-        scale = star.irradiance_scale_at(plan.sun_distances_m[index])
+    scale = (built.star.irradiance_scale_at(plan.sun_distances_m[index])
+             if plan.sun_distances_m else 1.0)
     radiance, error = sky_radiance_grid(engine, plan.altitude_m, sun, plan.view_zeniths_deg,
                                         plan.relative_azimuths_deg)
     toa = np.asarray(engine.profile.toa_irradiance, dtype=np.float64)

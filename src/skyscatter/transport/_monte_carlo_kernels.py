@@ -803,9 +803,9 @@ def first_collision(n, cdf, tau, t_nodes, u):
 @njit(parallel=True, cache=True)
 def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_orders, rr_start,
                bottom_radius, top_radius, h_step, density, extinction, extinction_maxima,
-               scattering, scatterers,
-               phase, cdf, majorant, sun_irradiance, albedo, sun_angular_radius,
-               n_sun_samples, sun_share, sun_probability, peak, peak_scattering, nodes, first):
+               scattering, scatterers, phase, cdf, majorant, sun_irradiance, albedo,
+               sun_angular_radius, n_sun_samples, sun_share, sun_probability, peak,
+               peak_scattering, nodes, first):
     """Sums and sums of squares (n_ray, n_wl, n_batch) of the path estimates [W m^-2 sr^-1
     nm^-1] of `n_paths` paths per ray and wavelength, in batches of `batch` paths; `nodes` and
     `first` are what `view_ray_nodes` and `first_collision_tables` return for these rays. Each path
@@ -863,17 +863,15 @@ def trace_rays(origins, directions, unit_offset, sun, n_paths, batch, seed, max_
                     px, py, pz, dx, dy, dz, transmittance * be * inverse_pdf, SCATTER, w, sun,
                     max_orders, rr_start, bottom_radius, top_radius, h_step, density,
                     extinction, extinction_maxima, scattering, scatterers, phase, cdf, cos_grid,
-                    majorant, albedo,
-                    sun_angular_radius, n_sun_samples, sun_share, sun_probability, peak,
-                    peak_scattering, dens, column, scratch)
+                    majorant, albedo, sun_angular_radius, n_sun_samples, sun_share,
+                    sun_probability, peak, peak_scattering, dens, column, scratch)
             if hits[i]:
                 value += random_walk(
                     gx * scale, gy * scale, gz * scale, dx, dy, dz, ground_transmittance,
                     GROUND, w, sun, max_orders, rr_start, bottom_radius, top_radius, h_step,
                     density, extinction, extinction_maxima, scattering, scatterers, phase, cdf,
-                    cos_grid, majorant,
-                    albedo, sun_angular_radius, n_sun_samples, sun_share, sun_probability, peak,
-                    peak_scattering, dens, column, scratch)
+                    cos_grid, majorant, albedo, sun_angular_radius, n_sun_samples, sun_share,
+                    sun_probability, peak, peak_scattering, dens, column, scratch)
             value *= sun_irradiance[w]
             total += value
             total_sq += value * value
