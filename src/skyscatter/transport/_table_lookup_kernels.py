@@ -86,6 +86,7 @@ class LookupTables(NamedTuple):
     slant_depth: np.ndarray  # (n_r_t, n_mu_t, n_wl) -ln(transmittance) to the top [-]
     peak_depth: np.ndarray  # (n_r_t, n_mu_t, n_wl) the particles' peak depth to the top [-]
     aureole_shape: np.ndarray  # (n_x, n_psi, n_wl) multiple peak scattering [sr^-1]
+    aureole_blur: np.ndarray  # (n_x, n_psi, n_wl) the peaks' blur of smooth light [sr^-1]
     aureole_x_max: float  # largest peak depth of aureole_shape [-]
     aureole_psi_max: float  # its largest angle from the sun [rad]; 0: no aureole
 
@@ -838,9 +839,12 @@ def aureole_path(r, mu, mu_s, nu, tables, out):
 
 @njit(cache=True)
 def add_aureole(r, mu_s, nu, path, tables, value):
-    """value[w] += E_sun V T' (exp(x') - 1 - x') G(x', psi) for the Poisson law `path`
-    (`aureole_path`) of a view at cos(angle from the sun) nu from radius r."""
-    bottom_radius, shape, x_max = tables.bottom_radius, tables.aureole_shape, tables.aureole_x_max
+    """value[w] += E_sun V T' ((exp(x') - 1 - x') G(x', psi) + exp(x') x' B(x', psi)) for the
+    Poisson law `path` (`aureole_path`) of a view at cos(angle from the sun) nu from radius r:
+    the light scattered two or more times in the peaks, and the peaks' blur of light scattered
+    once in the smooth part (`transport.aureole`)."""
+    bottom_radius, x_max = tables.bottom_radius, tables.aureole_x_max
+    shape, blur = tables.aureole_shape, tables.aureole_blur
     n_x, n_psi = shape.shape[0], shape.shape[1]
     visible = sun_visible_fraction(r, mu_s, bottom_radius, tables.sun_angular_radius)
     if visible <= 0.0:
@@ -854,8 +858,11 @@ def add_aureole(r, mu_s, nu, path, tables, value):
         i_x, a_x = linear_axis(math.log1p(x) / math.log1p(x_max) * (n_x - 1), n_x)
         g = ((1.0 - a_x) * ((1.0 - a_p) * shape[i_x, i_p, w] + a_p * shape[i_x, i_p + 1, w])
              + a_x * ((1.0 - a_p) * shape[i_x + 1, i_p, w] + a_p * shape[i_x + 1, i_p + 1, w]))
-        value[w] += (tables.sun_irradiance[w] * visible * math.exp(path[1, w])
-                     * (math.expm1(x) - x) * g)
+        b = ((1.0 - a_x) * ((1.0 - a_p) * blur[i_x, i_p, w] + a_p * blur[i_x, i_p + 1, w])
+             + a_x * ((1.0 - a_p) * blur[i_x + 1, i_p, w] + a_p * blur[i_x + 1, i_p + 1, w]))
+        value[w] += (tables.sun_irradiance[w] * visible
+                     * (math.exp(path[1, w]) * (math.expm1(x) - x) * g
+                        + math.exp(path[1, w] + x) * x * b))
 
 
 @njit(parallel=True, cache=True)

@@ -127,6 +127,7 @@ class LutSolver:
             slant_depth=_depth(tables.transmittance, SLANT_DEPTH_MAX),
             peak_depth=_depth(tables.peak_transmittance, float(tables.aureole_limits[0])),
             aureole_shape=tables.aureole_shape,
+            aureole_blur=tables.aureole_blur,
             aureole_x_max=float(tables.aureole_limits[0]),
             aureole_psi_max=float(tables.aureole_limits[1]))
 

@@ -39,11 +39,12 @@ from skyscatter.transport.tables import (
 __all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_arrays"]
 
 # bump when the arrays stored change meaning (2: truncated peaks, the orders' tail, the aureole;
-# 3: the radius axis's warp; 4: the scattering table packed, `table_packing`)
-TABLE_FORMAT = 4
+# 3: the radius axis's warp; 4: the scattering table packed, `table_packing`; 5: the peaks'
+# blur of light scattered once in the smooth part, `aureole_blur`)
+TABLE_FORMAT = 5
 _ARRAYS = ("wavelengths_nm", "transmittance", "irradiance", "phase", "order_mean_radiance",
            "order_zenith_radiance", "tail_share", "peak_transmittance", "aureole_shape",
-           "aureole_limits", "radius_warp")
+           "aureole_blur", "aureole_limits", "radius_warp")
 _MAX_DEFLATE_RATIO = 1100
 # Where the precomputation starts: the key covers the code it reaches (`code_fingerprint`).
 _PRECOMPUTATION = ("skyscatter.transport.tables", "precompute_tables")

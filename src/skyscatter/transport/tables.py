@@ -302,6 +302,8 @@ class AtmosphereTables:
                    on the transmittance table's axes [-]
     aureole_shape  (n_x, n_psi, n_wl) float64: the angular shape of the light scattered twice
                    or more in the peaks (`transport.aureole.PeakAureole`) [sr^-1]
+    aureole_blur   (n_x, n_psi, n_wl) float64: on the same nodes, the peaks' blur of light
+                   scattered once in the smooth part (`transport.aureole.PeakAureole`) [sr^-1]
     aureole_limits (x_max, psi_max [rad]) of that table; psi_max = 0 where nothing is clipped
     radius_warp    (RADIUS_WARP_SEGMENTS + 1,) float64: the scattering table's radius axis
                    (`radius_warp`, `table_parameterisation.scattering_u_r`)
@@ -327,6 +329,7 @@ class AtmosphereTables:
     tail_share: np.ndarray
     peak_transmittance: np.ndarray
     aureole_shape: np.ndarray
+    aureole_blur: np.ndarray
     aureole_limits: np.ndarray
     radius_warp: np.ndarray
 
@@ -349,7 +352,8 @@ class AtmosphereTables:
     @property
     def nbytes(self) -> int:
         return sum(a.nbytes for a in (self.transmittance, self.scattering, self.irradiance,
-                                      self.phase, self.peak_transmittance, self.aureole_shape))
+                                      self.phase, self.peak_transmittance, self.aureole_shape,
+                                      self.aureole_blur))
 
 
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
@@ -604,6 +608,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         order_mean_radiance=order_mean, order_zenith_radiance=order_zenith,
         orders_computed=orders_computed, tail_share=tail_share,
         peak_transmittance=peak_transmittance, aureole_shape=aureole.shape,
+        aureole_blur=aureole.blur,
         aureole_limits=np.array([aureole.x_max, aureole.psi_max_rad]), radius_warp=warp)
 
 
@@ -612,22 +617,31 @@ def _peak_aureole(profile: OpticalProfile, scaled: _ScaledOptics, scatterers: np
                   columns: np.ndarray, truncation_angle_deg: float
                   ) -> tuple[np.ndarray, PeakAureole]:
     """(exp(-x) (n_r_t, n_mu_t, n_wl) with x the peak depth f beta_s along the transmittance
-    table's rays, the aureole of the peaks' multiple scattering) (`transport.aureole`); the
-    peaks of several constituents mixed by their vertical peak depths. Without a clipped peak a
+    table's rays, the aureole of the peaks' multiple scattering and their blur of light
+    scattered once in the smooth part) (`transport.aureole`); the peaks of several
+    constituents mixed by their vertical peak depths, the smooth phase functions of the
+    clipped constituents by their vertical smooth scattering depths. Without a clipped peak a
     transmittance of 1 and an aureole of angle 0 (nothing to add)."""
     n_wl = profile.n_wavelengths
     if not np.any(peak > 0.0):
-        return np.ones((2, 2, n_wl)), PeakAureole(np.zeros((2, 2, n_wl)), 1.0, 0.0)
+        nothing = np.zeros((2, 2, n_wl))
+        return np.ones((2, 2, n_wl)), PeakAureole(nothing, nothing, 1.0, 0.0)
     removed = scaled.removed
     depth = np.einsum("cw,crm->rmw", removed, columns)
-    vertical = removed[scatterers] * profile.density[scatterers].sum(axis=1)[:, None]
-    share = vertical / np.maximum(vertical.sum(axis=0), np.finfo(float).tiny)  # (n_s, n_wl)
+    column = profile.density[scatterers].sum(axis=1)[:, None]
+    vertical = removed[scatterers] * column
+    smooth_vertical = np.where(peak > 0.0, scaled.scattering[scatterers], 0.0) * column
+    tiny = np.finfo(float).tiny
+    share = vertical / np.maximum(vertical.sum(axis=0), tiny)  # (n_s, n_wl)
+    smooth_share = smooth_vertical / np.maximum(smooth_vertical.sum(axis=0), tiny)
     with np.errstate(divide="ignore", invalid="ignore"):
         peak_phase = np.where(peak[:, None, :] > 0.0,
                               (phase - (1.0 - peak[:, None, :]) * smooth_phase)
                               / peak[:, None, :], 0.0)
-    mixed = np.einsum("sw,saw->aw", share, peak_phase)
-    aureole = peak_aureole(mixed, truncation_angle_deg, float(depth.max()))
+    aureole = peak_aureole(
+        np.einsum("sw,saw->aw", share, peak_phase), truncation_angle_deg, float(depth.max()),
+        smooth_phase=np.einsum("sw,saw->aw", smooth_share, smooth_phase),
+        smooth_ratio=smooth_vertical.sum(axis=0) / np.maximum(vertical.sum(axis=0), tiny))
     return np.exp(-np.minimum(depth, aureole.x_max)), aureole
 
 
