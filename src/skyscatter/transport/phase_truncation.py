@@ -27,12 +27,13 @@ __all__ = ["MIN_PEAK_FRACTION", "truncate_forward_peak"]
 MIN_PEAK_FRACTION = 1e-3
 
 
-def truncate_forward_peak(phase: np.ndarray, truncation_angle_deg: float
+def truncate_forward_peak(phase: np.ndarray, truncation_angle_deg: float, *,
+                          min_fraction: float = MIN_PEAK_FRACTION
                           ) -> tuple[np.ndarray, np.ndarray]:
     """(p* (n_s, n_angle, n_wl) [sr^-1], f (n_s, n_wl) [-]) of phase functions `phase` sampled
     at angles uniform over [0, pi] (`scatterers.sample_phase_functions`), clipped at
     `truncation_angle_deg` (module docstring). p* is normalised as p is on the samples
-    (trapezoid rule in the angle); where the clip would remove less than `MIN_PEAK_FRACTION`
+    (trapezoid rule in the angle); where the clip would remove less than `min_fraction`
     (e.g. Rayleigh scattering, or an angle of 0) f = 0 and p* = p."""
     n_angle = phase.shape[1]
     theta = np.linspace(0.0, np.pi, n_angle)
@@ -45,6 +46,6 @@ def truncate_forward_peak(phase: np.ndarray, truncation_angle_deg: float
     kept = np.trapezoid(clipped * weight[None, :, None], theta, axis=1)
     total = np.trapezoid(phase * weight[None, :, None], theta, axis=1)
     fraction = np.clip(1.0 - kept / total, 0.0, 1.0)
-    changed = fraction >= MIN_PEAK_FRACTION
+    changed = fraction >= min_fraction
     smooth = np.where(changed[:, None, :], clipped * (total / kept)[:, None, :], phase)
     return smooth, np.where(changed, fraction, 0.0)
