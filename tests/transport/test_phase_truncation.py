@@ -56,3 +56,15 @@ def test_rayleigh_and_a_zero_angle_are_left_alone():
     assert fraction[1, 0] > MIN_PEAK_FRACTION
     smooth, fraction = truncate_forward_peak(phase, 0.0)
     assert np.all(fraction == 0.0) and np.array_equal(smooth, phase)
+
+
+def test_a_stricter_minimum_leaves_a_broad_lobe_alone_and_clips_a_peak():
+    # the tables' `TABLE_MIN_PEAK_FRACTION` (5 %): at 15 deg Henyey-Greenstein g 0.65 (Earth's
+    # aerosol) loses 3.7 % (closed form), g 0.9 loses more and is clipped as without the minimum
+    phase = np.concatenate([sampled(lambda nu: henyey_greenstein(nu, 0.65)),
+                            sampled(lambda nu: henyey_greenstein(nu, 0.9))])
+    edge_deg = np.degrees(THETA[np.count_nonzero(np.radians(15.0) > THETA)])
+    assert hg_clipped_share(0.65, edge_deg) < 0.05 < hg_clipped_share(0.9, edge_deg)
+    smooth, fraction = truncate_forward_peak(phase, 15.0, min_fraction=0.05)
+    assert fraction[0, 0] == 0.0 and np.array_equal(smooth[0], phase[0])
+    assert fraction[1, 0] == truncate_forward_peak(phase[1:], 15.0)[1][0, 0]

@@ -856,13 +856,19 @@ def add_aureole(r, mu_s, nu, path, tables, value):
         if not x > 0.0:
             continue
         i_x, a_x = linear_axis(math.log1p(x) / math.log1p(x_max) * (n_x - 1), n_x)
-        g = ((1.0 - a_x) * ((1.0 - a_p) * shape[i_x, i_p, w] + a_p * shape[i_x, i_p + 1, w])
-             + a_x * ((1.0 - a_p) * shape[i_x + 1, i_p, w] + a_p * shape[i_x + 1, i_p + 1, w]))
-        b = ((1.0 - a_x) * ((1.0 - a_p) * blur[i_x, i_p, w] + a_p * blur[i_x, i_p + 1, w])
-             + a_x * ((1.0 - a_p) * blur[i_x + 1, i_p, w] + a_p * blur[i_x + 1, i_p + 1, w]))
+        g = _bilinear_at(shape, i_x, a_x, i_p, a_p, w)
+        b = _bilinear_at(blur, i_x, a_x, i_p, a_p, w)
         value[w] += (tables.sun_irradiance[w] * visible
                      * (math.exp(path[1, w]) * (math.expm1(x) - x) * g
                         + math.exp(path[1, w] + x) * x * b))
+
+
+@njit(cache=True, inline="always")
+def _bilinear_at(table, i, a, j, b, w):
+    """`table` (n, m, n_wl) at row i + a and column j + b (lower entries and weights), band w
+    (`transmittance_bilinear` for one band)."""
+    return ((1.0 - a) * ((1.0 - b) * table[i, j, w] + b * table[i, j + 1, w])
+            + a * ((1.0 - b) * table[i + 1, j, w] + b * table[i + 1, j + 1, w]))
 
 
 @njit(parallel=True, cache=True)

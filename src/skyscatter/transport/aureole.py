@@ -115,7 +115,8 @@ def _moments(theta: np.ndarray, inside: np.ndarray, phase: np.ndarray) -> np.nda
     """Normalised Legendre moments chi_l, l = 0 .. MAX_DEGREE, (degree + 1, n_wl) of
     `phase` (n_angle, n_wl) sampled at `theta`, integrated over the angles `inside` (where
     it is not zero); 0 where it is 0."""
-    weight = 2.0 * np.pi * np.sin(theta[inside]) * theta[1]  # the phase is 0 at both ends
+    # rectangles of the sampling's step: the trapezoid rule, sin(theta) being 0 at both ends
+    weight = 2.0 * np.pi * np.sin(theta[inside]) * theta[1]
     moments = legendre.legvander(np.cos(theta[inside]), MAX_DEGREE).T @ (
         phase[inside] * weight[:, None])
     total = moments[0]

@@ -94,7 +94,7 @@ TRUNCATION_ANGLE_DEG = 15.0
 MAX_TRUNCATION_ANGLE_DEG = 90.0
 # A lobe that loses less than this share of its light to the clip is left alone: the orders >= 2's
 # quadrature holds it, and the clip would cost the scaled medium's first-order pass and the
-# aureole's lookups. Earth's aerosol (Henyey-Greenstein g 0.7, 3.7 % above 15 deg) against the
+# aureole's lookups. Earth's aerosol (Henyey-Greenstein g 0.65, 3.7 % above 15 deg) against the
 # Monte Carlo with and without the clip: the same to 0.03 points of median error, 0.1 of the
 # 95th percentile, at sun zenith 0-85 deg (benchmarks/bench_forward_peak.py, docs/validation.md).
 TABLE_MIN_PEAK_FRACTION = 0.05
