@@ -54,6 +54,7 @@ TOP_LEVEL = {
     "disk_cache": "base",
     "output_files": "base",
     "jit_cache": "base",
+    "blas_threads": "base",  # OpenBLAS's idle threads, set before numpy loads it
     "row_output": "base",  # rows of numbers as JSON/CSV text, with their metadata
     "dask_cluster": "base",  # the Dask client of batch work (sweep): local or a scheduler's
     "api": "api",

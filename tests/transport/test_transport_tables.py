@@ -475,6 +475,20 @@ def test_higher_orders_add_light_without_absorption(profile):
     assert np.all(np.diff(tables.order_mean_radiance, axis=0) < 0.0)
 
 
+def test_the_working_memory_s_shortcuts_leave_the_tables_unchanged(profile, monkeypatch):
+    # One batch of all wavelengths reads the single scattering in place, its multiple slot
+    # weighed by 0, and the source is built a few r nodes at a time; a batch per wavelength
+    # reads a copy, and one chunk of all nodes is the incoming radiance of the whole table at
+    # once. The same sums in the same order: equal to float32 rounding.
+    monkeypatch.setattr(tables_module, "idle_threads_sleep", lambda: True)
+    in_place = precompute_tables(profile, SMALL, orders=3)
+    monkeypatch.setattr(tables_module, "idle_threads_sleep", lambda: False)
+    copied = precompute_tables(profile, SMALL, orders=3, wavelength_batch=1)
+    np.testing.assert_allclose(in_place.scattering, copied.scattering, rtol=1e-6, atol=0.0)
+    np.testing.assert_allclose(in_place.irradiance, copied.irradiance, rtol=1e-6, atol=0.0)
+    assert np.mean(in_place.multiple_scattering > 0.0) > 0.5  # the orders were computed
+
+
 def test_radiance_is_continuous_on_each_side_of_the_horizon(profile, tables_two_orders,
                                                               brute_force):
     # Observer at 1 km; view zenith from 3 deg above to 3 deg below the horizon, in steps that

@@ -745,16 +745,18 @@ def _nu_profile(flat, n_mu, n_mu_s, n_nu, i_r, a_r, i_mu, a_mu, i_s, a_s, profil
 
 
 @njit(parallel=True, cache=True)
-def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradiance, albedo):
+def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradiance, albedo,
+                      r_nodes):
     """Radiance of the previous order arriving at the scattering-density nodes (the (r, mu_s)
-    nodes of `grid`, a `TableGrid`), from the directions (theta_in[a], phi_in[p]) (phi from the
-    sun's vertical plane): the scattering lookup in `previous` (a `LitOrder`; with phase
-    functions when its `use_phase`, i.e. the single-scattering tables) plus the ground lit by
-    `ground_irradiance` for directions that hit it (`medium`: a `RayMedium`). Returns
-    (n_wl, n_a n_p, n_r n_mu_s) float32, the layout of the matrix product that follows.
-    Bruneton 2017, `ComputeScatteringDensity`, the inner part. The directions of one zenith
-    angle share their r, mu and mu_s corners: the tables are interpolated there once, on every
-    nu slice (`_nu_profile`), and each azimuth only interpolates in nu (`nu_interpolation`, as
+    nodes of `grid`, a `TableGrid`, of its r nodes first .. stop - 1, r_nodes = (first, stop)),
+    from the directions (theta_in[a], phi_in[p]) (phi from the sun's vertical plane): the
+    scattering lookup in `previous` (a `LitOrder`; with phase functions when its `use_phase`,
+    i.e. the single-scattering tables) plus the ground lit by `ground_irradiance` for
+    directions that hit it (`medium`: a `RayMedium`). Returns (n_wl, n_a n_p, (stop - first)
+    n_mu_s) float32, the layout of the matrix product that follows. Bruneton 2017,
+    `ComputeScatteringDensity`, the inner part. The directions of one zenith angle share their
+    r, mu and mu_s corners: the tables are interpolated there once, on every nu slice
+    (`_nu_profile`), and each azimuth only interpolates in nu (`nu_interpolation`, as
     `scattering_lookup`)."""
     n_r, n_mu, n_mu_s, n_nu = grid.n_r, grid.n_mu, grid.n_mu_s, grid.n_nu
     bottom_radius, top_radius, mu_s_min = grid.bottom_radius, grid.top_radius, grid.mu_s_min
@@ -764,10 +766,11 @@ def incoming_radiance(grid, medium, theta_in, phi_in, previous, ground_irradianc
     n_c, n_wl = extinction.shape
     n_a = theta_in.size
     n_p = phi_in.size
-    radiance = np.zeros((n_wl, n_a * n_p, n_r * n_mu_s), dtype=np.float32)
+    first, stop = r_nodes
+    radiance = np.zeros((n_wl, n_a * n_p, (stop - first) * n_mu_s), dtype=np.float32)
     nodes = mu_s_nodes(grid)
-    for kl in prange(n_r * n_mu_s):
-        k = kl // n_mu_s
+    for kl in prange((stop - first) * n_mu_s):
+        k = first + kl // n_mu_s
         l = kl % n_mu_s
         r = scattering_r_from_u((k + 0.5) / n_r, bottom_radius, top_radius, n_r,
                                 grid.radius_warp)

@@ -109,10 +109,12 @@ def source_function(quadrature: PhaseQuadrature, incoming: np.ndarray, beta_s: n
     `node_density` (n_s, n_r)), so S is the phase-weighted mean incoming radiance, smooth in r;
     the kernel multiplies it by the exact scattering coefficient along each ray. Where no
     constituent scatters (above the profile), the constituents are weighted by beta_s alone.
-    incoming: (n_b, n_in, n_r n_mu_s); beta_s: (n_s, n_b)."""
+    incoming: (n_b, n_in, n_r n_mu_s); beta_s: (n_s, n_b). The r nodes may be any run of the
+    table's (`node_density` and `incoming` of the same nodes), so that an order's source is
+    built a few nodes at a time (`tables.precompute_tables`)."""
     n_s, n_b = beta_s.shape
     n_in = incoming.shape[1]
-    n_r, n_mu_s = resolution.scattering_r, resolution.scattering_mu_s
+    n_r, n_mu_s = node_density.shape[1], resolution.scattering_mu_s
     n_theta, n_phi = resolution.density_theta, resolution.density_phi
     weights = node_density[:, :, None] * beta_s[:, None, :]  # (n_s, n_r, n_b)
     empty = weights.sum(axis=0) <= 0.0

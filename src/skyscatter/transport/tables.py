@@ -63,6 +63,7 @@ from typing import NamedTuple
 import numpy as np
 
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
+from skyscatter.blas_threads import idle_threads_sleep
 from skyscatter.errors import InputError
 from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
@@ -124,6 +125,11 @@ TAIL_SHARE_MAX = 0.1
 # cells in every order; docs/physics/tables.md).
 COARSE_FROM_ORDER = 7
 COARSE_NU_SLICES = 4
+# An order's source function is built this many r nodes at a time, each batch of nodes from
+# its own incoming radiance (Earth: 11 instead of 90 MiB, and faster), where OpenBLAS's idle
+# threads sleep at once after each node batch's matrix product (`blas_threads`); else all
+# nodes at once (their spin took 12-25 % more time in batches; docs/performance.md)
+SOURCE_NODE_CHUNK = 4
 # Orders that grow by this factor twice in a row are refused (`_check_converging`).
 DIVERGING_RATIO = 1.0
 RATIO_SETTLED = 0.02
@@ -386,8 +392,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         every planet (`table_parameterisation.COS_SUN_ZENITH_MIN`); Bruneton 2017 used
         cos(102 deg) = -0.208 for Earth.
     wavelength_batch : int
-        Wavelengths computed together; bounds the working memory (about 0.5 GB for 16
-        wavelengths at the default resolution) besides the result tables.
+        Wavelengths computed together; bounds the working memory besides the result tables
+        (about 170 MiB for 16 wavelengths at the default resolution; each batch more costs
+        the wavelength-independent part of the ray integrals again, ~30 % of the time).
     progress : callable(done, total, stage), optional
         Called after each step.
     on_order : callable(order, batch, multiple, irradiance), optional
@@ -482,6 +489,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         cubic_source=cubic_source(profile))
 
     sun_radius = float(profile.sun_angular_radius_rad)
+    node_chunk = SOURCE_NODE_CHUNK if idle_threads_sleep() else res.scattering_r
     cumulative = _kernels.cumulative_columns(density, h_step)
     for batch in batches:
         medium = _table_build_kernels.RayMedium(
@@ -495,6 +503,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         phase_b = np.ascontiguousarray(phase[:, :, batch])
         smooth_b = np.ascontiguousarray(smooth_phase[:, :, batch])
         beta_s = profile.scattering_per_density[scatterer_index][:, batch]  # (n_s, n_b)
+        n_b = batch.stop - batch.start
         label = f"wavelengths {batch.start + 1}-{batch.stop} of {n_wl}"
 
         # the exact first order written into the tables' own slots (no copy beside them), and
@@ -535,7 +544,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             continue
         phases = phase_quadrature(smooth_b, res)
         scaled_beta_s = scaled.scattering[scatterer_index][:, batch]
-        previous, use_phase = scaled_single, True
+        previous, previous_phase = ((scaled_single, smooth_b) if scaled_pass else
+                                    _single_in_place(scattering[..., batch], single, smooth_b))
+        use_phase, delta = True, None
         del scaled_single  # `previous` holds it until the second order has read it
         extrapolation = OrderExtrapolation()
         ground = _table_build_kernels.direct_ground_irradiance(
@@ -549,24 +560,31 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                 sums.coarsen(restrict, prolong)
             lit = _table_build_kernels.LitOrder(tables=flat_tables(previous),
                                                 n_t=previous.shape[4], use_phase=use_phase,
-                                                phase_table=smooth_b)
-            incoming = _table_build_kernels.incoming_radiance(
-                order_grid, scaled_medium, theta_in, phi_in, lit, ground,
-                albedo)
+                                                phase_table=previous_phase)
+            # the source a few r nodes at a time: the incoming radiance of all nodes at once
+            # was a third of the working memory
+            source = np.empty((order_res.scattering_r, order_res.density_theta,
+                               order_res.scattering_mu_s * order_res.density_phi * n_b),
+                              dtype=np.float32)
+            for first in range(0, order_res.scattering_r, node_chunk):
+                nodes = slice(first, min(first + node_chunk, order_res.scattering_r))
+                incoming = _table_build_kernels.incoming_radiance(
+                    order_grid, scaled_medium, theta_in, phi_in, lit, ground, albedo,
+                    (nodes.start, nodes.stop))
+                source[nodes] = source_function(phases, incoming, scaled_beta_s,
+                                                node_density[:, nodes], order_res)
+                del incoming
             delta_irradiance = _table_build_kernels.indirect_irradiance(
                 res.irradiance_r, res.irradiance_mu_s, res.irradiance_theta,
                 res.irradiance_phi, order_grid, lit)
             irradiance[..., batch] += delta_irradiance
             ground = np.ascontiguousarray(delta_irradiance[0])
-            del lit, previous  # read: their memory goes to the source and the next order
-            source = source_function(phases, incoming, scaled_beta_s, node_density,
-                                     order_res)
-            del incoming
+            del lit, previous, delta  # read: their memory goes to the next order
             delta = _table_build_kernels.multiple_scattering_table(
                 order_grid, scaled_medium, res.multiple_ray_samples,
                 np.ascontiguousarray(scattering_all[:, batch]), source, res.density_phi)
             del source
-            previous, use_phase = delta[..., None, :], False
+            previous, previous_phase, use_phase = delta[..., None, :], smooth_b, False
             order_mean[order - 1, batch], order_zenith[order - 1, batch] = (
                 _table_build_kernels.order_statistics(previous, False, phase_b, order_grid))
             sums.add(delta)
@@ -577,7 +595,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             if tail is not None:
                 # orders > n as the geometric series of order n (module docstring)
                 factor = (tail / (1.0 - tail)).astype(np.float32)
-                sums.add(delta * factor)
+                delta *= factor  # in place: the last order is not read again
+                sums.add(delta)
                 irradiance[..., batch] += delta_irradiance * factor
                 tail_share[batch] = (order_mean[order - 1, batch] * factor
                                      / order_mean[1:order, batch].sum(axis=0))
@@ -604,7 +623,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                     multiple[..., batch] = sums.on_tables_grid()
                 on_order(order, batch, _read_only(multiple), _read_only(irradiance))
         sums.finish()
-        del previous, sums
+        del previous, delta, sums
 
     return AtmosphereTables(
         wavelengths_nm=wavelengths.copy(), bottom_radius_m=bottom, top_radius_m=top,
@@ -944,6 +963,18 @@ def _resampled(table: np.ndarray, resampling: _Resampling) -> np.ndarray:
         result += np.take(table, low + 1, axis=axis) * weight
         table = result
     return table
+
+
+def _single_in_place(batch_tables: np.ndarray, single: np.ndarray, phase: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(tables, phase functions) of the single scattering as the second order reads it
+    (`LitOrder`): in place in the tables when one batch holds all wavelengths (`batch_tables`
+    (n_r, n_mu, n_mu_s, n_nu, n_s + 1, n_b) C-contiguous), the multiple-scattering slot, empty
+    until the second order is added, weighed by a phase function of 0; else `single`, which
+    `flat_tables` copies."""
+    if not batch_tables.flags.c_contiguous:
+        return single, phase
+    return batch_tables, np.concatenate([phase, np.zeros_like(phase[:1])])
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
