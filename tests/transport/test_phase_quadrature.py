@@ -89,3 +89,29 @@ def test_source_function_of_gas_and_particles_is_the_closed_form_integral():
         # the full matrix interpolates HG's samples linearly in the angle (1e-6 at 4097
         # samples) and both paths work in float32
         np.testing.assert_allclose(got[..., b], expected.transpose(2, 0, 3, 1), rtol=2e-5)
+
+
+def test_wavelengths_with_the_same_particles_share_one_matrix_and_others_keep_their_own():
+    # Earth's aerosol has one Henyey-Greenstein g at every wavelength; Mie particles change with
+    # it. Each wavelength's integral is still its own phase function's closed-form matrix.
+    n_in = RESOLUTION.sphere_theta * RESOLUTION.sphere_phi
+    n_r, n_mu_s = RESOLUTION.scattering_r, RESOLUTION.scattering_mu_s
+    g = [0.5, 0.8, 0.5]
+    phase = np.stack([sampled(lambda c, g=g_b: henyey_greenstein(c, g)) for g_b in g],
+                     axis=-1)[None]  # (1, n_angle, 3)
+    quadrature = phase_quadrature(phase, RESOLUTION)
+    assert quadrature.full_matrices.shape[0] == 2
+    assert quadrature.full_index[0] == quadrature.full_index[2] != quadrature.full_index[1]
+
+    incoming = np.random.default_rng(5).uniform(0.1, 1.0, (3, n_in, n_r * n_mu_s)
+                                                ).astype(np.float32)
+    got = source_function(quadrature, incoming, np.full((1, 3), 1e-5), np.ones((1, n_r)),
+                          RESOLUTION).reshape(n_r, RESOLUTION.density_theta, n_mu_s,
+                                              RESOLUTION.density_phi, 3)
+    light = incoming.astype(np.float64).reshape(3, n_in, n_r, n_mu_s)
+    for b, g_b in enumerate(g):
+        matrix = closed_form_matrix(lambda c, g=g_b: henyey_greenstein(c, g), RESOLUTION)
+        expected = np.einsum("oi,irm->orm", matrix, light[b]).reshape(
+            RESOLUTION.density_theta, RESOLUTION.density_phi, n_r, n_mu_s)
+        # as the test above: linear interpolation of the samples in angle, float32 products
+        np.testing.assert_allclose(got[..., b], expected.transpose(2, 0, 3, 1), rtol=2e-5)

@@ -39,14 +39,17 @@ QUADRATIC_TOLERANCE = 1e-9
 
 class PhaseQuadrature(NamedTuple):
     """The phase matrices of one wavelength batch (n_b wavelengths): the full matrices of the
-    constituents `full` (indices into the scattering constituents), (n_b, n_out, n_full n_in)
-    float32 side by side, and for the constituents `quadratic` (p = a + b c^2) the rows
-    `quadratic_rows` (n_q, n_b, n_out, 5) float32, features times coefficients over the row
-    sums, and the incoming features times solid angle `incoming_features` (5, n_in) float32
-    (module docstring)."""
+    constituents `full` (indices into the scattering constituents), (n_u, n_out, n_full n_in)
+    float32 side by side, one per distinct set of their phase functions, wavelength b's
+    `full_matrices[full_index[b]]` (Earth's aerosol has one Henyey-Greenstein g at every
+    wavelength: one matrix, 2 instead of 30 MiB), and for the constituents `quadratic` (p = a
+    + b c^2) the rows `quadratic_rows` (n_q, n_b, n_out, 5) float32, features times
+    coefficients over the row sums, and the incoming features times solid angle
+    `incoming_features` (5, n_in) float32 (module docstring)."""
 
     full: np.ndarray
     full_matrices: np.ndarray
+    full_index: np.ndarray
     quadratic: np.ndarray
     quadratic_rows: np.ndarray
     incoming_features: np.ndarray
@@ -79,12 +82,13 @@ def phase_quadrature(phase: np.ndarray, resolution: TableResolution) -> PhaseQua
     _, _, solid, out, incoming, mirrored = sphere_grids(resolution)
     coefficients, quadratic = _quadratic_fits(phase)
     full = np.flatnonzero(~quadratic)
-    matrices = _table_build_kernels.phase_matrices(  # (n_full, n_b, n_out, n_in)
-        np.ascontiguousarray(phase[full]), np.ascontiguousarray(out @ incoming.T),
+    distinct, full_index = _distinct_wavelengths(phase[full])
+    matrices = _table_build_kernels.phase_matrices(  # (n_full, n_u, n_out, n_in)
+        np.ascontiguousarray(phase[full][:, :, distinct]), np.ascontiguousarray(out @ incoming.T),
         np.ascontiguousarray(out @ mirrored.T), solid)
-    n_full, n_b, n_out, n_in = matrices.shape
+    n_full, n_u, n_out, n_in = matrices.shape
     full_matrices = np.ascontiguousarray(matrices.transpose(1, 2, 0, 3)).reshape(
-        n_b, n_out, n_full * n_in)
+        n_u, n_out, n_full * n_in)
     out_features, in_features = _features(out), _features(incoming)
     in_weighted = in_features * solid[None, :]  # (5, n_in)
     # the features' coefficients: 2a for the constant, 2b for the four quadratic ones
@@ -94,7 +98,8 @@ def phase_quadrature(phase: np.ndarray, resolution: TableResolution) -> PhaseQua
     rows = out_features.T[None, None] * scale[:, :, None, :]  # (n_q, n_b, n_out, 5)
     row_sums = rows @ in_weighted.sum(axis=1)  # (n_q, n_b, n_out)
     return PhaseQuadrature(
-        full=full, full_matrices=full_matrices, quadratic=np.flatnonzero(quadratic),
+        full=full, full_matrices=full_matrices, full_index=full_index,
+        quadratic=np.flatnonzero(quadratic),
         quadratic_rows=(rows / row_sums[..., None]).astype(np.float32),
         incoming_features=in_weighted.astype(np.float32))
 
@@ -130,7 +135,8 @@ def source_function(quadrature: PhaseQuadrature, incoming: np.ndarray, beta_s: n
             # weights per r applied to the incoming radiance (the smaller operand)
             weighted = (weights[full][:, None, :, b, None] * incoming[b][None]).reshape(
                 full.size * n_in, -1)
-            product += (quadrature.full_matrices[b] @ weighted).reshape(product.shape)
+            product += (quadrature.full_matrices[quadrature.full_index[b]] @ weighted
+                        ).reshape(product.shape)
         if quadratic.size:
             # the weights per r commute with the projection on the incoming features
             projected = (quadrature.incoming_features @ incoming[b].reshape(n_in, -1)
@@ -141,6 +147,15 @@ def source_function(quadrature: PhaseQuadrature, incoming: np.ndarray, beta_s: n
                             ).reshape(product.shape)
         source[..., b] = product.reshape(n_theta, n_phi, n_r, n_mu_s).transpose(2, 0, 3, 1)
     return source.reshape(n_r, n_theta, -1)
+
+
+def _distinct_wavelengths(phase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the wavelengths whose phase functions, `phase` (n, n_angle, n_b), are each set's first,
+    and for every wavelength the index of its set among them)."""
+    n_b = phase.shape[2]
+    rows = phase.transpose(2, 0, 1).reshape(n_b, -1)
+    _, first, which = np.unique(rows, axis=0, return_index=True, return_inverse=True)
+    return first, which.reshape(n_b)
 
 
 def _features(directions: np.ndarray) -> np.ndarray:
