@@ -624,6 +624,23 @@ def test_the_geometric_tail_stops_once_the_extrapolated_sum_is_within_its_tolera
         assert share <= tables_module.TAIL_SHARE_MAX
 
 
+def test_at_the_last_order_each_wavelength_gets_its_own_tail_whatever_shares_its_batch():
+    # Two wavelengths at their last order: one a geometric series (ratio 0.5 from the start),
+    # one whose ratio still moves (orders 0.3^n + 0.05 x 0.8^n: the last two ratios 0.54 and
+    # 0.66, 17 % apart, RATIO_SETTLED is 2 %). The first gets its ratio, the
+    # second nothing, together as apart: a batch of wavelengths must not change the tables.
+    orders = np.arange(1, 6)
+    settled = 0.5 ** orders
+    moving = 0.3 ** orders + 0.05 * 0.8 ** orders
+    both = np.stack([settled, moving], axis=1)
+    tail = tables_module._geometric_tail(both, last=True)
+    np.testing.assert_allclose(tail, [0.5, 0.0], rtol=1e-12)
+    np.testing.assert_allclose(tables_module._geometric_tail(settled[:, None], last=True),
+                               [0.5], rtol=1e-12)
+    assert tables_module._geometric_tail(moving[:, None], last=True) is None
+    assert tables_module._geometric_tail(both, last=False) is None  # the batch goes on
+
+
 def test_orders_that_grow_are_refused_with_a_message_naming_the_cause():
     # The safety net behind the test above: order means that grow twice in a row (what the
     # trapezoid rule made of earth-fog) are refused in one line naming the solver that holds

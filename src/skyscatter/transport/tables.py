@@ -106,9 +106,11 @@ TABLE_MIN_PEAK_FRACTION = 0.05
 # RATIO_SETTLED from one order to the next, the iteration stops as soon as the tail's
 # uncertainty, its share of the orders >= 2 times the relative change of r/(1 - r) that the
 # last change of r makes, is below TAIL_TOLERANCE; at the last order allowed the tail is added
-# anyway. Before it does, from order `order_extrapolation.EXTRAPOLATION_FIRST_ORDER` on, the
-# orders' limit may be extrapolated by RRE (`order_extrapolation`): a stratus deck of optical
-# depth 20 (ratio 0.953) stops at 16 orders instead of the 30 this rule needs
+# anyway, in each wavelength whose r has settled (wavelengths computed together do not change
+# each other's tables). Before it does, from order
+# `order_extrapolation.EXTRAPOLATION_FIRST_ORDER` on, the orders' limit may be extrapolated by
+# RRE (`order_extrapolation`): a stratus deck of optical depth 20 (ratio 0.953) stops at 16
+# orders instead of the 30 this rule needs
 # (benchmarks/bench_precompute_media.py, docs/physics/tables.md).
 TAIL_MIN_ORDER = 4
 # ... and only once the series is at most this share of the orders >= 2: beyond it the last
@@ -125,6 +127,11 @@ TAIL_SHARE_MAX = 0.1
 # cells in every order; docs/physics/tables.md).
 COARSE_FROM_ORDER = 7
 COARSE_NU_SLICES = 4
+# Wavelengths computed together by default: the ray integrals' wavelength-independent part (a
+# third of Earth's time at 16 wavelengths) is paid once a batch; the working memory is ~8 MiB a
+# wavelength besides the tables' 15 (48 wavelengths, 4 orders: CPU 30.8 s in batches of 16,
+# 22.7 s in one, +968 against +1139 MiB; docs/performance.md)
+WAVELENGTH_BATCH = 48
 # An order's source function is built this many r nodes at a time, each batch of nodes from
 # its own incoming radiance (Earth: 11 instead of 90 MiB, and faster), where OpenBLAS's idle
 # threads sleep at once after each node batch's matrix product (`blas_threads`); else all
@@ -371,7 +378,7 @@ class AtmosphereTables:
 def precompute_tables(profile: OpticalProfile, resolution: TableResolution | None = None,
                       orders: int = DEFAULT_SCATTERING_ORDERS, *,
                       min_cos_sun_zenith: float = COS_SUN_ZENITH_MIN,
-                      wavelength_batch: int = 16,
+                      wavelength_batch: int = WAVELENGTH_BATCH,
                       progress: Callable[[int, int, str], None] | None = None,
                       on_order: Callable[[int, slice, np.ndarray, np.ndarray], None] | None = None
                       ) -> AtmosphereTables:
@@ -393,8 +400,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         cos(102 deg) = -0.208 for Earth.
     wavelength_batch : int
         Wavelengths computed together; bounds the working memory besides the result tables
-        (about 170 MiB for 16 wavelengths at the default resolution; each batch more costs
-        the wavelength-independent part of the ray integrals again, ~30 % of the time).
+        (about 8 MiB a wavelength at the default resolution; each batch more costs the
+        wavelength-independent part of the ray integrals again, `WAVELENGTH_BATCH`).
     progress : callable(done, total, stage), optional
         Called after each step.
     on_order : callable(order, batch, multiple, irradiance), optional
@@ -702,22 +709,26 @@ def _check_converging(order_mean: np.ndarray, wavelengths_nm: np.ndarray) -> Non
 def _geometric_tail(order_mean: np.ndarray, last: bool) -> np.ndarray | None:
     """The ratio r (n_b,) of successive orders once it has settled, when the orders beyond the
     last computed one (`order_mean` (n, n_b), orders 1 .. n) are to be added as a geometric
-    series: at the last order allowed, or earlier when that tail's uncertainty is below
-    `TAIL_TOLERANCE` and the tail itself below `TAIL_SHARE_MAX` of the orders >= 2 in every
-    wavelength (module constants); None to go on (or where the ratio has not settled)."""
+    series: at the last order allowed, in every wavelength whose ratio has settled (0 in the
+    others: nothing added, whatever wavelengths share the batch), or earlier, in all, when that
+    tail's uncertainty is below `TAIL_TOLERANCE` and the tail itself below `TAIL_SHARE_MAX` of
+    the orders >= 2 in every wavelength (module constants); None to go on."""
     if order_mean.shape[0] < TAIL_MIN_ORDER:
         return None
     ratio, before = _last_ratios(order_mean)
-    settled = (np.all(np.isfinite(ratio)) and np.all(ratio < 1.0) and np.all(ratio >= 0.0)
-               and np.all(np.abs(ratio - before) <= RATIO_SETTLED * ratio))
-    if not settled:
+    with np.errstate(invalid="ignore"):
+        each = (np.isfinite(ratio) & (ratio < 1.0) & (ratio >= 0.0)
+                & (np.abs(ratio - before) <= RATIO_SETTLED * ratio))
+    if last:
+        return np.where(each, ratio, 0.0) if np.any(each) else None
+    if not np.all(each):
         return None
     share = order_mean[-1] * ratio / (1.0 - ratio) / order_mean[1:].sum(axis=0)
     # d(r / (1 - r)) / (r / (1 - r)) = dr / (r (1 - r)); 0 where the orders are 0
     relative_change = np.abs(ratio - before) / np.maximum(ratio, np.finfo(float).tiny)
     uncertainty = share * relative_change / (1.0 - ratio)
     known = np.all(uncertainty <= TAIL_TOLERANCE) and np.all(share <= TAIL_SHARE_MAX)
-    return ratio if last or known else None
+    return ratio if known else None
 
 
 def radius_warp(profile: OpticalProfile) -> np.ndarray:
