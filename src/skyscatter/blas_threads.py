@@ -20,7 +20,8 @@ __all__ = ["idle_threads_sleep", "let_idle_threads_sleep"]
 
 TIMEOUT_VARIABLE = "OPENBLAS_THREAD_TIMEOUT"
 SLEEP_AT_ONCE = "4"  # OpenBLAS's smallest: 2^4 cycles
-# up to 2^16 cycles (~20 us) the spin costs a numba kernel nothing measurable
+# a spin taken as short: 2^16 cycles, ~20 us, against kernels of milliseconds (a threshold
+# chosen, not measured: 2^4 and 2^28 are the values measured, docs/performance.md)
 LONGEST_HARMLESS_SPIN = 16
 
 _sleeping = False

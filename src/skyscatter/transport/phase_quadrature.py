@@ -82,9 +82,10 @@ def phase_quadrature(phase: np.ndarray, resolution: TableResolution) -> PhaseQua
     _, _, solid, out, incoming, mirrored = sphere_grids(resolution)
     coefficients, quadratic = _quadratic_fits(phase)
     full = np.flatnonzero(~quadratic)
-    distinct, full_index = _distinct_wavelengths(phase[full])
+    full_phase = phase[full]
+    distinct, full_index = _distinct_wavelengths(full_phase)
     matrices = _table_build_kernels.phase_matrices(  # (n_full, n_u, n_out, n_in)
-        np.ascontiguousarray(phase[full][:, :, distinct]), np.ascontiguousarray(out @ incoming.T),
+        np.ascontiguousarray(full_phase[:, :, distinct]), np.ascontiguousarray(out @ incoming.T),
         np.ascontiguousarray(out @ mirrored.T), solid)
     n_full, n_u, n_out, n_in = matrices.shape
     full_matrices = np.ascontiguousarray(matrices.transpose(1, 2, 0, 3)).reshape(
