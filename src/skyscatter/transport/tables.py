@@ -28,7 +28,9 @@ functions the sphere quadrature resolves; the first order stays exact (full phas
 true extinction). What the scaled medium's first order has more than the exact one's smooth part
 (light scattered in the peak and then once more) is added to M, and the light the peaks keep
 near the sun's direction to E as the scaled medium's direct sun less the true one (the TMS
-correction of Nakajima & Tanaka 1988, in table form). Optically thick media need many orders:
+correction of Nakajima & Tanaka 1988, in table form). The scaled medium's sun is corrected for
+what the peaks do to a low sun's beam (`beam_spread`: deflected a few degrees, its light goes
+through much more or much less air). Optically thick media need many orders:
 once the ratio of successive orders settles, the orders beyond are a geometric series, added
 at once (`TAIL_TOLERANCE`); where it settles slowly (cloud decks), the limit of the orders is
 extrapolated from the last six by reduced-rank extrapolation (`order_extrapolation`).
@@ -68,13 +70,16 @@ from skyscatter.errors import InputError
 from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.aureole import PeakAureole, peak_aureole
+from skyscatter.transport.beam_spread import BeamSpread, beam_spread
 from skyscatter.transport.order_extrapolation import OrderExtrapolation
 from skyscatter.transport.phase_quadrature import phase_quadrature, source_function, sphere_grids
 from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN,
+    irradiance_r_mu_s_from_x,
     scattering_r_from_u,
+    transmittance_r_mu_from_x,
 )
 
 __all__ = [
@@ -465,8 +470,16 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     # peak it is the medium itself
     scaled = _scaled_optics(profile, scatterer_index, peak)
     sun_table = depth if thick else transmittance
+    spread: BeamSpread | None = None
     if truncated:  # the scaled medium's first order lights the second (below)
+        # its sun: the scaled beam, corrected for the peaks' spread of a low sun's light
+        # (where the solver resolves the particles: not in a cloud deck, fog or a dust storm)
+        spread = beam_spread(profile, scaled.removed,
+                             _mixed_peak(profile, scaled, scatterer_index, phase,
+                                         smooth_phase, peak), res.truncation_angle_deg)
         scaled_depth = np.einsum("cw,crm->rmw", scaled.extinction, columns)
+        if spread is not None:
+            scaled_depth -= np.log(_beam_gain_on_transmittance_nodes(spread, res, bottom, top))
         scaled_sun_table = scaled_depth if thick else np.exp(-scaled_depth)
     peak_transmittance, aureole = _peak_aureole(profile, scaled, scatterer_index, phase,
                                                 smooth_phase, peak, columns,
@@ -534,11 +547,12 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                 scattering[..., n_s, batch])
             # the light the peak scatters stays near the sun: on the ground it is the direct
             # sun of the scaled medium less the true one
-            irradiance[..., batch] = (
-                _table_build_kernels.direct_irradiance_nodes(
-                    res.irradiance_r, res.irradiance_mu_s, grid, scaled_medium, sun, sun_radius)
-                - _table_build_kernels.direct_irradiance_nodes(
-                    res.irradiance_r, res.irradiance_mu_s, grid, medium, sun, sun_radius))
+            scaled_direct = _table_build_kernels.direct_irradiance_nodes(
+                res.irradiance_r, res.irradiance_mu_s, grid, scaled_medium, sun, sun_radius)
+            if spread is not None:
+                scaled_direct *= _irradiance_gain_on_nodes(spread, res, bottom, top)[..., batch]
+            irradiance[..., batch] = scaled_direct - _table_build_kernels.direct_irradiance_nodes(
+                res.irradiance_r, res.irradiance_mu_s, grid, medium, sun, sun_radius)
         else:
             scaled_single = single
         order_mean[0, batch], order_zenith[0, batch] = _table_build_kernels.order_statistics(
@@ -558,6 +572,10 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         extrapolation = OrderExtrapolation()
         ground = _table_build_kernels.direct_ground_irradiance(
             DIRECT_GROUND_SAMPLES, grid, scaled_medium, sun, sun_radius)
+        if spread is not None:
+            ground *= spread.irradiance_at(np.zeros(DIRECT_GROUND_SAMPLES),
+                                           np.linspace(-1.0, 1.0, DIRECT_GROUND_SAMPLES)
+                                           )[:, batch]
         order_res, order_grid = res, grid
         sums = _OrderSums(scattering[..., n_s, batch])
         for order in range(2, orders + 1):
@@ -659,23 +677,54 @@ def _peak_aureole(profile: OpticalProfile, scaled: _ScaledOptics, scatterers: np
     if not np.any(peak > 0.0):
         nothing = np.zeros((2, 2, n_wl))
         return np.ones((2, 2, n_wl)), PeakAureole(nothing, nothing, 1.0, 0.0)
-    removed = scaled.removed
-    depth = np.einsum("cw,crm->rmw", removed, columns)
+    depth = np.einsum("cw,crm->rmw", scaled.removed, columns)
     column = profile.density[scatterers].sum(axis=1)[:, None]
-    vertical = removed[scatterers] * column
+    vertical = scaled.removed[scatterers] * column
     smooth_vertical = np.where(peak > 0.0, scaled.scattering[scatterers], 0.0) * column
     tiny = np.finfo(float).tiny
-    share = vertical / np.maximum(vertical.sum(axis=0), tiny)  # (n_s, n_wl)
     smooth_share = smooth_vertical / np.maximum(smooth_vertical.sum(axis=0), tiny)
+    aureole = peak_aureole(
+        _mixed_peak(profile, scaled, scatterers, phase, smooth_phase, peak),
+        truncation_angle_deg, float(depth.max()),
+        smooth_phase=np.einsum("sw,saw->aw", smooth_share, smooth_phase),
+        smooth_ratio=smooth_vertical.sum(axis=0) / np.maximum(vertical.sum(axis=0), tiny))
+    return np.exp(-np.minimum(depth, aureole.x_max)), aureole
+
+
+def _mixed_peak(profile: OpticalProfile, scaled: _ScaledOptics, scatterers: np.ndarray,
+                phase: np.ndarray, smooth_phase: np.ndarray, peak: np.ndarray) -> np.ndarray:
+    """The normalised peaks p_peak = (p - (1 - f) p*) / f of the clipped constituents
+    `scatterers` (phase functions (n_s, n_angle, n_wl)), mixed by their vertical peak depths:
+    (n_angle, n_wl) [sr^-1], 0 where nothing is clipped."""
+    vertical = scaled.removed[scatterers] * profile.density[scatterers].sum(axis=1)[:, None]
+    share = vertical / np.maximum(vertical.sum(axis=0), np.finfo(float).tiny)  # (n_s, n_wl)
     with np.errstate(divide="ignore", invalid="ignore"):
         peak_phase = np.where(peak[:, None, :] > 0.0,
                               (phase - (1.0 - peak[:, None, :]) * smooth_phase)
                               / peak[:, None, :], 0.0)
-    aureole = peak_aureole(
-        np.einsum("sw,saw->aw", share, peak_phase), truncation_angle_deg, float(depth.max()),
-        smooth_phase=np.einsum("sw,saw->aw", smooth_share, smooth_phase),
-        smooth_ratio=smooth_vertical.sum(axis=0) / np.maximum(vertical.sum(axis=0), tiny))
-    return np.exp(-np.minimum(depth, aureole.x_max)), aureole
+    return np.einsum("sw,saw->aw", share, peak_phase)
+
+
+def _beam_gain_on_transmittance_nodes(spread: BeamSpread, res: TableResolution, bottom: float,
+                                      top: float) -> np.ndarray:
+    """The beam's G (`beam_spread`) on the transmittance table's nodes (n_r_t, n_mu_t, n_wl):
+    node (i, j) at x_r = i / (n_r_t - 1), x_mu = j / (n_mu_t - 1)."""
+    r, mu = np.array([[transmittance_r_mu_from_x(j / (res.transmittance_mu - 1),
+                                                 i / (res.transmittance_r - 1), bottom, top)
+                       for j in range(res.transmittance_mu)]
+                      for i in range(res.transmittance_r)]).transpose(2, 0, 1)
+    return spread.beam_at(r - bottom, mu)
+
+
+def _irradiance_gain_on_nodes(spread: BeamSpread, res: TableResolution, bottom: float,
+                              top: float) -> np.ndarray:
+    """The irradiance's G (`beam_spread`) on the irradiance table's nodes (n_r_e, n_mu_s_e,
+    n_wl), as `_table_build_kernels.direct_irradiance_nodes` places them."""
+    r, mu_s = np.array([[irradiance_r_mu_s_from_x(j / (res.irradiance_mu_s - 1),
+                                                  i / (res.irradiance_r - 1), bottom, top)
+                         for j in range(res.irradiance_mu_s)]
+                        for i in range(res.irradiance_r)]).transpose(2, 0, 1)
+    return spread.irradiance_at(r - bottom, mu_s)
 
 
 def _last_ratios(order_mean: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
