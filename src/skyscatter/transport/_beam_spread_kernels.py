@@ -64,14 +64,8 @@ def _bracket(x, nodes):
         return 0, 0.0
     if x >= nodes[n - 1]:
         return n - 2, 1.0
-    lo, hi = 0, n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if nodes[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
-    return lo, (x - nodes[lo]) / (nodes[lo + 1] - nodes[lo])
+    i = min(np.searchsorted(nodes, x, side="right") - 1, n - 2)
+    return i, (x - nodes[i]) / (nodes[i + 1] - nodes[i])
 
 
 @njit(cache=True)
