@@ -26,6 +26,8 @@ from numba import njit
 
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.spectrum.grid import wavelength_grid
+from skyscatter.transport._kernels import density_at
+from skyscatter.transport._monte_carlo_kernels import rotate
 from skyscatter.transport.beam_spread import beam_spread
 from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
@@ -37,26 +39,17 @@ STEP_M = 200.0
 
 
 @njit(cache=True)
-def _level(altitude: float, dz: float, table: np.ndarray) -> float:
-    if altitude < 0.0:
-        return table[0]
-    i = int(altitude / dz)
-    if i >= table.size - 1:
-        return 0.0
-    t = altitude / dz - i
-    return table[i] * (1.0 - t) + table[i + 1] * t
-
-
-@njit(cache=True)
 def _photons(n: int, seed: int, deflect: bool, bottom: float, top: float, rho_min: float,
-             dz: float, peak: np.ndarray, loss: np.ndarray, cdf: np.ndarray,
+             dz: float, peak_loss: np.ndarray, cdf: np.ndarray,
              angles: np.ndarray, altitude_edges: np.ndarray, zenith_edges: np.ndarray
              ) -> np.ndarray:
     """Loss-weighted track length of n photons per (altitude, sun zenith) cell, the sun along
-    +z, photons entering on the annulus rho_min .. top of the disk facing it."""
+    +z, photons entering on the annulus rho_min .. top of the disk facing it; `peak_loss`
+    (2, n_z) the peak events' and the loss's coefficients [m^-1] on levels every dz."""
     np.random.seed(seed)
     out = np.zeros((altitude_edges.size - 1, zenith_edges.size - 1))
-    majorant = peak.max()
+    majorant = peak_loss[0].max()
+    here = np.empty(2)
     for _ in range(n):
         rho = math.sqrt(rho_min ** 2 + np.random.random() * (top ** 2 - rho_min ** 2))
         phi = 2.0 * math.pi * np.random.random()
@@ -74,7 +67,8 @@ def _photons(n: int, seed: int, deflect: bool, bottom: float, top: float, rho_mi
                     alive = False
                     break
                 altitude = r - bottom
-                attenuation = math.exp(-_level(altitude, dz, loss) * ds)
+                density_at(altitude, dz, peak_loss, here)
+                attenuation = math.exp(-here[1] * ds)
                 zenith = math.degrees(math.acos(min(1.0, max(-1.0, mz / r))))
                 a = np.searchsorted(altitude_edges, altitude, side="right") - 1
                 b = np.searchsorted(zenith_edges, zenith, side="right") - 1
@@ -85,20 +79,11 @@ def _photons(n: int, seed: int, deflect: bool, bottom: float, top: float, rho_mi
                 to_event -= ds
             if not alive:
                 break
-            r = math.sqrt(px * px + py * py + pz * pz)
-            if not deflect or np.random.random() * majorant >= _level(r - bottom, dz, peak):
+            density_at(math.sqrt(px * px + py * py + pz * pz) - bottom, dz, peak_loss, here)
+            if not deflect or np.random.random() * majorant >= here[0]:
                 continue  # a null event, or a peak event that keeps the light on its line
-            angle = np.interp(np.random.random(), cdf, angles)
-            turn = 2.0 * math.pi * np.random.random()
-            ax, ay, az = (1.0, 0.0, 0.0) if abs(dx) < 0.9 else (0.0, 1.0, 0.0)
-            ux, uy, uz = dy * az - dz_ * ay, dz_ * ax - dx * az, dx * ay - dy * ax
-            norm = math.sqrt(ux * ux + uy * uy + uz * uz)
-            ux, uy, uz = ux / norm, uy / norm, uz / norm
-            vx, vy, vz = dy * uz - dz_ * uy, dz_ * ux - dx * uz, dx * uy - dy * ux
-            c, s = math.cos(angle), math.sin(angle)
-            p, q = s * math.cos(turn), s * math.sin(turn)
-            dx, dy, dz_ = (c * dx + p * ux + q * vx, c * dy + p * uy + q * vy,
-                           c * dz_ + p * uz + q * vz)
+            dx, dy, dz_ = rotate(dx, dy, dz_, math.cos(np.interp(np.random.random(), cdf, angles)),
+                                 2.0 * math.pi * np.random.random())
     return out
 
 
@@ -138,7 +123,8 @@ def main() -> None:
     for deflect in (False, True):
         start = time.perf_counter()
         tallies.append(_photons(int(args.photons), 7 + deflect, deflect, bottom, top, rho_min,
-                                float(levels[1] - levels[0]), peak, loss, cdf / cdf[-1],
+                                float(levels[1] - levels[0]), np.stack([peak, loss]),
+                                cdf / cdf[-1],
                                 angles, ALTITUDE_EDGES_M, SUN_ZENITH_EDGES_DEG))
         print(f"Monte Carlo, peaks {'deflecting' if deflect else 'on the line'}: "
               f"{time.perf_counter() - start:.0f} s")

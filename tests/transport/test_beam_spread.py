@@ -17,6 +17,7 @@ from numba import njit
 
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.transport import _beam_spread_kernels
+from skyscatter.transport._monte_carlo_kernels import rotate
 from skyscatter.transport.beam_spread import (
     MARCH_STEPS,
     _layer_share,
@@ -68,20 +69,6 @@ def _coefficient(altitude: float, coefficient: float) -> float:
 
 
 @njit(cache=True)
-def _turn(dx: float, dy: float, dz: float, angle: float, turn: float
-          ) -> tuple[float, float, float]:
-    """The unit direction (dx, dy, dz) turned by `angle`, about it by `turn`."""
-    ax, ay, az = (1.0, 0.0, 0.0) if abs(dx) < 0.9 else (0.0, 1.0, 0.0)
-    ux, uy, uz = dy * az - dz * ay, dz * ax - dx * az, dx * ay - dy * ax
-    norm = math.sqrt(ux * ux + uy * uy + uz * uz)
-    ux, uy, uz = ux / norm, uy / norm, uz / norm
-    vx, vy, vz = dy * uz - dz * uy, dz * ux - dx * uz, dx * uy - dy * ux
-    c, s = math.cos(angle), math.sin(angle)
-    a, b = s * math.cos(turn), s * math.sin(turn)
-    return c * dx + a * ux + b * vx, c * dy + a * uy + b * vy, c * dz + a * uz + b * vz
-
-
-@njit(cache=True)
 def _monte_carlo(n: int, seed: int, rho_min: float, peak: float, loss: float,
                  cdf: np.ndarray, angles: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """Track length (weighted by the loss's transmittance) of n photons in each cell, the sun
@@ -123,8 +110,8 @@ def _monte_carlo(n: int, seed: int, rho_min: float, peak: float, loss: float,
             r = math.sqrt(px * px + py * py + pz * pz)
             if np.random.random() * peak >= _coefficient(r - RADIUS, peak):
                 continue  # a null event
-            dx, dy, dz = _turn(dx, dy, dz, np.interp(np.random.random(), cdf, angles),
-                               2.0 * math.pi * np.random.random())
+            dx, dy, dz = rotate(dx, dy, dz, math.cos(np.interp(np.random.random(), cdf, angles)),
+                                2.0 * math.pi * np.random.random())
     return out
 
 

@@ -90,13 +90,12 @@ class BeamSpread:
     """G (n_h, n_theta, n_wl) [-] on altitudes `altitudes_m` and sun zenith angles
     `sun_zenith_rad` (module docstring): `beam` for the light a point scatters, `irradiance`
     for the light on a horizontal surface there (each direction's light weighted by its
-    cosine); `sweeps` Gauss-Seidel sweeps were taken."""
+    cosine)."""
 
     altitudes_m: np.ndarray
     sun_zenith_rad: np.ndarray
     beam: np.ndarray
     irradiance: np.ndarray
-    sweeps: int
 
     def beam_at(self, altitude_m: ArrayLike, mu_s: ArrayLike) -> np.ndarray:
         """`beam` at altitudes `altitude_m` [m] and sun zenith cosines `mu_s` (same shape S),
@@ -161,29 +160,27 @@ def beam_spread(profile: OpticalProfile, peak_per_density: np.ndarray,
     # nothing) divided out: G is the light with the peak over the light without deflection,
     # both marched on the same nodes
     solve = (args, extinction, column, peak, rays, direct, scaled)
-    beam, irradiance, sweeps = _peak_light(*solve, deltas, kernel)
-    kept_beam, kept_irradiance, _ = _peak_light(*solve, np.zeros(1),
+    beam, irradiance = _peak_light(*solve, deltas, kernel)
+    kept_beam, kept_irradiance = _peak_light(*solve, np.zeros(1),
                                                 np.ones((extinction.shape[1], 1, 1)))
     beam = _ratio(beam, kept_beam, scaled > BEAM_FLOOR)
     irradiance = _ratio(irradiance, kept_irradiance,
                         scaled * np.cos(theta)[None, :, None] > BEAM_FLOOR)
     return BeamSpread(altitudes, theta, 1.0 + trust * (beam - 1.0),
-                      1.0 + trust * (irradiance - 1.0), sweeps)
+                      1.0 + trust * (irradiance - 1.0))
 
 
 def _peak_light(args: tuple, extinction: np.ndarray, column: np.ndarray, peak: np.ndarray,
                 rays: tuple, direct: np.ndarray, scaled: np.ndarray, deltas: np.ndarray,
-                kernel: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+                kernel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(direct + light scattered only in peaks (n_h, n_theta, n_w), the same on a horizontal
-    surface, the sweeps taken) with directions `deltas` and projected peak `kernel`
+    surface) with directions `deltas` and projected peak `kernel`
     (`_projected_kernel`)."""
     theta = args[3]
     source = np.ascontiguousarray(
         kernel[:, :, deltas.size // 2].T[None, None] * direct[:, :, None, :])
     field = np.zeros(source.shape)
-    sweeps = 0
-    while sweeps < MAX_SWEEPS:
-        sweeps += 1
+    for _ in range(MAX_SWEEPS):
         change = _beam_spread_kernels.sweep(*args, deltas, extinction, column, peak, *rays,
                                             kernel, direct, scaled, source, field)
         if change < TOLERANCE:
@@ -192,7 +189,7 @@ def _peak_light(args: tuple, extinction: np.ndarray, column: np.ndarray, peak: n
     cosine = np.maximum(np.cos(theta[:, None] - deltas[None, :]), 0.0)  # (n_theta, n_delta)
     mu_s = np.maximum(np.cos(theta), 0.0)[None, :, None]
     return (direct + field.sum(axis=2),
-            direct * mu_s + np.einsum("hmdw,md->hmw", field, cosine), sweeps)
+            direct * mu_s + np.einsum("hmdw,md->hmw", field, cosine))
 
 
 def _ratio(light: np.ndarray, reference: np.ndarray, kept: np.ndarray) -> np.ndarray:

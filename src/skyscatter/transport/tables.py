@@ -470,18 +470,18 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     # peak it is the medium itself
     scaled = _scaled_optics(profile, scatterer_index, peak)
     sun_table = depth if thick else transmittance
-    spread: BeamSpread | None = None
+    peak_phase = _mixed_peak(profile, scaled, scatterer_index, phase, smooth_phase, peak)
+    gains = None
     if truncated:  # the scaled medium's first order lights the second (below)
         # its sun: the scaled beam, corrected for the peaks' spread of a low sun's light
         # (where the solver resolves the particles: not in a cloud deck, fog or a dust storm)
-        spread = beam_spread(profile, scaled.removed,
-                             _mixed_peak(profile, scaled, scatterer_index, phase,
-                                         smooth_phase, peak), res.truncation_angle_deg)
+        gains = _beam_gains(beam_spread(profile, scaled.removed, peak_phase,
+                                        res.truncation_angle_deg), res, bottom, top)
         scaled_depth = np.einsum("cw,crm->rmw", scaled.extinction, columns)
-        if spread is not None:
-            scaled_depth -= np.log(_beam_gain_on_transmittance_nodes(spread, res, bottom, top))
+        if gains is not None:
+            scaled_depth -= np.log(gains.transmittance)
         scaled_sun_table = scaled_depth if thick else np.exp(-scaled_depth)
-    peak_transmittance, aureole = _peak_aureole(profile, scaled, scatterer_index, phase,
+    peak_transmittance, aureole = _peak_aureole(profile, scaled, scatterer_index, peak_phase,
                                                 smooth_phase, peak, columns,
                                                 res.truncation_angle_deg)
     theta_in, phi_in, *_ = sphere_grids(res)
@@ -549,8 +549,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             # sun of the scaled medium less the true one
             scaled_direct = _table_build_kernels.direct_irradiance_nodes(
                 res.irradiance_r, res.irradiance_mu_s, grid, scaled_medium, sun, sun_radius)
-            if spread is not None:
-                scaled_direct *= _irradiance_gain_on_nodes(spread, res, bottom, top)[..., batch]
+            if gains is not None:
+                scaled_direct *= gains.irradiance[..., batch]
             irradiance[..., batch] = scaled_direct - _table_build_kernels.direct_irradiance_nodes(
                 res.irradiance_r, res.irradiance_mu_s, grid, medium, sun, sun_radius)
         else:
@@ -572,10 +572,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         extrapolation = OrderExtrapolation()
         ground = _table_build_kernels.direct_ground_irradiance(
             DIRECT_GROUND_SAMPLES, grid, scaled_medium, sun, sun_radius)
-        if spread is not None:
-            ground *= spread.irradiance_at(np.zeros(DIRECT_GROUND_SAMPLES),
-                                           np.linspace(-1.0, 1.0, DIRECT_GROUND_SAMPLES)
-                                           )[:, batch]
+        if gains is not None:
+            ground *= gains.ground[:, batch]
         order_res, order_grid = res, grid
         sums = _OrderSums(scattering[..., n_s, batch])
         for order in range(2, orders + 1):
@@ -664,7 +662,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
 
 
 def _peak_aureole(profile: OpticalProfile, scaled: _ScaledOptics, scatterers: np.ndarray,
-                  phase: np.ndarray, smooth_phase: np.ndarray, peak: np.ndarray,
+                  peak_phase: np.ndarray, smooth_phase: np.ndarray, peak: np.ndarray,
                   columns: np.ndarray, truncation_angle_deg: float
                   ) -> tuple[np.ndarray, PeakAureole]:
     """(exp(-x) (n_r_t, n_mu_t, n_wl) with x the peak depth f beta_s along the transmittance
@@ -684,8 +682,7 @@ def _peak_aureole(profile: OpticalProfile, scaled: _ScaledOptics, scatterers: np
     tiny = np.finfo(float).tiny
     smooth_share = smooth_vertical / np.maximum(smooth_vertical.sum(axis=0), tiny)
     aureole = peak_aureole(
-        _mixed_peak(profile, scaled, scatterers, phase, smooth_phase, peak),
-        truncation_angle_deg, float(depth.max()),
+        peak_phase, truncation_angle_deg, float(depth.max()),
         smooth_phase=np.einsum("sw,saw->aw", smooth_share, smooth_phase),
         smooth_ratio=smooth_vertical.sum(axis=0) / np.maximum(vertical.sum(axis=0), tiny))
     return np.exp(-np.minimum(depth, aureole.x_max)), aureole
@@ -705,26 +702,41 @@ def _mixed_peak(profile: OpticalProfile, scaled: _ScaledOptics, scatterers: np.n
     return np.einsum("sw,saw->aw", share, peak_phase)
 
 
-def _beam_gain_on_transmittance_nodes(spread: BeamSpread, res: TableResolution, bottom: float,
-                                      top: float) -> np.ndarray:
-    """The beam's G (`beam_spread`) on the transmittance table's nodes (n_r_t, n_mu_t, n_wl):
-    node (i, j) at x_r = i / (n_r_t - 1), x_mu = j / (n_mu_t - 1)."""
-    r, mu = np.array([[transmittance_r_mu_from_x(j / (res.transmittance_mu - 1),
-                                                 i / (res.transmittance_r - 1), bottom, top)
-                       for j in range(res.transmittance_mu)]
-                      for i in range(res.transmittance_r)]).transpose(2, 0, 1)
-    return spread.beam_at(r - bottom, mu)
+class _BeamGains(NamedTuple):
+    """G of `beam_spread` where the tables apply it: on the transmittance table's nodes
+    (n_r_t, n_mu_t, n_wl), on horizontal surfaces on the irradiance table's nodes (n_r_e,
+    n_mu_s_e, n_wl) and on the ground at the second order's sun samples
+    (DIRECT_GROUND_SAMPLES, n_wl)."""
+
+    transmittance: np.ndarray
+    irradiance: np.ndarray
+    ground: np.ndarray
 
 
-def _irradiance_gain_on_nodes(spread: BeamSpread, res: TableResolution, bottom: float,
-                              top: float) -> np.ndarray:
-    """The irradiance's G (`beam_spread`) on the irradiance table's nodes (n_r_e, n_mu_s_e,
-    n_wl), as `_table_build_kernels.direct_irradiance_nodes` places them."""
-    r, mu_s = np.array([[irradiance_r_mu_s_from_x(j / (res.irradiance_mu_s - 1),
-                                                  i / (res.irradiance_r - 1), bottom, top)
-                         for j in range(res.irradiance_mu_s)]
-                        for i in range(res.irradiance_r)]).transpose(2, 0, 1)
-    return spread.irradiance_at(r - bottom, mu_s)
+def _beam_gains(spread: BeamSpread | None, res: TableResolution, bottom: float, top: float
+                ) -> _BeamGains | None:
+    """`spread`'s G on the tables' nodes (`_BeamGains`), once for all wavelengths; None
+    without one."""
+    if spread is None:
+        return None
+    r, mu = _node_positions(transmittance_r_mu_from_x, res.transmittance_mu,
+                            res.transmittance_r, bottom, top)
+    r_e, mu_s = _node_positions(irradiance_r_mu_s_from_x, res.irradiance_mu_s,
+                                res.irradiance_r, bottom, top)
+    return _BeamGains(spread.beam_at(r - bottom, mu), spread.irradiance_at(r_e - bottom, mu_s),
+                      spread.irradiance_at(np.zeros(DIRECT_GROUND_SAMPLES),
+                                           np.linspace(-1.0, 1.0, DIRECT_GROUND_SAMPLES)))
+
+
+def _node_positions(inverse: Callable[[float, float, float, float], tuple[float, float]],
+                    n_mu: int, n_r: int, bottom: float, top: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """(r [m], mu) (n_r, n_mu) of a table's nodes: node (i, j) at x_r = i / (n_r - 1),
+    x_mu = j / (n_mu - 1), placed by `inverse(x_mu, x_r, bottom, top)`
+    (`table_parameterisation`)."""
+    r, mu = np.array([[inverse(j / (n_mu - 1), i / (n_r - 1), bottom, top)
+                       for j in range(n_mu)] for i in range(n_r)]).transpose(2, 0, 1)
+    return r, mu
 
 
 def _last_ratios(order_mean: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
