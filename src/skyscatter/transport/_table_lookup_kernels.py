@@ -19,7 +19,7 @@ Kernels take arrays and floats only.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -28,6 +28,7 @@ from skyscatter.transport._kernels import density_at, sun_cosines
 from skyscatter.transport._table_common_kernels import (
     corner_sum,
     fast_acos,
+    flat_tables,
     linear_axis,
     mu_axis,
     mu_axis_from_u,
@@ -55,7 +56,13 @@ from skyscatter.transport.table_parameterisation import (
     view_sun_cos_azimuth,
 )
 
+if TYPE_CHECKING:  # the tables import this module's caller, `sight_spread`
+    from skyscatter.atmosphere.model import OpticalProfile
+    from skyscatter.transport.tables import AtmosphereTables
+
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loops of the lookups
+# the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
+SLANT_DEPTH_MAX = 700.0
 
 
 class LookupTables(NamedTuple):
@@ -89,6 +96,41 @@ class LookupTables(NamedTuple):
     aureole_blur: np.ndarray  # (n_x, n_psi, n_wl) the peaks' blur of smooth light [sr^-1]
     aureole_x_max: float  # largest peak depth of aureole_shape [-]
     aureole_psi_max: float  # its largest angle from the sun [rad]; 0: no aureole
+
+
+def lookup_record(profile: OpticalProfile, tables: AtmosphereTables) -> LookupTables:
+    """The `LookupTables` record of `tables` (computed for `profile`): the tables, and for
+    single scattering ray-marched in twilight (`lit_single_scattering`) the profile."""
+    sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
+    scatterers = np.array(tables.scattering_constituents, dtype=np.int64)
+    return LookupTables(
+        bottom_radius=tables.bottom_radius_m, top_radius=tables.top_radius_m,
+        mu_s_min=tables.min_cos_sun_zenith, sun_angle_share=tables.sun_angle_share,
+        scattering=flat_tables(tables.scattering),
+        n_r=int(tables.scattering.shape[0]), n_mu=int(tables.scattering.shape[1]),
+        n_mu_s=int(tables.scattering.shape[2]), n_nu=int(tables.scattering.shape[3]),
+        radius_warp=tables.radius_warp, phase_table=tables.phase,
+        transmittance=tables.transmittance, irradiance=tables.irradiance,
+        sun_irradiance=sun_irradiance,
+        sun_angular_radius=float(profile.sun_angular_radius_rad),
+        h_step=float(profile.altitudes_m[1] - profile.altitudes_m[0]),
+        density=np.ascontiguousarray(profile.density, dtype=np.float64),
+        scatterers=scatterers,
+        single_factor=np.ascontiguousarray(  # E_sun beta_s, (n_s, n_wl)
+            sun_irradiance[None, :] * profile.scattering_per_density[scatterers].reshape(
+                scatterers.size, profile.n_wavelengths), dtype=np.float64),
+        slant_depth=_depth(tables.transmittance, SLANT_DEPTH_MAX),
+        peak_depth=_depth(tables.peak_transmittance, float(tables.aureole_limits[0])),
+        aureole_shape=tables.aureole_shape,
+        aureole_blur=tables.aureole_blur,
+        aureole_x_max=float(tables.aureole_limits[0]),
+        aureole_psi_max=float(tables.aureole_limits[1]))
+
+
+def _depth(transmittance: np.ndarray, where_zero: float) -> np.ndarray:
+    """-ln of a transmittance table (n_r_t, n_mu_t, n_wl), `where_zero` where it is 0."""
+    with np.errstate(divide="ignore"):
+        return np.where(transmittance > 0.0, -np.log(transmittance), where_zero)
 
 
 @njit(cache=True)

@@ -29,9 +29,10 @@ changes with the angle), and without clipped peaks it is 1. Checked against a fo
 Carlo of the peaks alone in the spherical atmosphere (`tests/transport/test_beam_spread.py`).
 Optically thick layers (a cloud deck, fog, a dust storm) are not corrected: the nodes do not
 resolve them (`RESOLVED_DEPTH`). The same error of delta-M for a nearly horizontal line of
-sight is not corrected here.
+sight is corrected by `sight_spread`, where this module's G is trusted.
 
-Public names: `BeamSpread`, `beam_spread`.
+Public names: `BeamSpread`, `beam_spread`, `projected_peak` (the peak seen edge-on, also used by
+`sight_spread`), `ANGLE_FACTOR`.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from numpy.typing import ArrayLike
 from skyscatter.atmosphere.model import OpticalProfile
 from skyscatter.transport import _beam_spread_kernels
 
-__all__ = ["BeamSpread", "beam_spread"]
+__all__ = ["ANGLE_FACTOR", "BeamSpread", "beam_spread", "projected_peak"]
 
 # The resolution below was chosen against the same solver at 64 samples per line, 48
 # altitudes and 12 sweeps on `mars-physical` (16 bands, altitudes 0-20 km, sun 75-89 deg from
@@ -242,21 +243,30 @@ def _projected_kernel(peak_phase: np.ndarray, truncation_angle_deg: float
     delta_j that one peak event sends to delta_i, the peak projected on the sun's vertical
     plane (module docstring), each column normalised to 1: an event keeps all light, also
     next to the last node, where the share it would send beyond is spread over the others."""
-    n_angle, n_wl = peak_phase.shape
-    theta = np.linspace(0.0, np.pi, n_angle)
     half = int(round(ANGLE_FACTOR * truncation_angle_deg / DELTA_STEP_DEG))
     step = np.radians(DELTA_STEP_DEG)
     deltas = step * np.arange(-half, half + 1)
-    # across the plane: to the truncation angle, finer than the peak's samples
-    across = np.linspace(0.0, np.radians(truncation_angle_deg), 256)
-    angle = np.hypot(step * np.arange(2 * half + 1)[:, None], across[None, :])
-    profile = np.stack([np.trapezoid(np.interp(angle, theta, peak_phase[:, w], right=0.0),
-                                     across, axis=1) for w in range(n_wl)])  # (n_wl, n_sep)
+    profile = projected_peak(peak_phase, truncation_angle_deg, step, 2 * half + 1)
     separation = np.abs(np.arange(deltas.size)[:, None] - np.arange(deltas.size)[None, :])
     kernel = profile[:, separation]
     total = kernel.sum(axis=1, keepdims=True)
     return deltas, np.ascontiguousarray(np.where(total > 0.0, kernel / np.where(
         total > 0.0, total, 1.0), 0.0))
+
+
+def projected_peak(peak_phase: np.ndarray, truncation_angle_deg: float, step_rad: float,
+                   n: int) -> np.ndarray:
+    """The peak `peak_phase` (n_angle, n_wl) [sr^-1], sampled uniformly over [0, pi] and 0
+    beyond `truncation_angle_deg`, projected on a plane through its axis, K(delta) =
+    integral p_peak(sqrt(delta^2 + a^2)) da, at delta = 0, step_rad, .. (n - 1) step_rad:
+    (n_wl, n), not normalised."""
+    n_angle, n_wl = peak_phase.shape
+    theta = np.linspace(0.0, np.pi, n_angle)
+    # across the plane: to the truncation angle, finer than the peak's samples
+    across = np.linspace(0.0, np.radians(truncation_angle_deg), 256)
+    angle = np.hypot(step_rad * np.arange(n)[:, None], across[None, :])
+    return np.stack([np.trapezoid(np.interp(angle, theta, peak_phase[:, w], right=0.0),
+                                  across, axis=1) for w in range(n_wl)])
 
 
 def _bracket(x: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -67,7 +67,7 @@ import numpy as np
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.blas_threads import idle_threads_sleep
 from skyscatter.errors import InputError
-from skyscatter.transport import _kernels, _table_build_kernels
+from skyscatter.transport import _kernels, _table_build_kernels, _table_lookup_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.aureole import PeakAureole, peak_aureole
 from skyscatter.transport.beam_spread import BeamSpread, beam_spread
@@ -75,6 +75,7 @@ from skyscatter.transport.order_extrapolation import OrderExtrapolation
 from skyscatter.transport.phase_quadrature import phase_quadrature, source_function, sphere_grids
 from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
+from skyscatter.transport.sight_spread import SIGHT_THETA, sight_spread_source
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN,
     irradiance_r_mu_s_from_x,
@@ -648,7 +649,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         sums.finish()
         del previous, delta, sums
 
-    return AtmosphereTables(
+    tables = AtmosphereTables(
         wavelengths_nm=wavelengths.copy(), bottom_radius_m=bottom, top_radius_m=top,
         min_cos_sun_zenith=mu_s_min, resolution=res, orders=orders,
         scattering_names=tuple(profile.names[c] for c in scatterers),
@@ -659,6 +660,46 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         peak_transmittance=peak_transmittance, aureole_shape=aureole.shape,
         aureole_blur=aureole.blur,
         aureole_limits=np.array([aureole.x_max, aureole.psi_max_rad]), radius_warp=warp)
+    if gains is not None and orders > 1:
+        # the same peaks' spread of the lines of sight, where that of the sun's beam is trusted
+        _add_sight_spread(tables, profile, scaled, (peak_phase, res.truncation_angle_deg), grid,
+                          _table_build_kernels.RayMedium(
+                              h_step=h_step, density=density, columns=columns,
+                              extinction=scaled.extinction, cumulative=cumulative),
+                          batches)
+    return tables
+
+
+def _add_sight_spread(tables: AtmosphereTables, profile: OpticalProfile,
+                      scaled: _ScaledOptics, blur: tuple[np.ndarray, float],
+                      grid: _table_build_kernels.TableGrid,
+                      scaled_medium: _table_build_kernels.RayMedium,
+                      batches: list[slice]) -> None:
+    """Add to the orders >= 2 of `tables` (in place) the peaks' spread of the lines of sight
+    (`sight_spread`): its source on the scattering-density grid, integrated along the table
+    rays through the scaled medium (`scaled_medium`, all wavelengths) with the peak scattering
+    f beta_s as the scattering coefficient. `blur`: (normalised peak, truncation angle [deg])
+    as `sight_spread_source`."""
+    res = tables.resolution
+    n_s = len(tables.scattering_constituents)
+    radii = np.array([scattering_r_from_u((k + 0.5) / grid.n_r, grid.bottom_radius,
+                                          grid.top_radius, grid.n_r, grid.radius_warp)
+                      for k in range(grid.n_r)])
+    mu_s = _table_build_kernels.mu_s_nodes(grid)
+    source = sight_spread_source(_table_lookup_kernels.lookup_record(profile, tables),
+                                 np.ascontiguousarray(profile.ground_albedo, dtype=np.float64),
+                                 radii, mu_s, blur, res.density_phi)
+    source = source.reshape(grid.n_r, SIGHT_THETA, mu_s.size, res.density_phi, -1)
+    multiple = tables.scattering[..., n_s, :]
+    for batch in batches:
+        spread = _table_build_kernels.multiple_scattering_table(
+            grid, scaled_medium._replace(
+                extinction=np.ascontiguousarray(scaled_medium.extinction[:, batch])),
+            res.multiple_ray_samples, np.ascontiguousarray(scaled.removed[:, batch]),
+            np.ascontiguousarray(source[..., batch]).reshape(grid.n_r, SIGHT_THETA, -1),
+            res.density_phi)
+        # first order in the peak events: where it would take more than M holds, M is 0
+        multiple[..., batch] = np.maximum(multiple[..., batch] + spread, 0.0)
 
 
 def _peak_aureole(profile: OpticalProfile, scaled: _ScaledOptics, scatterers: np.ndarray,
