@@ -1,9 +1,10 @@
 """Numba kernels that look the precomputed tables up at run time (`transport/lut_solver.py`):
 sky radiance along rays, transmittance, aerial perspective, the radiance of lit surfaces and
 ground irradiance, with single scattering ray-marched through the sunlit part of each view ray
-in twilight (`lit_single_scattering`, and its per-observer view table). None of this code
-changes the tables, so it is outside their cache key (`transport/code_fingerprint.py`); the
-kernels that build the tables live in `_table_build_kernels`, the helpers of both in
+in twilight (`lit_single_scattering`, and its per-observer view table). The tables' last
+step looks them up too (`sight_spread`: `lookup_record`, `sky_radiance_rays`), so that code is in
+their cache key (`transport/code_fingerprint.py` follows it), the rest is not; the kernels
+that build the tables live in `_table_build_kernels`, the helpers of both in
 `_table_common_kernels`.
 
 Conventions (docs/physics/tables.md, Bruneton 2017 functions.glsl; the table layout in
@@ -1027,7 +1028,7 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                 d = distance_to_bottom_boundary(r, mu, bottom_radius)
             else:
                 d = distance_to_top_boundary(r, mu, top_radius)
-            if marched > 0.0:
+            if marched > 0.0 and n_s > 0:  # tables without a first order: nothing to march
                 if view_table.shape[0] > 0:
                     view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius,
                                       top_radius, exact)

@@ -29,6 +29,7 @@ Public names: `sight_spread_source`.
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import correlate1d
 
 from skyscatter.transport import _table_lookup_kernels
 from skyscatter.transport.beam_spread import ANGLE_FACTOR, projected_peak
@@ -150,7 +151,7 @@ def _blur_zenith(values: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     mirrored = values[:, :, ::-1]
     extended = np.concatenate([mirrored[:, n:0:-1], values, mirrored[:, -2:-n - 2:-1]], axis=1)
     n_theta = values.shape[1]
-    out = np.zeros_like(values)
-    for k in range(2 * n + 1):
-        out += kernel[:, k] * extended[:, k:k + n_theta]
+    out = np.empty_like(values)
+    for w in range(values.shape[3]):
+        out[..., w] = correlate1d(extended[..., w], kernel[w], axis=1)[:, n:n + n_theta]
     return out

@@ -30,7 +30,9 @@ true extinction). What the scaled medium's first order has more than the exact o
 near the sun's direction to E as the scaled medium's direct sun less the true one (the TMS
 correction of Nakajima & Tanaka 1988, in table form). The scaled medium's sun is corrected for
 what the peaks do to a low sun's beam (`beam_spread`: deflected a few degrees, its light goes
-through much more or much less air). Optically thick media need many orders:
+through much more or much less air), and M, once all orders are in, for the same along the
+lines of sight (`sight_spread`: near the horizon a peak event brings the light of a lower or
+higher view). Optically thick media need many orders:
 once the ratio of successive orders settles, the orders beyond are a geometric series, added
 at once (`TAIL_TOLERANCE`); where it settles slowly (cloud decks), the limit of the orders is
 extrapolated from the last six by reduced-rank extrapolation (`order_extrapolation`).
