@@ -29,7 +29,7 @@ N_PHI = 13
 
 def peak_phase(width_deg: float) -> np.ndarray:
     """A Gaussian peak clipped at the truncation angle, normalised on the sphere (N_ANGLE, 1)."""
-    p = np.where(THETA < np.radians(TRUNCATION_DEG),
+    p = np.where(np.radians(TRUNCATION_DEG) > THETA,
                  np.exp(-0.5 * (THETA / np.radians(width_deg)) ** 2), 0.0)
     return (p / np.trapezoid(p * 2.0 * np.pi * np.sin(THETA), THETA))[:, None]
 
