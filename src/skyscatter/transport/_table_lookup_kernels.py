@@ -1,10 +1,9 @@
 """Numba kernels that look the precomputed tables up at run time (`transport/lut_solver.py`):
 sky radiance along rays, transmittance, aerial perspective, the radiance of lit surfaces and
 ground irradiance, with single scattering ray-marched through the sunlit part of each view ray
-in twilight (`lit_single_scattering`, and its per-observer view table). The tables' last
-step looks them up too (`sight_spread`: `lookup_record`, `sky_radiance_rays`), so that code is in
-their cache key (`transport/code_fingerprint.py` follows it), the rest is not; the kernels
-that build the tables live in `_table_build_kernels`, the helpers of both in
+in twilight (`lit_single_scattering`, and its per-observer view table). None of this code
+changes the tables, so it is outside their cache key (`transport/code_fingerprint.py`); the
+kernels that build the tables live in `_table_build_kernels`, the helpers of both in
 `_table_common_kernels`.
 
 Conventions (docs/physics/tables.md, Bruneton 2017 functions.glsl; the table layout in
@@ -20,7 +19,7 @@ Kernels take arrays and floats only.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -29,7 +28,6 @@ from skyscatter.transport._kernels import density_at, sun_cosines
 from skyscatter.transport._table_common_kernels import (
     corner_sum,
     fast_acos,
-    flat_tables,
     linear_axis,
     mu_axis,
     mu_axis_from_u,
@@ -57,13 +55,7 @@ from skyscatter.transport.table_parameterisation import (
     view_sun_cos_azimuth,
 )
 
-if TYPE_CHECKING:  # the tables import this module's caller, `sight_spread`
-    from skyscatter.atmosphere.model import OpticalProfile
-    from skyscatter.transport.tables import AtmosphereTables
-
 RAYS_PER_BLOCK = 64  # rays that share scratch arrays in the parallel loops of the lookups
-# the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
-SLANT_DEPTH_MAX = 700.0
 
 
 class LookupTables(NamedTuple):
@@ -97,41 +89,6 @@ class LookupTables(NamedTuple):
     aureole_blur: np.ndarray  # (n_x, n_psi, n_wl) the peaks' blur of smooth light [sr^-1]
     aureole_x_max: float  # largest peak depth of aureole_shape [-]
     aureole_psi_max: float  # its largest angle from the sun [rad]; 0: no aureole
-
-
-def lookup_record(profile: OpticalProfile, tables: AtmosphereTables) -> LookupTables:
-    """The `LookupTables` record of `tables` (computed for `profile`): the tables, and for
-    single scattering ray-marched in twilight (`lit_single_scattering`) the profile."""
-    sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
-    scatterers = np.array(tables.scattering_constituents, dtype=np.int64)
-    return LookupTables(
-        bottom_radius=tables.bottom_radius_m, top_radius=tables.top_radius_m,
-        mu_s_min=tables.min_cos_sun_zenith, sun_angle_share=tables.sun_angle_share,
-        scattering=flat_tables(tables.scattering),
-        n_r=int(tables.scattering.shape[0]), n_mu=int(tables.scattering.shape[1]),
-        n_mu_s=int(tables.scattering.shape[2]), n_nu=int(tables.scattering.shape[3]),
-        radius_warp=tables.radius_warp, phase_table=tables.phase,
-        transmittance=tables.transmittance, irradiance=tables.irradiance,
-        sun_irradiance=sun_irradiance,
-        sun_angular_radius=float(profile.sun_angular_radius_rad),
-        h_step=float(profile.altitudes_m[1] - profile.altitudes_m[0]),
-        density=np.ascontiguousarray(profile.density, dtype=np.float64),
-        scatterers=scatterers,
-        single_factor=np.ascontiguousarray(  # E_sun beta_s, (n_s, n_wl)
-            sun_irradiance[None, :] * profile.scattering_per_density[scatterers].reshape(
-                scatterers.size, profile.n_wavelengths), dtype=np.float64),
-        slant_depth=_depth(tables.transmittance, SLANT_DEPTH_MAX),
-        peak_depth=_depth(tables.peak_transmittance, float(tables.aureole_limits[0])),
-        aureole_shape=tables.aureole_shape,
-        aureole_blur=tables.aureole_blur,
-        aureole_x_max=float(tables.aureole_limits[0]),
-        aureole_psi_max=float(tables.aureole_limits[1]))
-
-
-def _depth(transmittance: np.ndarray, where_zero: float) -> np.ndarray:
-    """-ln of a transmittance table (n_r_t, n_mu_t, n_wl), `where_zero` where it is 0."""
-    with np.errstate(divide="ignore"):
-        return np.where(transmittance > 0.0, -np.log(transmittance), where_zero)
 
 
 @njit(cache=True)
@@ -1028,7 +985,7 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
                 d = distance_to_bottom_boundary(r, mu, bottom_radius)
             else:
                 d = distance_to_top_boundary(r, mu, top_radius)
-            if marched > 0.0 and n_s > 0:  # tables without a first order: nothing to march
+            if marched > 0.0:
                 if view_table.shape[0] > 0:
                     view_table_lookup(view_table, r, mu, mu_s, nu, hits_ground, bottom_radius,
                                       top_radius, exact)

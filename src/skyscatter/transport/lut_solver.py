@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.errors import InputError
 from skyscatter.transport import _aerial_grid_kernels, _table_lookup_kernels
+from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.geometry import horizontal_towards
 from skyscatter.transport.table_parameterisation import COS_SUN_ZENITH_MIN, horizon_zenith_angle
 from skyscatter.transport.tables import AtmosphereTables, TableResolution, precompute_tables
@@ -62,6 +63,8 @@ AERIAL_GRID_MU = 192
 AERIAL_GRID_PHI = 129
 AERIAL_GRID_DEPTHS = 12
 AERIAL_GRID_EXACT_DEG = 20.0
+# the slant optical depth where the transmittance table holds 0 (exp(-700) ~ 1e-304)
+SLANT_DEPTH_MAX = 700.0
 
 
 class LutSolver:
@@ -101,7 +104,32 @@ class LutSolver:
                              value=tables.wavelengths_nm, allowed="the profile's wavelengths")
         self.tables = tables
         self._albedo = np.ascontiguousarray(profile.ground_albedo, dtype=np.float64)
-        self._lookup = _table_lookup_kernels.lookup_record(profile, tables)
+        sun_irradiance = np.ascontiguousarray(profile.toa_irradiance, dtype=np.float64)
+        scatterers = np.array(tables.scattering_constituents, dtype=np.int64)
+        # the tables, and for single scattering ray-marched in twilight
+        # (`_table_lookup_kernels.lit_single_scattering`) the profile
+        self._lookup = _table_lookup_kernels.LookupTables(
+            bottom_radius=tables.bottom_radius_m, top_radius=tables.top_radius_m,
+            mu_s_min=tables.min_cos_sun_zenith, sun_angle_share=tables.sun_angle_share,
+            scattering=flat_tables(tables.scattering),
+            n_r=int(tables.scattering.shape[0]), n_mu=int(tables.scattering.shape[1]),
+            n_mu_s=int(tables.scattering.shape[2]), n_nu=int(tables.scattering.shape[3]),
+            radius_warp=tables.radius_warp, phase_table=tables.phase,
+            transmittance=tables.transmittance, irradiance=tables.irradiance,
+            sun_irradiance=sun_irradiance,
+            sun_angular_radius=float(profile.sun_angular_radius_rad),
+            h_step=float(profile.altitudes_m[1] - profile.altitudes_m[0]),
+            density=np.ascontiguousarray(profile.density, dtype=np.float64),
+            scatterers=scatterers,
+            single_factor=np.ascontiguousarray(  # E_sun beta_s, (n_s, n_wl)
+                sun_irradiance[None, :] * profile.scattering_per_density[scatterers].reshape(
+                    scatterers.size, profile.n_wavelengths), dtype=np.float64),
+            slant_depth=_depth(tables.transmittance, SLANT_DEPTH_MAX),
+            peak_depth=_depth(tables.peak_transmittance, float(tables.aureole_limits[0])),
+            aureole_shape=tables.aureole_shape,
+            aureole_blur=tables.aureole_blur,
+            aureole_x_max=float(tables.aureole_limits[0]),
+            aureole_psi_max=float(tables.aureole_limits[1]))
 
     def sky_radiance(self, position: ArrayLike, view_directions: ArrayLike,
                      sun_direction: ArrayLike,
@@ -401,6 +429,12 @@ class LutSolver:
                                                                          self._lookup)
         n_wl = p.n_wavelengths
         return direct.reshape(shape + (n_wl,)), diffuse.reshape(shape + (n_wl,))
+
+
+def _depth(transmittance: np.ndarray, where_zero: float) -> np.ndarray:
+    """-ln of a transmittance table (n_r_t, n_mu_t, n_wl), `where_zero` where it is 0."""
+    with np.errstate(divide="ignore"):
+        return np.where(transmittance > 0.0, -np.log(transmittance), where_zero)
 
 
 def _writable(array: np.ndarray) -> np.ndarray:

@@ -17,13 +17,13 @@ scattered once and carried on through peaks) and the ground; the light of the fi
 itself is exact in the tables, and what the peaks make of it near the sun is in the aureole's
 closed forms (`aureole`), so neither is blurred again. The blur is taken in the view's
 vertical plane, the peak projected on it (`beam_spread.projected_peak`), where the field
-changes fastest near the horizon; it is looked up in the finished tables
-(`_table_lookup_kernels.sky_radiance_rays`) on the scattering-density grid with a 1 deg view
-zenith axis, and the integral is one more pass of the orders' ray integral
+changes fastest near the horizon; F is read from the finished tables as the orders read their
+incoming radiance (`_table_build_kernels.incoming_radiance`) on the scattering-density grid
+with a 1 deg view zenith axis, and the integral is one more pass of the orders' ray integral
 (`_table_build_kernels.multiple_scattering_table`) with beta_p as the scattering
 coefficient, added to M. Measured against the Monte Carlo in docs/validation.md.
 
-Public names: `sight_spread_source`.
+Public names: `sight_spread_source`, `view_zenith_angles`.
 """
 
 from __future__ import annotations
@@ -31,10 +31,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import correlate1d
 
-from skyscatter.transport import _table_lookup_kernels
 from skyscatter.transport.beam_spread import ANGLE_FACTOR, projected_peak
 
-__all__ = ["SIGHT_THETA", "sight_spread_source"]
+__all__ = ["SIGHT_THETA", "sight_spread_source", "view_zenith_angles"]
 
 # View zenith angles of the source over [0, pi], both ends included: 1 deg apart, the blur's
 # step (the field near the horizon changes by tens of percent within a few degrees).
@@ -44,34 +43,30 @@ SIGHT_THETA = 181
 ACROSS_MIN_DEG = 10.0
 
 
-def sight_spread_source(lookup: _table_lookup_kernels.LookupTables, albedo: np.ndarray,
-                        radii: np.ndarray, mu_s: np.ndarray, blur: tuple[np.ndarray, float],
-                        n_phi: int) -> np.ndarray:
+def sight_spread_source(field: np.ndarray, n_mu_s: int, n_phi: int,
+                        blur: tuple[np.ndarray, float]) -> np.ndarray:
     """K * F - F (module docstring) for `multiple_scattering_table`: (n_r, SIGHT_THETA,
-    n_mu_s * n_phi * n_wl) float32 on the radii `radii` [m] and sun zenith cosines `mu_s` of
-    its nodes, view zenith angles regular over [0, pi] and n_phi azimuths from the sun's
-    regular over [0, pi]. `lookup`: the finished tables; `albedo` (n_wl,) the ground's;
-    `blur`: (the normalised peak (n_angle, n_wl) [sr^-1] sampled uniformly over [0, pi],
-    its truncation angle [deg])."""
+    n_mu_s * n_phi * n_wl) float32, from the field F (n_wl, SIGHT_THETA * n_phi, n_r * n_mu_s)
+    (`incoming_radiance`'s layout) on the scattering-density nodes, view zenith angles
+    `view_zenith_angles()` and n_phi azimuths from the sun's regular over [0, pi]. `blur`:
+    (the normalised peak (n_angle, n_wl) [sr^-1] sampled uniformly over [0, pi], its
+    truncation angle [deg])."""
+    n_wl = field.shape[0]
+    theta = view_zenith_angles()
+    values = field.reshape(n_wl, theta.size, n_phi, -1, n_mu_s).transpose(3, 4, 1, 2, 0)
     kernel = _vertical_kernel(*blur)
     spread = _mean_square_angle(blur[0])
-    field_tables = _orders_and_ground(lookup)
-    theta = np.linspace(0.0, np.pi, SIGHT_THETA)
-    phi = np.linspace(0.0, np.pi, n_phi)
-    origins, directions = _node_rays(mu_s, theta, phi)
-    n_wl = albedo.size
-    source = np.empty((radii.size, theta.size, mu_s.size * n_phi * n_wl), dtype=np.float32)
-    empty_view = np.zeros((0, 2, 0, n_wl))
-    empty_aureole = np.zeros((0, 0, 2, n_wl))
-    sun = np.array([0.0, 0.0, 1.0])
-    field = np.empty((directions.shape[0], n_wl))
-    for i, r in enumerate(radii):
-        _table_lookup_kernels.sky_radiance_rays(origins * r, directions, sun, field_tables,
-                                                albedo, empty_view, empty_aureole, field)
-        values = field.reshape(mu_s.size, theta.size, n_phi, n_wl)
-        change = _blur_zenith(values, kernel) - values + _across(values, theta, spread)
+    source = np.empty((values.shape[0], theta.size, n_mu_s * n_phi * n_wl), dtype=np.float32)
+    for i, node in enumerate(values):  # (n_mu_s, n_theta, n_phi, n_wl) of one radius
+        node = node.astype(np.float64)
+        change = _blur_zenith(node, kernel) - node + _across(node, theta, spread)
         source[i] = change.transpose(1, 0, 2, 3).reshape(theta.size, -1)
     return source
+
+
+def view_zenith_angles() -> np.ndarray:
+    """The source's view zenith angles [rad]: SIGHT_THETA regular over [0, pi]."""
+    return np.linspace(0.0, np.pi, SIGHT_THETA)
 
 
 def _vertical_kernel(peak_phase: np.ndarray, truncation_angle_deg: float) -> np.ndarray:
@@ -107,39 +102,6 @@ def _across(values: np.ndarray, theta: np.ndarray, mean_square: np.ndarray) -> n
     sine = np.maximum(np.sin(theta), np.sin(np.radians(ACROSS_MIN_DEG)))[None, :, None, None]
     cosine = np.cos(theta)[None, :, None, None]
     return mean_square / 4.0 * (cosine / sine * slope + second / sine**2)
-
-
-def _orders_and_ground(lookup: _table_lookup_kernels.LookupTables
-                       ) -> _table_lookup_kernels.LookupTables:
-    """`lookup` with the orders >= 2 as its only table, no constituent of its own (no first
-    order, looked up or marched) and no aureole: its lookups are F, the orders >= 2 and the
-    ground."""
-    n_s = lookup.scatterers.size
-    n_wl = lookup.single_factor.shape[1]
-    orders = np.ascontiguousarray(lookup.scattering.reshape(-1, n_s + 1, n_wl)[:, n_s])
-    return lookup._replace(
-        scattering=orders.reshape(-1), phase_table=lookup.phase_table[:0],
-        scatterers=lookup.scatterers[:0], single_factor=lookup.single_factor[:0],
-        aureole_psi_max=0.0)
-
-
-def _node_rays(mu_s: np.ndarray, theta: np.ndarray, phi: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """(origins on the unit sphere, view directions), each (n_mu_s * n_theta * n_phi, 3) in
-    that order, with the sun along +z: at an origin the sun is arccos(mu_s) from the zenith,
-    and the view theta from the zenith and phi in azimuth from the sun's."""
-    sun_zenith = np.arccos(np.clip(mu_s, -1.0, 1.0))
-    up = np.stack([np.sin(sun_zenith), np.zeros_like(mu_s), np.cos(sun_zenith)], axis=1)
-    # towards the sun along the ground (the sun at the zenith: any azimuth will do)
-    towards = np.stack([-np.cos(sun_zenith), np.zeros_like(mu_s), np.sin(sun_zenith)], axis=1)
-    across = np.array([0.0, 1.0, 0.0])
-    s, c = np.sin(theta)[None, :, None, None], np.cos(theta)[None, :, None, None]
-    directions = (c * up[:, None, None, :] + s * (
-        np.cos(phi)[None, None, :, None] * towards[:, None, None, :]
-        + np.sin(phi)[None, None, :, None] * across))
-    origins = np.broadcast_to(up[:, None, None, :], directions.shape)
-    return (np.ascontiguousarray(origins.reshape(-1, 3)),
-            np.ascontiguousarray(directions.reshape(-1, 3)))
 
 
 def _blur_zenith(values: np.ndarray, kernel: np.ndarray) -> np.ndarray:

@@ -69,7 +69,7 @@ import numpy as np
 from skyscatter.atmosphere.model import DEFAULT_SCATTERING_ORDERS, OpticalProfile
 from skyscatter.blas_threads import idle_threads_sleep
 from skyscatter.errors import InputError
-from skyscatter.transport import _kernels, _table_build_kernels, _table_lookup_kernels
+from skyscatter.transport import _kernels, _table_build_kernels
 from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.aureole import PeakAureole, peak_aureole
 from skyscatter.transport.beam_spread import BeamSpread, beam_spread
@@ -77,7 +77,7 @@ from skyscatter.transport.order_extrapolation import OrderExtrapolation
 from skyscatter.transport.phase_quadrature import phase_quadrature, source_function, sphere_grids
 from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
-from skyscatter.transport.sight_spread import SIGHT_THETA, sight_spread_source
+from skyscatter.transport.sight_spread import sight_spread_source, view_zenith_angles
 from skyscatter.transport.table_parameterisation import (
     COS_SUN_ZENITH_MIN,
     irradiance_r_mu_s_from_x,
@@ -667,7 +667,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         _add_sight_spread(tables, profile, scaled, (peak_phase, res.truncation_angle_deg), grid,
                           _table_build_kernels.RayMedium(
                               h_step=h_step, density=density, columns=columns,
-                              extinction=scaled.extinction, cumulative=cumulative),
+                              extinction=profile.extinction_per_density, cumulative=cumulative),
                           batches)
     return tables
 
@@ -675,31 +675,43 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
 def _add_sight_spread(tables: AtmosphereTables, profile: OpticalProfile,
                       scaled: _ScaledOptics, blur: tuple[np.ndarray, float],
                       grid: _table_build_kernels.TableGrid,
-                      scaled_medium: _table_build_kernels.RayMedium,
-                      batches: list[slice]) -> None:
+                      medium: _table_build_kernels.RayMedium, batches: list[slice]) -> None:
     """Add to the orders >= 2 of `tables` (in place) the peaks' spread of the lines of sight
-    (`sight_spread`): its source on the scattering-density grid, integrated along the table
-    rays through the scaled medium (`scaled_medium`, all wavelengths) with the peak scattering
-    f beta_s as the scattering coefficient. `blur`: (normalised peak, truncation angle [deg])
-    as `sight_spread_source`."""
+    (`sight_spread`): the field F, the orders >= 2 and the ground lit by the true sun and the
+    sky (`tables.irradiance`), read on the scattering-density grid with `sight_spread`'s view
+    zenith angles, its blur's source integrated along the table rays through the scaled
+    medium with the peak scattering f beta_s as the scattering coefficient. `medium`: the true
+    medium, all wavelengths; `blur`: (normalised peak, truncation angle [deg]) as
+    `sight_spread_source`."""
     res = tables.resolution
     n_s = len(tables.scattering_constituents)
-    radii = np.array([scattering_r_from_u((k + 0.5) / grid.n_r, grid.bottom_radius,
-                                          grid.top_radius, grid.n_r, grid.radius_warp)
-                      for k in range(grid.n_r)])
-    mu_s = _table_build_kernels.mu_s_nodes(grid)
-    source = sight_spread_source(_table_lookup_kernels.lookup_record(profile, tables),
-                                 np.ascontiguousarray(profile.ground_albedo, dtype=np.float64),
-                                 radii, mu_s, blur, res.density_phi)
-    source = source.reshape(grid.n_r, SIGHT_THETA, mu_s.size, res.density_phi, -1)
+    theta = view_zenith_angles()
+    phi = np.linspace(0.0, np.pi, res.density_phi)
+    _, ground_mu_s = _node_positions(irradiance_r_mu_s_from_x, res.irradiance_mu_s,
+                                     res.irradiance_r, grid.bottom_radius, grid.top_radius)
+    samples = np.linspace(-1.0, 1.0, DIRECT_GROUND_SAMPLES)
     multiple = tables.scattering[..., n_s, :]
     for batch in batches:
+        true = medium._replace(extinction=np.ascontiguousarray(medium.extinction[:, batch]))
+        sun = np.ascontiguousarray(profile.toa_irradiance[batch], dtype=np.float64)
+        ground = _table_build_kernels.direct_ground_irradiance(
+            DIRECT_GROUND_SAMPLES, grid, true, sun, float(profile.sun_angular_radius_rad))
+        ground += np.stack([np.interp(samples, ground_mu_s[0], tables.irradiance[0, :, w])
+                            for w in range(batch.start, batch.stop)], axis=1)
+        field = _table_build_kernels.incoming_radiance(
+            grid, true, theta, phi, _table_build_kernels.LitOrder(
+                tables=flat_tables(multiple[..., batch][..., None, :]), n_t=1,
+                use_phase=False, phase_table=np.ascontiguousarray(tables.phase[:, :, batch])),
+            ground, np.ascontiguousarray(profile.ground_albedo[batch], dtype=np.float64),
+            (0, grid.n_r))
+        source = sight_spread_source(field, grid.n_mu_s, res.density_phi,
+                                     (blur[0][:, batch], blur[1]))
+        del field
+        scaled_medium = true._replace(
+            extinction=np.ascontiguousarray(scaled.extinction[:, batch]))
         spread = _table_build_kernels.multiple_scattering_table(
-            grid, scaled_medium._replace(
-                extinction=np.ascontiguousarray(scaled_medium.extinction[:, batch])),
-            res.multiple_ray_samples, np.ascontiguousarray(scaled.removed[:, batch]),
-            np.ascontiguousarray(source[..., batch]).reshape(grid.n_r, SIGHT_THETA, -1),
-            res.density_phi)
+            grid, scaled_medium, res.multiple_ray_samples,
+            np.ascontiguousarray(scaled.removed[:, batch]), source, res.density_phi)
         # first order in the peak events: where it would take more than M holds, M is 0
         multiple[..., batch] = np.maximum(multiple[..., batch] + spread, 0.0)
 
