@@ -19,6 +19,7 @@ above, e.g. `--atmospheres earth-overcast --altitude 3000 --suns 30 --bands 1
 
 Run: PYTHONPATH=src python benchmarks/bench_forward_peak.py [--paths 20000]
      [--atmospheres earth mars-hg-dust mars-physical] [--suns 0 30 60 85] [--altitude 0]
+     [--orders N]
 """
 
 from __future__ import annotations
@@ -112,6 +113,8 @@ def main() -> None:
                              "default: TableResolution's")
     parser.add_argument("--altitude", type=float, default=0.0,
                         help="the observer's altitude [m]; above 0 it looks down too")
+    parser.add_argument("--orders", type=int, default=None,
+                        help="the tables' scattering orders (default: each config's)")
     args = parser.parse_args()
     wavelengths = wavelength_grid(args.bands)
     rows = []
@@ -121,9 +124,11 @@ def main() -> None:
         solvers = {}
         for variant in args.variants:
             truncation = None if variant == "default" else float(variant)
-            solver, seconds = tables(profile, atm.scattering_orders, truncation)
+            orders = atm.scattering_orders if args.orders is None else args.orders
+            solver, seconds = tables(profile, orders, truncation)
             peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-            print(f"{name}: tables ({variant}) {seconds:.1f} s, process peak so far {peak:.0f} MB")
+            print(f"{name}: tables ({variant}, {orders} orders) {seconds:.1f} s, "
+                  f"process peak so far {peak:.0f} MB")
             solvers[variant] = solver
         for sun_zenith in args.suns:
             mean, error = monte_carlo(profile, name, sun_zenith, args.paths, args.cache,

@@ -222,16 +222,20 @@ def test_thick_cells_get_the_cubic_source_and_a_thick_layer_the_sun_angle_share(
     # tables.cubic_source: where a cell of Bruneton's 32 radii holds > 0.25 optical depths. The
     # slab of van de Hulst at tau = 8 (uniform over 1 km: its top cell on that axis holds
     # 1 - (31/32)^2 of 8 = 0.49) does, at tau = 1 (0.06) not; Earth's air (0.05) does not.
-    # Only a layer that warps the radius axis (the stratus) gets the mu_s share, which puts
+    # A layer that warps the radius axis (the stratus) gets the mu_s share, which puts
     # cells near the zenith: 11 of 40 within 50 deg of it, 5 deg apart (Bruneton's axis: 3,
-    # at 47.9, 36.2 and 0 deg).
+    # at 47.9, 36.2 and 0 deg); so does a forward-scattering haze of optical depth 1 (Mie
+    # droplets of effective radius 1.05 um: g ~ 0.7), not Earth's aerosol (0.1).
     assert tables_module.cubic_source(slab_profile(8.0))
     assert not tables_module.cubic_source(slab_profile(1.0))
     earth = load_atmosphere("earth").optical_profile(np.array([375.0, 550.0]))
     assert not tables_module.cubic_source(earth)
-    assert tables_module.sun_angle_share(tables_module.radius_warp(earth)) == 0.0
+    assert tables_module.sun_angle_share(earth, tables_module.radius_warp(earth)) == 0.0
+    haze = load_atmosphere("exo-hazy").optical_profile(np.array([550.0]))
+    assert tables_module.sun_angle_share(haze, tables_module.radius_warp(haze)) == (
+        tables_module.THICK_SUN_ANGLE_SHARE)
     overcast = load_atmosphere("earth-overcast").optical_profile(np.array([550.0]))
-    share = tables_module.sun_angle_share(tables_module.radius_warp(overcast))
+    share = tables_module.sun_angle_share(overcast, tables_module.radius_warp(overcast))
     assert share == tables_module.THICK_SUN_ANGLE_SHARE
     bottom, top = overcast.bottom_radius_m, overcast.top_radius_m
     for s, cells in ((0.0, 3), (share, 11)):

@@ -18,7 +18,7 @@ from skyscatter.render.sky_at_time import render_sky_at
 from skyscatter.render.tonemap import night_adapted_exposure
 from skyscatter.transport import table_parameterisation as tp
 from skyscatter.transport.lut_solver import LutSolver
-from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS, sun_angle_share
+from skyscatter.transport.tables import RADIUS_WARP_SEGMENTS, THICK_SUN_ANGLE_SHARE
 from skyscatter.viewer import codegen
 
 PROBE = (Path(__file__).parent / "glsl_probe.js").read_text()
@@ -207,7 +207,7 @@ def test_glsl_parameterisations_agree_with_python(page, viewer_url, radii, layer
     x = np.linspace(0.0, 1.0, RADIUS_WARP_SEGMENTS + 1)
     warp = 0.5 * x + 0.5 * np.clip((x - 0.07) / 0.04, 0.0, 1.0) if layer_warp else x
     # such a layer also takes the mu_s axis's share uniform in the sun's zenith angle
-    share = sun_angle_share(warp)
+    share = THICK_SUN_ANGLE_SHARE if layer_warp else 0.0
     page.goto(viewer_url.url + "&controls=0&quality=preview&width=8&height=8")
     result = page.evaluate(PROBE, {"inputs": inputs.tolist(), "radii": list(radii),
                                    "mu_s_min": tp.COS_SUN_ZENITH_MIN,
