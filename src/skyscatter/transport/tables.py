@@ -189,9 +189,7 @@ THICK_LAYER_QUADRATURE = {"transmittance_r": 1024}
 # forward-scattering particles (`has_forward_particles`, below): their orders >= 2 change with
 # the sun's zenith angle faster than linearly across Bruneton's cell of 0-36 deg; `exo-hazy`
 # (haze of optical depth 1) at 566 nm against the Monte Carlo, the zenith with the sun 24 deg
-# from it, 1.150 -> 1.020, 30 deg from the zenith on the far side 1.226 -> 1.009;
-# `mars-dust-storm` with the sun 20 deg from the zenith, median / 95th percentile of 2 bands,
-# 11.3 / 42.4 % -> 1.0 / 3.4 % (benchmarks/bench_forward_peak.py, docs/validation.md).
+# from it, 1.150 -> 1.020, 30 deg from the zenith on the far side 1.226 -> 1.009.
 THICK_SUN_ANGLE_SHARE = 0.5
 # Where a cell of Bruneton's radius axis holds more than this optical depth, the source function
 # is interpolated in radius by a cubic, not linearly (`cubic_source`): across such cells it
