@@ -8,7 +8,13 @@ import dataclasses
 
 import numpy as np
 import pytest
-from transport_cases import EARTH_RADIUS_M, SMALL, cloud_deck, homogeneous_shell
+from transport_cases import (
+    EARTH_RADIUS_M,
+    SMALL,
+    cloud_deck,
+    exponential_earth,
+    homogeneous_shell,
+)
 
 from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.errors import InputError
@@ -52,9 +58,13 @@ TOP_RADIUS_M = EARTH_RADIUS_M + 60e3  # exponential_earth()
 def single_only(tables: AtmosphereTables) -> AtmosphereTables:
     """The same tables without the orders >= 2 and without sky light on the ground: exactly
     what `precompute_tables(..., orders=1)` returns."""
-    scattering = tables.scattering.copy()
-    scattering[..., -1, :] = 0.0
+    n_s = len(tables.scattering_constituents)
+    scattering = np.zeros(tables.scattering.shape[:4] + (n_s + 1, tables.scattering.shape[5]),
+                          dtype=tables.scattering.dtype)
+    scattering[..., :n_s, :] = tables.scattering[..., :n_s, :]
     return dataclasses.replace(tables, scattering=scattering, orders=1,
+                               peak_correction_phase=tables.peak_correction_phase[:0],
+                               peak_correction_names=(),
                                irradiance=np.zeros_like(tables.irradiance))
 
 
@@ -193,6 +203,31 @@ def test_earth_keeps_8_view_sun_slices_and_dusty_mars_gets_16_but_not_a_cloud_de
         resolution = tables_module.forward_scattering_resolution(
             TableResolution(), profile, tables_module.radius_warp(profile))
         assert resolution.scattering_nu == slices, name
+
+
+def test_the_clipped_peak_s_correction_is_weighted_per_ray_not_between_view_sun_slices():
+    # The TMS term of a clipped constituent, p*(nu) (S* - (1 - f) S), has p* flat inside the
+    # truncation angle and falling with the haze's wing beyond it: a kink the view-sun slices
+    # would interpolate linearly. Its p-less table is smooth in nu and weighted per ray, so 8
+    # slices (22.5 deg apart) give the sky of 96 along the almucantar of a sun 85 deg from the
+    # zenith (azimuth ~ scattering angle there) with a dense HG 0.9 haze (optical depth 0.25)
+    # within 3 % (measured: -0.3 ... +2.3 %, the rest of the orders >= 2 linear between the
+    # slices; with the term inside the orders' table: -8.1 ... +8.1 %).
+    profile = exponential_earth()
+    profile = dataclasses.replace(
+        profile, phases=(profile.phases[0], HenyeyGreensteinPhase(0.9)),
+        extinction_per_density=profile.extinction_per_density * [[1.0], [10.0]],
+        scattering_per_density=profile.scattering_per_density * [[1.0], [10.0]])
+    origin = observer_position(0.0, profile.bottom_radius_m)
+    sun = local_frame_directions(np.radians(85.0), 0.0)
+    views = np.array([local_frame_directions(np.radians(85.3), np.radians(azimuth))
+                      for azimuth in np.arange(4.0, 61.0, 4.0)])
+    sky = {}
+    for slices in (8, 96):
+        lut = LutSolver(profile, dataclasses.replace(SMALL, scattering_nu=slices), orders=4)
+        assert lut.tables.peak_correction_names == ("mie",)
+        sky[slices] = lut.sky_radiance(origin, views, sun)
+    np.testing.assert_allclose(sky[8], sky[96], rtol=3 * PERCENT)
 
 
 def test_radius_taps_reproduce_quadratics_and_sum_to_one():

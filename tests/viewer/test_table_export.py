@@ -151,8 +151,8 @@ def test_npz_holds_the_tables_in_texture_order_with_names(preview, tmp_path):
     for s_index in range(n_t - 1):
         angle = 2049
         row = s_index * sidecar["uniforms"]["u_phase_rows"] + angle // 1024
-        np.testing.assert_allclose(phase[row, angle % 1024], tables.phase[s_index, angle],
-                                   rtol=1e-6)
+        np.testing.assert_allclose(phase[row, angle % 1024],
+                                   tables.lookup_phase[s_index, angle], rtol=1e-6)
 
 
 def test_sidecar_states_the_atmosphere_and_its_parameterisation(preview, tmp_path):

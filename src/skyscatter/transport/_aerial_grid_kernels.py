@@ -102,7 +102,6 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
     atmosphere). `tables`: the `LookupTables` record."""
     n_points = points.shape[0]
     n_wl = out.shape[1]
-    n_s = tables.phase_table.shape[0]
     one_albedo = albedo.shape[0] == 1
     # the observer's horizon, for the grid's cells
     r = math.sqrt(origin[0] ** 2 + origin[1] ** 2 + origin[2] ** 2)
@@ -110,7 +109,7 @@ def surface_radiance_points(origin, points, normals, lit, albedo, sun_direction,
                                    tables.bottom_radius)
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        work = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
+        work = aerial_scratch(tables, n_wl)
         t_view, direct, diffuse = np.empty(n_wl), np.empty(n_wl), np.empty(n_wl)
         scratch = np.empty(n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):

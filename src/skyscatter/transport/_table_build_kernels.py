@@ -635,18 +635,21 @@ def direct_irradiance_nodes(n_r_e, n_mu_s_e, grid, medium, sun_irradiance, sun_a
 
 
 @njit(parallel=True, cache=True)
-def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid, out):
-    """sum_s p*_s(nu) (scaled_single_s - kept_s single_s) on every cell of the scattering
-    table, into out (n_r, n_mu, n_mu_s, n_nu, n_wl) float32, any strides: what the first
-    order of the delta-M scaled medium has more than the exact first order's smooth part
-    (`phase_truncation`). Tables (n_r, n_mu, n_mu_s, n_nu, n_s, n_wl) without phase functions,
-    as `single_scattering_table` writes them; kept = 1 - f (n_s, n_wl); p* from `smooth_phase`
-    (n_s, n_angle, n_wl) at each cell's nu. `grid`: a `TableGrid`. The scaled medium
-    attenuates less, so each difference is >= 0; where the true one is ~0 (air above the
-    particles) the two quadratures can differ by a hair in either direction (measured: 33 of
-    131 072 cells of a small table, down to -0.8 % of its largest value), which is clipped
-    to 0."""
+def peak_differences(scaled_single, single, kept, smooth_phase, slot, grid, out):
+    """What the first order of the delta-M scaled medium has more than the exact first order's
+    smooth part (`phase_truncation`), D_s = scaled_single_s - kept_s single_s, on every cell
+    of the scattering table, into out (n_r, n_mu, n_mu_s, n_nu, n_c + 1, n_wl) float32, any
+    strides: D_s without phase function into out[..., slot[s], :] for the constituents with
+    slot[s] >= 0 (the clipped ones, whose p* kinks at the truncation angle: the lookups apply
+    it per ray), sum_s p*_s(nu) D_s of the others into the last entry (the orders >= 2; p*
+    from `smooth_phase` (n_s, n_angle, n_wl) at each cell's nu). Tables (n_r, n_mu, n_mu_s,
+    n_nu, n_s, n_wl) without phase functions, as `single_scattering_table` writes them;
+    kept = 1 - f (n_s, n_wl). `grid`: a `TableGrid`. The scaled medium attenuates less, so
+    each difference is >= 0; where the true one is ~0 (air above the particles) the two
+    quadratures can differ by a hair in either direction (measured: 33 of 131 072 cells of a
+    small table, down to -0.8 % of its largest value), which is clipped to 0."""
     n_r, n_mu, n_mu_s, n_nu, n_s, n_wl = single.shape
+    last = out.shape[4] - 1
     bottom_radius, top_radius = grid.bottom_radius, grid.top_radius
     nodes = mu_s_nodes(grid)
     for row in prange(n_r * n_mu):
@@ -661,12 +664,15 @@ def phase_weighted_difference(scaled_single, single, kept, smooth_phase, grid, o
             for i_nu in range(n_nu):
                 nu = cell_nu(mu, mu_s, i_nu, n_nu)
                 phase_values(smooth_phase, nu, phase)
-                out[i_r, i_mu, i_s, i_nu] = 0.0
+                out[i_r, i_mu, i_s, i_nu, last] = 0.0
                 for s in range(n_s):
                     for w in range(n_wl):
-                        out[i_r, i_mu, i_s, i_nu, w] += phase[s * n_wl + w] * max(
-                            scaled_single[i_r, i_mu, i_s, i_nu, s, w]
-                            - kept[s, w] * single[i_r, i_mu, i_s, i_nu, s, w], 0.0)
+                        difference = max(scaled_single[i_r, i_mu, i_s, i_nu, s, w]
+                                         - kept[s, w] * single[i_r, i_mu, i_s, i_nu, s, w], 0.0)
+                        if slot[s] >= 0:
+                            out[i_r, i_mu, i_s, i_nu, slot[s], w] = difference
+                        else:
+                            out[i_r, i_mu, i_s, i_nu, last, w] += phase[s * n_wl + w] * difference
 
 
 @njit(parallel=True, cache=True)

@@ -74,7 +74,9 @@ class LookupTables(NamedTuple):
     n_mu_s: int
     n_nu: int
     radius_warp: np.ndarray  # the u_r axis's warp (table_parameterisation.scattering_u_r)
-    phase_table: np.ndarray  # (n_s, n_angle, n_wl) phase functions [sr^-1]
+    # (n_s + n_c, n_angle, n_wl) [sr^-1]: the phase function of each table before the orders
+    # >= 2, those of the single scattering then of the peak corrections (`tables.lookup_phase`)
+    phase_table: np.ndarray
     transmittance: np.ndarray  # (n_r_t, n_mu_t, n_wl) to the top [-]
     irradiance: np.ndarray  # (n_r_e, n_mu_s_e, n_wl) indirect irradiance [W m^-2 nm^-1]
     sun_irradiance: np.ndarray  # (n_wl,) E_sun at the top [W m^-2 nm^-1]
@@ -216,11 +218,12 @@ def exact_single_weight(mu_s):
 
 
 @njit(cache=True)
-def geometric_mu_s_correction(flat, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu, i_s, a_s,
-                              i_nu, a_nu, share, slices, out):
-    """out[w] += share * (geometric - linear interpolation in mu_s) of the last table of the
-    interleaved `flat` (the orders >= 2), at the corners of `scattering_corners`; slices
-    (2, n_wl) is scratch.
+def geometric_mu_s_correction(flat, n_mu, n_mu_s, n_nu, weights, first, i_r, a_r, i_mu, a_mu,
+                              i_s, a_s, i_nu, a_nu, share, slices, out):
+    """out[w] += share * (geometric - linear interpolation in mu_s) of the tables of the
+    interleaved `flat` from table `first` on (the peak corrections and the orders >= 2),
+    summed with their `weights` (as `scattering_lookup`'s), at the corners of
+    `scattering_corners`; slices (2, n_wl) is scratch.
 
     In twilight the orders >= 2 fall by a factor of 3-10 from one mu_s cell to the next (the
     lit air recedes), and linear interpolation between the cells overestimates them by up to
@@ -229,14 +232,13 @@ def geometric_mu_s_correction(flat, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_m
     `scattering_lookup` does; `share` (`exact_single_weight`) blends it in as the sun sets,
     so daytime lookups are unchanged."""
     n_wl = out.size
-    m = n_t * n_wl
+    m = weights.size
     s_nu = m
     s_s = n_nu * s_nu
     s_mu = n_mu_s * s_s
     s_r = n_mu * s_mu
-    last = (n_t - 1) * n_wl
     slices[:, :] = 0.0
-    base = i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu + last
+    base = i_r * s_r + i_mu * s_mu + i_s * s_s + i_nu * s_nu
     for dr in range(2):
         wr = a_r if dr == 1 else 1.0 - a_r
         for dm in range(2):
@@ -245,9 +247,9 @@ def geometric_mu_s_correction(flat, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_m
                 continue
             for ds in range(2):
                 offset = base + dr * s_r + dm * s_mu + ds * s_s
-                for w in range(n_wl):
-                    slices[ds, w] += wm * ((1.0 - a_nu) * flat[offset + w]
-                                           + a_nu * flat[offset + m + w])
+                for k in range(first * n_wl, m):
+                    slices[ds, k % n_wl] += wm * weights[k] * (
+                        (1.0 - a_nu) * flat[offset + k] + a_nu * flat[offset + m + k])
     for w in range(n_wl):
         v0 = slices[0, w]
         v1 = slices[1, w]
@@ -944,8 +946,8 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
     n_ray = directions.shape[0]
     n_r, n_mu, n_mu_s, n_nu = tables.n_r, tables.n_mu, tables.n_mu_s, tables.n_nu
     n_wl = out.shape[1]
-    n_s = phase_table.shape[0]
-    n_t = n_s + 1
+    n_s = scatterers.size
+    n_t = phase_table.shape[0] + 1
     single_origin = origins.shape[0] == 1
     n_blocks = (n_ray + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
@@ -979,8 +981,9 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
             scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s,
                               a_s, i_nu, a_nu, pair_values, value)
             if marched > 0.0:
-                geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu,
-                                          a_mu, i_s, a_s, i_nu, a_nu, marched, slices, value)
+                geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, weights, n_s, i_r,
+                                          a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu, marched,
+                                          slices, value)
             if hits_ground:
                 d = distance_to_bottom_boundary(r, mu, bottom_radius)
             else:
@@ -1027,15 +1030,16 @@ def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo,
 
 
 @njit(cache=True)
-def aerial_scratch(n_t, n_wl, n_c, n_s):
-    """Scratch arrays of `_aerial_point` and `_aerial_lit_single` for n_t tables (n_s
-    constituents that scatter and the orders >= 2) of n_wl wavelengths and n_c profile
-    constituents: (weights, pair_values, at_point, scratch, slices, samples, observer, here,
+def aerial_scratch(tables, n_wl):
+    """Scratch arrays of `_aerial_point` and `_aerial_lit_single` for the `LookupTables` record
+    `tables` (its single-scattering tables, peak corrections and orders >= 2) at n_wl
+    wavelengths: (weights, pair_values, at_point, scratch, slices, samples, observer, here,
     sun, dens, exact)."""
-    weights, pair_values = lookup_scratch(n_t, n_wl)
+    weights, pair_values = lookup_scratch(tables.phase_table.shape[0] + 1, n_wl)
     return (weights, pair_values, np.empty(n_wl), np.empty(n_wl),
             np.empty((2, n_wl)), np.empty(EXACT_SINGLE_SAMPLES + 8), np.empty(n_wl),
-            np.empty(n_wl), np.empty(n_wl), np.empty(n_c), np.empty((n_s, n_wl)))
+            np.empty(n_wl), np.empty(n_wl), np.empty(tables.density.shape[0]),
+            np.empty((tables.scatterers.size, n_wl)))
 
 
 @njit(cache=True, inline="always")
@@ -1113,8 +1117,7 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_v
                                               tables.transmittance)
     n_r, n_mu, n_mu_s, n_nu = tables.n_r, tables.n_mu, tables.n_mu_s, tables.n_nu
     n_wl = inscatter_out.size
-    n_s = phase_table.shape[0]
-    n_t = n_s + 1
+    n_s = tables.scatterers.size
     for w in range(n_wl):
         inscatter_out[w] = 0.0
         transmittance_out[w] = 1.0
@@ -1138,16 +1141,16 @@ def _aerial_point(ox, oy, oz, px, py, pz, sun_direction, tables, weights, pair_v
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
                       i_nu, a_nu, pair_values, inscatter_out)
     if marched > 0.0:
-        geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu,
-                                  i_s, a_s, i_nu, a_nu, marched, slices, inscatter_out)
+        geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, weights, n_s, i_r, a_r, i_mu,
+                                  a_mu, i_s, a_s, i_nu, a_nu, marched, slices, inscatter_out)
     i_r, a_r, i_mu, a_mu, i_s, a_s, i_nu, a_nu = scattering_corners(
         r_p, mu_p, mu_s_p, nu, hits_ground, bottom_radius, top_radius, mu_s_min,
         tables.sun_angle_share, n_r, n_mu, n_mu_s, n_nu, tables.radius_warp)
     scattering_lookup(scattering, n_mu, n_mu_s, n_nu, weights, i_r, a_r, i_mu, a_mu, i_s, a_s,
                       i_nu, a_nu, pair_values, at_point)
     if marched > 0.0:
-        geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, n_t, i_r, a_r, i_mu, a_mu,
-                                  i_s, a_s, i_nu, a_nu, marched, slices, at_point)
+        geometric_mu_s_correction(scattering, n_mu, n_mu_s, n_nu, weights, n_s, i_r, a_r, i_mu,
+                                  a_mu, i_s, a_s, i_nu, a_nu, marched, slices, at_point)
     transmittance_along(r, mu, d, hits_ground, bottom_radius, top_radius, transmittance,
                         transmittance_out, scratch)
     for w in range(n_wl):
@@ -1169,9 +1172,9 @@ def _aerial_lit_single(r, mu, mu_s, nu, d, hits_ground, marched, tables, weights
                           tables.top_radius, tables.sun_angular_radius, EXACT_SINGLE_SAMPLES,
                           tables.h_step, tables.density, tables.scatterers, tables.transmittance,
                           samples, observer, here, sun, dens, exact)
-    phase_table, single_factor = tables.phase_table, tables.single_factor
-    phase_values(phase_table, nu, weights)
-    for s in range(phase_table.shape[0]):
+    phase_values(tables.phase_table, nu, weights)
+    single_factor = tables.single_factor
+    for s in range(single_factor.shape[0]):
         for w in range(n_wl):
             inscatter_out[w] += (marched * weights[s * n_wl + w] * single_factor[s, w]
                                  * exact[s, w])
@@ -1202,11 +1205,10 @@ def aerial_perspective_points(origins, points, sun_direction, tables, inscatter_
     `tables`: the `LookupTables` record of the tables and the profile."""
     n_points = points.shape[0]
     n_wl = inscatter_out.shape[1]
-    n_s = tables.phase_table.shape[0]
     single_origin = origins.shape[0] == 1
     n_blocks = (n_points + RAYS_PER_BLOCK - 1) // RAYS_PER_BLOCK
     for block in prange(n_blocks):
-        work = aerial_scratch(n_s + 1, n_wl, tables.density.shape[0], n_s)
+        work = aerial_scratch(tables, n_wl)
         for i in range(block * RAYS_PER_BLOCK, min(n_points, (block + 1) * RAYS_PER_BLOCK)):
             o = 0 if single_origin else i
             aerial_segment(origins[o, 0], origins[o, 1], origins[o, 2], points[i, 0],

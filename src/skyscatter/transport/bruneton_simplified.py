@@ -72,7 +72,8 @@ class SimplifiedTables(NamedTuple):
     def from_tables(cls, tables: AtmosphereTables, sun_angular_radius_rad: float
                     ) -> SimplifiedTables:
         """The single-scattering slices (a copy) and the transmittance of `tables`."""
-        single = np.ascontiguousarray(tables.scattering[..., :-1, :])
+        single = np.ascontiguousarray(
+            tables.scattering[..., :len(tables.scattering_constituents), :])
         return cls(np.ascontiguousarray(tables.transmittance), single,
                    np.ascontiguousarray(tables.phase),
                    (float(tables.bottom_radius_m), float(tables.top_radius_m),

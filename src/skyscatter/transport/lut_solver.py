@@ -114,7 +114,7 @@ class LutSolver:
             scattering=flat_tables(tables.scattering),
             n_r=int(tables.scattering.shape[0]), n_mu=int(tables.scattering.shape[1]),
             n_mu_s=int(tables.scattering.shape[2]), n_nu=int(tables.scattering.shape[3]),
-            radius_warp=tables.radius_warp, phase_table=tables.phase,
+            radius_warp=tables.radius_warp, phase_table=tables.lookup_phase,
             transmittance=tables.transmittance, irradiance=tables.irradiance,
             sun_irradiance=sun_irradiance,
             sun_angular_radius=float(profile.sun_angular_radius_rad),

@@ -41,9 +41,11 @@ __all__ = ["cached_tables", "table_metadata", "tables_from_arrays", "tables_to_a
 # bump when the arrays stored change meaning (2: truncated peaks, the orders' tail, the aureole;
 # 3: the radius axis's warp; 4: the scattering table packed, `table_packing`; 5: the peaks'
 # blur of light scattered once in the smooth part, `aureole_blur`; 6: the mu_s axis's share
-# uniform in the sun's angle stored, `sun_angle_share`)
-TABLE_FORMAT = 6
-_ARRAYS = ("wavelengths_nm", "transmittance", "irradiance", "phase", "order_mean_radiance",
+# uniform in the sun's angle stored, `sun_angle_share`; 7: the clipped constituents' peak
+# corrections as tables of their own, `peak_correction_phase`)
+TABLE_FORMAT = 7
+_ARRAYS = ("wavelengths_nm", "transmittance", "irradiance", "phase", "peak_correction_phase",
+           "order_mean_radiance",
            "order_zenith_radiance", "tail_share", "peak_transmittance", "aureole_shape",
            "aureole_blur", "aureole_limits", "radius_warp")
 _MAX_DEFLATE_RATIO = 1100
@@ -92,6 +94,7 @@ def tables_to_arrays(tables: AtmosphereTables) -> dict[str, np.ndarray]:
     arrays["sun_angle_share"] = np.array(tables.sun_angle_share)
     arrays["scattering_constituents"] = np.array(tables.scattering_constituents, dtype=np.int64)
     arrays["scattering_names"] = np.array(tables.scattering_names, dtype=np.str_)
+    arrays["peak_correction_names"] = np.array(tables.peak_correction_names, dtype=np.str_)
     return arrays
 
 
@@ -138,6 +141,7 @@ def tables_from_arrays(arrays: dict[str, np.ndarray],
         orders=int(metadata["orders"]),
         scattering_names=tuple(str(n) for n in arrays["scattering_names"]),
         scattering_constituents=tuple(int(c) for c in arrays["scattering_constituents"]),
+        peak_correction_names=tuple(str(n) for n in arrays["peak_correction_names"]),
         orders_computed=int(arrays["orders_computed"]), scattering=scattering,
         sun_angle_share=float(arrays["sun_angle_share"]),
         **{name: arrays[name] for name in _ARRAYS})

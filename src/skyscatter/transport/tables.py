@@ -7,9 +7,14 @@ What is computed, for every wavelength of an `OpticalProfile` (docs/physics/tabl
   S_s(r, mu, mu_s, nu) = E_sun beta_s,s int_0^d T(x, p) n_s(p) T_sun(p) V(p) dt
   [W m^-2 nm^-1], so that the renderer applies p_s(nu) at lookup (sampled every 0.044 deg)
   and aerosol forward peaks stay sharp; and the sum of the orders n >= 2,
-  M(r, mu, mu_s, nu) [W m^-2 sr^-1 nm^-1], phase functions included; interleaved as
-  `scattering` (n_r, n_mu, n_mu_s, n_nu, n_s + 1, n_wl) (the tables of one cell adjacent, for
-  fast lookups; `single_scattering` and `multiple_scattering` give each as a view);
+  M(r, mu, mu_s, nu) [W m^-2 sr^-1 nm^-1], phase functions included, except the peak
+  corrections D_c of the n_c constituents whose forward peaks are clipped (below), tables of
+  their own without phase function, which the renderer weights by the clipped phase function
+  p*_c(nu) as it weights S_s by p_s(nu); interleaved as `scattering`
+  (n_r, n_mu, n_mu_s, n_nu, n_s + n_c + 1, n_wl) = (S_1 .. S_n_s, D_1 .. D_n_c, M) (the
+  tables of one cell adjacent, for fast lookups; `single_scattering` and
+  `multiple_scattering` give S and M as views, `lookup_phase` the phase function of each
+  table before M);
 - indirect irradiance of horizontal ground, E(r, mu_s) = sum_{k=1}^{N-1} Delta E_k, the sky
   light of orders 1 .. N-1 (N = orders), (n_r_e, n_mu_s_e, n_wl) [W m^-2 nm^-1].
 
@@ -26,16 +31,21 @@ delta-M scaled medium of `phase_truncation` (each particle's forward peak clippe
 `TableResolution.truncation_angle_deg` and counted as unscattered light), whose smooth phase
 functions the sphere quadrature resolves; the first order stays exact (full phase functions,
 true extinction). What the scaled medium's first order has more than the exact one's smooth part
-(light scattered in the peak and then once more) is added to M, and the light the peaks keep
-near the sun's direction to E as the scaled medium's direct sun less the true one (the TMS
-correction of Nakajima & Tanaka 1988, in table form). The scaled medium's sun is corrected for
-what the peaks do to a low sun's beam (`beam_spread`: deflected a few degrees, its light goes
-through much more or much less air), and M, once all orders are in, for the same along the
-lines of sight (`sight_spread`: near the horizon a peak event brings the light of a lower or
-higher view). Optically thick media need many orders:
-once the ratio of successive orders settles, the orders beyond are a geometric series, added
-at once (`TAIL_TOLERANCE`); where it settles slowly (cloud decks), the limit of the orders is
-extrapolated from the last six by reduced-rank extrapolation (`order_extrapolation`).
+(light scattered in the peak and then once more) is added: D_s = S*_s - (1 - f_s) S_s, times
+p*_s(nu) (the TMS correction of Nakajima & Tanaka 1988, in table form), into M for the
+constituents that are not clipped, as tables of their own for the clipped ones, whose p* is
+flat inside the truncation angle and falls with the particles' wing beyond it: a kink that
+the table's view-sun slices would interpolate linearly (+7 % 20 deg from a low sun with
+Mars dust at 16 slices, docs/physics/tables.md), applied exactly per ray instead. The light
+the peaks keep near the sun's direction is added to E as the scaled medium's direct sun less
+the true one. The scaled medium's sun is corrected for what the peaks do to a low sun's beam
+(`beam_spread`: deflected a few degrees, its light goes through much more or much less air),
+and M, once all orders are in, for the same along the lines of sight (`sight_spread`: near
+the horizon a peak event brings the light of a lower or higher view). Optically thick media
+need many orders: once the ratio of successive orders settles, the orders beyond are a
+geometric series, added at once (`TAIL_TOLERANCE`); where it settles slowly (cloud decks), the
+limit of the orders is extrapolated from the last six by reduced-rank extrapolation
+(`order_extrapolation`).
 `AtmosphereTables.tail_share` says how much of M either tail is.
 Paths whose last event is a ground reflection are not in the tables; the renderer adds the ground
 with albedo / pi (direct sun + E) (Bruneton 2017). The ground albedo of the profile enters the
@@ -311,14 +321,19 @@ class AtmosphereTables:
     """Precomputed tables of one atmosphere (module docstring); arrays C order, wavelength last.
 
     transmittance  (n_r_t, n_mu_t, n_wl) float64: T to the top for rays that miss the ground [-]
-    scattering     (n_r, n_mu, n_mu_s, n_nu, n_s + 1, n_wl) float32, interleaved: [..., s, :]
-                   single scattering of constituent `scattering_names[s]` without phase
-                   [W m^-2 nm^-1]; [..., -1, :] the orders >= 2 with phases
-                   [W m^-2 sr^-1 nm^-1]
+    scattering     (n_r, n_mu, n_mu_s, n_nu, n_s + n_c + 1, n_wl) float32, interleaved:
+                   [..., s, :] single scattering of constituent `scattering_names[s]` without
+                   phase [W m^-2 nm^-1]; [..., n_s + c, :] the peak correction D_c of the c-th
+                   clipped constituent without phase [W m^-2 nm^-1] (module docstring; n_c = 0
+                   without clipped peaks or with one order); [..., -1, :] the orders >= 2 with
+                   phases [W m^-2 sr^-1 nm^-1]
     irradiance     (n_r_e, n_mu_s_e, n_wl) float64: indirect irradiance on horizontal ground
                    from sky light of orders 1 .. orders-1 [W m^-2 nm^-1]
     phase          (n_s, n_angle, n_wl) float64: p_s at scattering angles uniform in [0, pi]
                    [sr^-1]
+    peak_correction_phase  (n_c, n_angle, n_wl) float64: on the same angles, the clipped phase
+                   function p*_c that weights the peak correction D_c [sr^-1]
+    peak_correction_names  the constituents of the peak corrections D_1 .. D_n_c
     order_mean_radiance, order_zenith_radiance  (orders, n_wl): radiance of each order alone,
                    the mean over all table cells and the zenith seen from the ground with the
                    sun at the zenith [W m^-2 sr^-1 nm^-1]; they show how the orders converge
@@ -350,10 +365,12 @@ class AtmosphereTables:
     orders: int
     scattering_names: tuple[str, ...]
     scattering_constituents: tuple[int, ...]
+    peak_correction_names: tuple[str, ...]
     transmittance: np.ndarray
     scattering: np.ndarray
     irradiance: np.ndarray
     phase: np.ndarray
+    peak_correction_phase: np.ndarray
     order_mean_radiance: np.ndarray
     order_zenith_radiance: np.ndarray
     orders_computed: int
@@ -369,7 +386,13 @@ class AtmosphereTables:
     def single_scattering(self) -> np.ndarray:
         """(n_s, n_r, n_mu, n_mu_s, n_nu, n_wl) view: single scattering per constituent, no
         phase function."""
-        return np.moveaxis(self.scattering[..., :-1, :], -2, 0)
+        return np.moveaxis(self.scattering[..., :len(self.scattering_constituents), :], -2, 0)
+
+    @property
+    def lookup_phase(self) -> np.ndarray:
+        """(n_s + n_c, n_angle, n_wl): the phase function that weights each table before the
+        orders >= 2 (`phase`, then `peak_correction_phase`) [sr^-1]."""
+        return np.concatenate([self.phase, self.peak_correction_phase])
 
     @property
     def multiple_scattering(self) -> np.ndarray:
@@ -379,7 +402,8 @@ class AtmosphereTables:
     @property
     def nbytes(self) -> int:
         return sum(a.nbytes for a in (self.transmittance, self.scattering, self.irradiance,
-                                      self.phase, self.peak_transmittance, self.aureole_shape,
+                                      self.phase, self.peak_correction_phase,
+                                      self.peak_transmittance, self.aureole_shape,
                                       self.aureole_blur))
 
 
@@ -416,7 +440,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         Called after each order n of each wavelength batch (a slice) with read-only views of
         the sum of orders 2 .. n (n_r, n_mu, n_mu_s, n_nu, n_wl) and of the sky light on the
         ground of orders 1 .. n - 1 (n_r_e, n_mu_s_e, n_wl) so far: the tables truncated at n
-        orders, for convergence studies (benchmarks/bench_orders.py).
+        orders, for convergence studies (benchmarks/bench_orders.py); the orders' table M,
+        without the peak corrections that have tables of their own.
 
     Returns
     -------
@@ -498,8 +523,15 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     # scattering per density of every constituent (absorbers: 0), for beta_s along rays
     scattering_all = np.where(np.isin(np.arange(len(profile.names)), scatterers)[:, None],
                               scaled.scattering, 0.0)
+    # the peak corrections of the clipped constituents get tables of their own (module
+    # docstring): slot[s] their index among the tables after the single scattering, else -1
+    clipped = (np.flatnonzero(np.any(peak > 0.0, axis=1)) if truncated and orders > 1
+               else np.zeros(0, dtype=np.int64))
+    slot = np.full(n_s, -1, dtype=np.int64)
+    slot[clipped] = np.arange(clipped.size)
+    multiple_slot = n_s + clipped.size
     scattering = np.zeros((res.scattering_r, res.scattering_mu, res.scattering_mu_s,
-                           res.scattering_nu, n_s + 1, n_wl), dtype=np.float32)
+                           res.scattering_nu, multiple_slot + 1, n_wl), dtype=np.float32)
     irradiance = np.zeros((res.irradiance_r, res.irradiance_mu_s, n_wl))
     order_mean = np.zeros((orders, n_wl))
     order_zenith = np.zeros((orders, n_wl))
@@ -545,9 +577,9 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         first_orders.compute(grid, medium, scaled_medium, res.ray_samples, thick,
                              scatterer_index, sun_radius, single, scaled_single)
         if scaled_pass:
-            _table_build_kernels.phase_weighted_difference(
-                scaled_single, single, 1.0 - peak_b, smooth_b, grid,
-                scattering[..., n_s, batch])
+            _table_build_kernels.peak_differences(
+                scaled_single, single, 1.0 - peak_b, smooth_b, slot, grid,
+                scattering[..., n_s:, batch])
             # the light the peak scatters stays near the sun: on the ground it is the direct
             # sun of the scaled medium less the true one
             scaled_direct = _table_build_kernels.direct_irradiance_nodes(
@@ -562,7 +594,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             single, True, phase_b, grid)
         report(f"single scattering, {label}")
         if on_order is not None:
-            on_order(1, batch, _read_only(scattering[..., n_s, :]),
+            on_order(1, batch, _read_only(scattering[..., multiple_slot, :]),
                      _read_only(irradiance))
         if orders == 1 or n_s == 0:  # nothing scatters: no higher orders
             continue
@@ -578,7 +610,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         if gains is not None:
             ground *= gains.ground[:, batch]
         order_res, order_grid = res, grid
-        sums = _OrderSums(scattering[..., n_s, batch])
+        sums = _OrderSums(scattering[..., multiple_slot, batch])
         for order in range(2, orders + 1):
             if order == COARSE_FROM_ORDER and (coarse := _coarse_grid(res, grid)) is not None:
                 order_res, order_grid, restrict, prolong = coarse
@@ -643,7 +675,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                 break
             report(f"order {order}, {label}")
             if on_order is not None:
-                multiple = scattering[..., n_s, :]
+                multiple = scattering[..., multiple_slot, :]
                 if sums.coarse:
                     multiple = multiple.copy()
                     multiple[..., batch] = sums.on_tables_grid()
@@ -655,8 +687,11 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         wavelengths_nm=wavelengths.copy(), bottom_radius_m=bottom, top_radius_m=top,
         min_cos_sun_zenith=mu_s_min, resolution=res, orders=orders,
         scattering_names=tuple(profile.names[c] for c in scatterers),
-        scattering_constituents=scatterers, transmittance=transmittance,
+        scattering_constituents=scatterers,
+        peak_correction_names=tuple(profile.names[scatterers[s]] for s in clipped),
+        transmittance=transmittance,
         scattering=scattering, irradiance=irradiance, phase=phase,
+        peak_correction_phase=np.ascontiguousarray(smooth_phase[clipped]),
         order_mean_radiance=order_mean, order_zenith_radiance=order_zenith,
         orders_computed=orders_computed, tail_share=tail_share,
         peak_transmittance=peak_transmittance, aureole_shape=aureole.shape,
@@ -678,10 +713,11 @@ def _add_sight_spread(tables: AtmosphereTables, profile: OpticalProfile,
                       grid: _table_build_kernels.TableGrid,
                       medium: _table_build_kernels.RayMedium, batches: list[slice]) -> None:
     """Add to the orders >= 2 of `tables` (in place) the peaks' spread of the lines of sight
-    (`sight_spread`): the field F, the orders >= 2 and the ground lit by the true sun and the
-    sky (`tables.irradiance`), read on the scattering-density grid with `sight_spread`'s view
-    zenith angles, its blur's source integrated along the table rays through the scaled
-    medium with the peak scattering f beta_s as the scattering coefficient. `medium`: the true
+    (`sight_spread`): the field F, the orders >= 2 (the peak corrections with their phase
+    functions included) and the ground lit by the true sun and the sky (`tables.irradiance`),
+    read on the scattering-density grid with `sight_spread`'s view zenith angles, its blur's
+    source integrated along the table rays through the scaled medium with the peak scattering
+    f beta_s as the scattering coefficient. `medium`: the true
     medium, all wavelengths; `blur`: (normalised peak, truncation angle [deg]) as
     `sight_spread_source`."""
     res = tables.resolution
@@ -691,7 +727,8 @@ def _add_sight_spread(tables: AtmosphereTables, profile: OpticalProfile,
     _, ground_mu_s = _node_positions(irradiance_r_mu_s_from_x, res.irradiance_mu_s,
                                      res.irradiance_r, grid.bottom_radius, grid.top_radius)
     samples = np.linspace(-1.0, 1.0, DIRECT_GROUND_SAMPLES)
-    multiple = tables.scattering[..., n_s, :]
+    multiple = tables.scattering[..., -1, :]
+    corrected = tables.scattering[..., n_s:, :]  # the peak corrections D_c, then M
     for batch in batches:
         true = medium._replace(extinction=np.ascontiguousarray(medium.extinction[:, batch]))
         sun = np.ascontiguousarray(profile.toa_irradiance[batch], dtype=np.float64)
@@ -701,8 +738,9 @@ def _add_sight_spread(tables: AtmosphereTables, profile: OpticalProfile,
                             for w in range(batch.start, batch.stop)], axis=1)
         field = _table_build_kernels.incoming_radiance(
             grid, true, theta, phi, _table_build_kernels.LitOrder(
-                tables=flat_tables(multiple[..., batch][..., None, :]), n_t=1,
-                use_phase=False, phase_table=np.ascontiguousarray(tables.phase[:, :, batch])),
+                tables=flat_tables(corrected[..., batch]), n_t=corrected.shape[4],
+                use_phase=True, phase_table=np.ascontiguousarray(
+                    tables.peak_correction_phase[:, :, batch])),
             ground, np.ascontiguousarray(profile.ground_albedo[batch], dtype=np.float64),
             (0, grid.n_r))
         source = sight_spread_source(field, grid.n_mu_s, res.density_phi,

@@ -110,27 +110,31 @@ def channel_tables(tables: AtmosphereTables, profile: OpticalProfile,
     channels = weights.shape[1]
     sun = np.asarray(profile.toa_irradiance, dtype=np.float64)
     n_r, n_mu, n_mu_s, n_nu, n_t, _ = tables.scattering.shape
-    n_s = n_t - 1
+    n_p = n_t - 1  # the tables weighted by a phase function
+    lookup_phase = tables.lookup_phase
     if n_t > MAX_TABLES:
-        raise InputError(f"{label or 'this atmosphere'} has {n_s} scattering constituents; the "
-                         f"viewer shows at most {MAX_TABLES - 1}", key="atmosphere", value=label)
+        raise InputError(f"{label or 'this atmosphere'} needs {n_t} scattering tables (its "
+                         f"{len(tables.scattering_names)} scattering constituents, the peak "
+                         "corrections of those whose forward peak is clipped and the orders "
+                         f">= 2); the viewer shows at most {MAX_TABLES}", key="atmosphere",
+                         value=label)
     # float32 beyond colour: a spectral set of the full Earth tables is 0.5 GB in float64
     scattering = np.empty((n_t, n_r, n_mu, n_nu, n_mu_s, channels),
                           dtype=np.float64 if channels <= 3 else np.float32)
-    phase_rows = -(-tables.phase.shape[1] // PHASE_ROW)
-    phase = np.zeros((n_s, phase_rows * PHASE_ROW, channels))
+    phase_rows = -(-lookup_phase.shape[1] // PHASE_ROW)
+    phase = np.zeros((n_p, phase_rows * PHASE_ROW, channels))
     for t in range(n_t):
         table = tables.scattering[..., t, :].astype(np.float64)
         scattering[t] = np.moveaxis(table @ weights, 3, 2)  # (r, mu, nu, mu_s, c)
-        if t < n_s:
+        if t < n_p:
             mean = table.reshape(-1, table.shape[-1]).mean(axis=0)
-            phase[t, :tables.phase.shape[1]] = _weighted(tables.phase[t], weights, mean)
+            phase[t, :lookup_phase.shape[1]] = _weighted(lookup_phase[t], weights, mean)
     if transmittance_weights is None:
         transmittance_weights = weights
     return {"transmittance": _weighted(tables.transmittance, transmittance_weights, sun),
             "irradiance": tables.irradiance @ weights,
             "scattering": scattering,
-            "phase": phase.reshape(n_s * phase_rows, PHASE_ROW, channels),
+            "phase": phase.reshape(n_p * phase_rows, PHASE_ROW, channels),
             "ground_albedo": _weighted(np.asarray(profile.ground_albedo, dtype=np.float64),
                                        weights, sun),
             "sun_irradiance": sun @ weights}
@@ -167,6 +171,7 @@ def gpu_tables(tables: AtmosphereTables, profile: OpticalProfile, star: Star,
         "orders": int(tables.orders),
         "n_wavelengths": int(profile.n_wavelengths),
         "scattering_names": list(tables.scattering_names),
+        "peak_correction_names": list(tables.peak_correction_names),
         "scattering_shape": [int(n_r), int(n_mu), int(n_mu_s), int(n_nu), int(n_t)],
         "transmittance_shape": [int(n) for n in tables.transmittance.shape[:2]],
         "irradiance_shape": [int(n) for n in tables.irradiance.shape[:2]],

@@ -12,9 +12,13 @@ Tables (`gpu_tables.channel_tables`: the viewer's layout, channels chosen by `co
                  folded into x: texel (x, y, z) holds
                  nu index x // n_mu_s, mu_s index x % n_mu_s, mu index y, r index z % n_r of
                  table z // n_r; tables S_1 .. S_n_s (single scattering of each scattering
-                 constituent, without its phase function), then M (orders >= 2, phases in)
-  phase          2-D, width 1024: phase function of constituent s at angle index i in texel
-                 (i % 1024, s * rows + i // 1024), angles uniform over [0, pi] [sr^-1]
+                 constituent, without its phase function), then D_1 .. D_n_c (the peak
+                 corrections of the constituents whose forward peak is clipped, without
+                 phase function; none for clear air), then M (orders >= 2, phases in)
+  phase          2-D, width 1024: phase function of table t (< n_tables - 1) at angle index i
+                 in texel (i % 1024, t * rows + i // 1024), angles uniform over [0, pi]
+                 [sr^-1]: p_s of the constituents, then the clipped p*_c of the peak
+                 corrections
 
 The coordinates within each axis are skyscatter's (transport/table_parameterisation.py, with
 its GLSL twin in the snippets), not Bruneton's: a horizon-dense mu axis, a mu_s axis that
@@ -248,6 +252,7 @@ def _sidecar(tables: AtmosphereTables, profile: OpticalProfile, settings: Export
         "radius_warp": tables.radius_warp.tolist(),
         "radius_warp_identity": is_identity_warp(tables.radius_warp),
         "orders": int(tables.orders), "scattering_names": list(tables.scattering_names),
+        "peak_correction_names": list(tables.peak_correction_names),
         "scattering_shape": {"n_r": n_r, "n_mu": n_mu, "n_mu_s": n_mu_s, "n_nu": n_nu,
                              "n_tables": n_t},
         "phase_angles": int(tables.phase.shape[1]), "phase_row": PHASE_ROW,

@@ -84,6 +84,7 @@ export function uploadTables(gl, decoded) {
       u_irradiance_size: [irradiance[1], irradiance[0]],
       u_scattering_shape: [nR, nMu, nMuS, nNu],
       u_n_tables: nT,
+      u_n_single: header.scattering_names.length,
       u_phase_angles: header.phase_angles,
       u_phase_rows: header.phase_rows,
       u_transmittance_scale: header.scales.transmittance,

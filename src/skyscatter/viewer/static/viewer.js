@@ -549,9 +549,9 @@ class Viewer {
 
   setUniforms(program, values) {
     const gl = this.gl;
-    const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_phase_rows", "u_output",
-                          "u_radius_warp_identity", "u_cloud_layers", "u_map_on", "u_map_layer",
-                          "u_level_columns"]);
+    const ints = new Set(["u_projection", "u_operator", "u_n_tables", "u_n_single", "u_phase_rows",
+                          "u_output", "u_radius_warp_identity", "u_cloud_layers", "u_map_on",
+                          "u_map_layer", "u_level_columns"]);
     const matrices = new Set(["u_camera_basis", "u_local_to_world", "u_site_to_world"]);
     for (const [name, value] of Object.entries(values)) {
       const location = this.uniform(program, name);

@@ -26,6 +26,7 @@
 uniform vec3 u_camera_position;             // planet-centred [m]
 uniform vec3 u_sun_direction;               // world, unit
 uniform int u_cloud_layers;                 // 0: no clouds
+uniform int u_n_single;                     // n_s single-scattering tables (sky.glsl's first)
 uniform highp sampler3D u_cloud_noise;      // RG: shape, detail (gpu_clouds: layers stacked)
 // each layer's first 4 CLOUD_PARAM_VEC4S columns of the parameter table (viewer.js
 // cloudUniforms): uniforms, not a texture, as each sample of the water reads a dozen
@@ -583,7 +584,7 @@ void single_scattering_sums(float r, float mu, float mu_s, float nu, bool hits_g
     weighted = vec3(0.0);
     plain = vec3(0.0);
     for (int t = 0; t < MAX_TABLES - 1; ++t) {
-        if (t >= u_n_tables - 1) break;
+        if (t >= u_n_single) break;
         vec3 table = scattering_table(t, u.x, u.y, u.z, i_nu, a_nu);
         weighted += phase_value(t, nu) * table;
         plain += table;

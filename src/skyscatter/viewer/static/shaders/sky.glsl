@@ -11,9 +11,10 @@ uniform sampler2D u_phase;           // texelFetch only
 uniform vec2 u_transmittance_size;   // (n_mu_t, n_r_t)
 uniform vec2 u_irradiance_size;      // (n_mu_s_e, n_r_e)
 uniform vec4 u_scattering_shape;     // (n_r, n_mu, n_mu_s, n_nu)
-uniform int u_n_tables;              // n_s single-scattering tables + 1 (orders >= 2)
+uniform int u_n_tables;              // n_s single-scattering tables, n_c peak corrections
+                                     // (clipped forward peaks) + 1 (orders >= 2)
 uniform float u_phase_angles;        // samples of each phase function over [0, pi]
-uniform int u_phase_rows;            // texture rows per constituent
+uniform int u_phase_rows;            // texture rows per phase-weighted table
 uniform float u_transmittance_scale;
 uniform float u_irradiance_scale;
 uniform float u_phase_scale;
@@ -122,8 +123,8 @@ void scattering_coordinates(float r, float mu, float mu_s, float nu, bool hits_g
     a_nu = f_nu - float(i_nu);
 }
 
-// Single scattering of each constituent with its phase function, plus the orders >= 2, at
-// (r, mu, mu_s, nu) in the half of the mu axis `hits_ground` names (twin of
+// Single scattering of each constituent with its phase function, the peak corrections with
+// their clipped phase functions, plus the orders >= 2, at (r, mu, mu_s, nu) in the half of the mu axis `hits_ground` names (twin of
 // scattering_corners + scattering_lookup with the phase weights)
 vec3 sky_scattering(float r, float mu, float mu_s, float nu, bool hits_ground) {
     vec3 u;
