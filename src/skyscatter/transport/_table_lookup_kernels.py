@@ -920,7 +920,8 @@ def aureole_view_lookup(table, mu, mu_s, nu, psi_max, out):
 def sky_radiance_rays(origins, directions, sun_direction, tables, ground_albedo, view_table,
                       aureole_table, out):
     """Radiance from the tables into out (n_ray, n_wl) [W m^-2 sr^-1 nm^-1]:
-    sum_s p_s(nu) S_s + M (`scattering` = the interleaved (S_1..S_n_s, M) from `flat_tables`;
+    sum_s p_s(nu) S_s + sum_c p*_c(nu) D_c + M (`scattering` = the interleaved
+    (S_1..S_n_s, D_1..D_n_c, M) from `flat_tables`, weighted by the rows of `phase_table`;
     sizes n_r, n_mu, n_mu_s, n_nu), plus for rays that hit the ground the Lambertian ground
     albedo / pi (E_sun T_sun max(mu_s, 0) V + E_indirect) seen through T(x, g). origins is
     (1, 3) or (n_ray, 3); directions (n_ray, 3), normalised here. Observers in space start at

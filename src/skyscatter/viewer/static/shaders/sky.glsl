@@ -140,9 +140,10 @@ vec3 sky_scattering(float r, float mu, float mu_s, float nu, bool hits_ground) {
     return radiance;
 }
 
-// twin of sky_radiance_rays (day branch): sum_s p_s(nu) S_s + M, plus for rays that hit the
-// ground the Lambertian ground lit by the sun and the sky, seen through the air; the part
-// `ground_sunlit` of the sunlight reaches the ground (the clouds' shadow: surfaces.py)
+// twin of sky_radiance_rays (day branch): sum_s p_s(nu) S_s + sum_c p*_c(nu) D_c + M, plus for
+// rays that hit the ground the Lambertian ground lit by the sun and the sky, seen through the
+// air; the part `ground_sunlit` of the sunlight reaches the ground (the clouds' shadow:
+// surfaces.py)
 vec3 sky_radiance(vec3 origin, vec3 dir, vec3 sun_dir, float ground_sunlit) {
     vec4 entry = enter_atmosphere(origin, dir);
     if (entry.w == 0.0) return vec3(0.0);
