@@ -525,8 +525,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                               scaled.scattering, 0.0)
     # the peak corrections of the clipped constituents get tables of their own (module
     # docstring): slot[s] their index among the tables after the single scattering, else -1
-    clipped = (np.flatnonzero(np.any(peak > 0.0, axis=1)) if truncated and orders > 1
-               else np.zeros(0, dtype=np.int64))
+    clipped = np.flatnonzero(np.any(peak > 0.0, axis=1) & (orders > 1))
     slot = np.full(n_s, -1, dtype=np.int64)
     slot[clipped] = np.arange(clipped.size)
     multiple_slot = n_s + clipped.size
