@@ -8,6 +8,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from numba import njit
 from transport_cases import (
     EARTH_RADIUS_M,
     SMALL,
@@ -21,6 +22,7 @@ from skyscatter.errors import InputError
 from skyscatter.optics.phase import HenyeyGreensteinPhase
 from skyscatter.transport import tables as tables_module
 from skyscatter.transport._table_build_kernels import radius_taps
+from skyscatter.transport._table_common_kernels import EXP_NEGATIVE_MAX, exp_negative
 from skyscatter.transport.geometry import horizon_cos_zenith, local_frame_directions
 from skyscatter.transport.lut_solver import LutSolver
 from skyscatter.transport.single_scattering import SingleScatteringSolver, observer_position
@@ -251,6 +253,24 @@ def test_radius_taps_reproduce_quadratics_and_sum_to_one():
         first, *weights = radius_taps(0, a, 2)
         assert first == 0 and weights[2:] == [0.0, 0.0]
         assert np.dot(weights[:2], [5.0, 7.0]) == pytest.approx(5.0 + 2.0 * a, abs=1e-14)
+
+
+@njit(cache=False)
+def _exp_negative_of(depth):
+    out = np.empty_like(depth)
+    power_bits = np.empty(depth.size, dtype=np.int32)
+    exp_negative(depth, out, power_bits, power_bits.view(np.float32))
+    return out
+
+
+def test_the_vectorised_exponential_of_the_sun_s_optical_depth_is_exp():
+    # against numpy's exp: within 1e-8 relative over the depths the single scattering of a
+    # thick layer looks up (its Taylor remainder 0.347^8 / 8! < 6e-9, plus rounding); beyond
+    # EXP_NEGATIVE_MAX held at exp(-EXP_NEGATIVE_MAX), a negative depth (none in a table) at 1
+    depth = np.concatenate([np.linspace(0.0, EXP_NEGATIVE_MAX, 200_001), [1e-9, 0.5, 0.6931]])
+    np.testing.assert_allclose(_exp_negative_of(depth), np.exp(-depth), rtol=1e-8, atol=0.0)
+    assert _exp_negative_of(np.array([EXP_NEGATIVE_MAX + 5.0, -1.0])) == pytest.approx(
+        [np.exp(-EXP_NEGATIVE_MAX), 1.0], rel=1e-8)
 
 
 def test_thick_cells_get_the_cubic_source_and_a_thick_layer_the_sun_angle_share():
