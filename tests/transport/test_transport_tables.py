@@ -21,6 +21,13 @@ from skyscatter.atmosphere.config import load_atmosphere
 from skyscatter.errors import InputError
 from skyscatter.optics.phase import HenyeyGreensteinPhase
 from skyscatter.transport import tables as tables_module
+from skyscatter.transport._kernels import (
+    columns_along_segment,
+    density_at,
+    sample_distance,
+    sample_total,
+    split_sample_count,
+)
 from skyscatter.transport._table_build_kernels import radius_taps
 from skyscatter.transport._table_common_kernels import EXP_NEGATIVE_MAX, exp_negative
 from skyscatter.transport.geometry import horizon_cos_zenith, local_frame_directions
@@ -271,6 +278,37 @@ def test_the_vectorised_exponential_of_the_sun_s_optical_depth_is_exp():
     np.testing.assert_allclose(_exp_negative_of(depth), np.exp(-depth), rtol=1e-8, atol=0.0)
     assert _exp_negative_of(np.array([EXP_NEGATIVE_MAX + 5.0, -1.0])) == pytest.approx(
         [np.exp(-EXP_NEGATIVE_MAX), 1.0], rel=1e-8)
+
+
+def test_densities_and_ray_columns_interpolate_the_profile_linearly():
+    # against numpy's interp (the profile linear between levels, its lowest level below it,
+    # nothing above its top) and, for the columns, the trapezoid rule on the same samples done
+    # in numpy; both within float64 round-off
+    rng = np.random.default_rng(5)
+    h_step, n_z = 250.0, 41
+    density = rng.uniform(0.0, 2.0, (3, n_z))
+    altitudes = np.concatenate([rng.uniform(-500.0, 10_500.0, 500),
+                                [0.0, 250.0, 10_000.0, 10_000.0 + 1e-7, 10_001.0, -1.0]])
+    top = (n_z - 1) * h_step
+    out = np.empty(3)
+    for altitude in altitudes:
+        density_at(altitude, h_step, density, out)
+        expected = [np.interp(altitude, np.arange(n_z) * h_step, row)
+                    if altitude <= top + 1e-9 * h_step else 0.0 for row in density]
+        np.testing.assert_allclose(out, expected, rtol=1e-14, atol=1e-14)
+    bottom = 6_371_000.0
+    for r, mu in ((bottom + 100.0, 0.3), (bottom + 2_000.0, -0.02), (bottom, 1.0)):
+        end = 150_000.0
+        columns = np.empty(3)
+        columns_along_segment(r, mu, 0.0, end, 200, bottom, h_step, density, columns)
+        t_split, m1, m2 = split_sample_count(r, mu, 0.0, end, 200)
+        t = np.array([sample_distance(j, r, mu, 0.0, end, 200, t_split, m1, m2)
+                      for j in range(sample_total(m1, m2, 200))])
+        heights = np.sqrt(r * r + t * t + 2.0 * r * mu * t) - bottom
+        samples = [np.where(heights <= top, np.interp(heights, np.arange(n_z) * h_step, row), 0.0)
+                   for row in density]
+        np.testing.assert_allclose(columns, [np.trapezoid(row, t) for row in samples],
+                                   rtol=1e-12)
 
 
 def test_thick_cells_get_the_cubic_source_and_a_thick_layer_the_sun_angle_share():
