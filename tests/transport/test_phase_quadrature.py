@@ -115,3 +115,34 @@ def test_wavelengths_with_the_same_particles_share_one_matrix_and_others_keep_th
             RESOLUTION.density_theta, RESOLUTION.density_phi, n_r, n_mu_s)
         # as the test above: linear interpolation of the samples in angle, float32 products
         np.testing.assert_allclose(got[..., b], expected.transpose(2, 0, 3, 1), rtol=2e-5)
+
+
+@pytest.mark.parametrize("absent", [(), (0,), (1,), (2,), (0, 2)])
+def test_particles_absent_from_the_nodes_leave_the_source_the_closed_form_integral(absent):
+    # three forward-scattering constituents, some with no density at any node of the call (a
+    # cloud deck above or below these nodes), and incoming radiances far below anything
+    # visible (1e-35, entered as 0): S = sum_s w_s P_s @ L over the present ones, in float64
+    rng = np.random.default_rng(7)
+    res = RESOLUTION
+    n_in = res.sphere_theta * res.sphere_phi
+    n_r, n_mu_s = res.scattering_r, res.scattering_mu_s
+    g = (0.3, 0.6, 0.85)
+    functions = [lambda c, g=g_s: henyey_greenstein(c, g) for g_s in g]
+    phase = np.stack([sampled(f) for f in functions])[:, :, None]  # (3, n_angle, 1)
+    incoming = rng.uniform(0.1, 1.0, (1, n_in, n_r * n_mu_s)).astype(np.float32)
+    incoming[0, ::5] = 1e-35
+    beta_s = np.array([[1e-5], [2e-5], [3e-6]])
+    node_density = rng.uniform(0.2, 1.0, (3, n_r))
+    node_density[list(absent)] = 0.0
+    got = source_function(phase_quadrature(phase, res), incoming, beta_s, node_density, res)
+    got = got.reshape(n_r, res.density_theta, n_mu_s, res.density_phi)
+
+    light = incoming.astype(np.float64).reshape(n_in, n_r, n_mu_s)
+    weights = node_density * beta_s
+    weights /= weights.sum(axis=0, keepdims=True)
+    expected = sum(np.einsum("oi,irm->orm", closed_form_matrix(f, res), light) * weights[s, None]
+                   [..., None] for s, f in enumerate(functions))
+    expected = expected.reshape(res.density_theta, res.density_phi, n_r, n_mu_s)
+    # as above: HG's samples interpolated linearly in angle, float32 products; the dropped
+    # radiances change S by < 1e-34 absolute
+    np.testing.assert_allclose(got, expected.transpose(2, 0, 3, 1), rtol=2e-5, atol=1e-30)

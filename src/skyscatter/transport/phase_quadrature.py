@@ -137,14 +137,18 @@ def source_function(quadrature: PhaseQuadrature, incoming: np.ndarray, beta_s: n
     source = np.empty((n_r, n_theta, n_mu_s, n_phi, n_b), dtype=np.float32)
     for b in range(n_b):
         product = np.zeros((n_theta * n_phi, n_r, n_mu_s), dtype=np.float32)
-        if full.size:
-            # one product for all full constituents: [P_1 .. P_s] @ [w_1 L; ..; w_s L], the
-            # weights per r applied to the incoming radiance (the smaller operand)
-            weighted = (weights[full][:, None, :, b, None] * incoming[b][None]).reshape(
-                full.size * n_in, -1)
+        # the full constituents present at these nodes: a cloud deck is absent from most
+        present = np.flatnonzero(weights[full, :, b].max(axis=1, initial=0.0) > 0.0)
+        if present.size:
+            # one product for the run of full constituents from the first present to the last:
+            # [P_i .. P_j] @ [w_i L; ..; w_j L], the weights per r applied to the incoming
+            # radiance (the smaller operand)
+            first, stop = present[0], present[-1] + 1
+            weighted = (weights[full[first:stop]][:, None, :, b, None] * incoming[b][None]
+                        ).reshape((stop - first) * n_in, -1)
             weighted[np.abs(weighted) < NEGLIGIBLE_RADIANCE] = 0.0
-            product += (quadrature.full_matrices[quadrature.full_index[b]] @ weighted
-                        ).reshape(product.shape)
+            matrices = quadrature.full_matrices[quadrature.full_index[b]]
+            product += (matrices[:, first * n_in:stop * n_in] @ weighted).reshape(product.shape)
         if quadratic.size:
             # the weights per r commute with the projection on the incoming features
             projected = (quadrature.incoming_features @ incoming[b].reshape(n_in, -1)
