@@ -14,7 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skyscatter.atmosphere.config import PRESETS_DIR, list_presets, load_atmosphere
+from skyscatter.atmosphere.config import (
+    PRESETS_DIR,
+    list_presets,
+    load_atmosphere,
+    outline_atmosphere,
+)
 from skyscatter.errors import ConfigError, InputError
 
 PERCENT = 1e-2
@@ -151,6 +156,26 @@ def test_each_preset_loads_with_finite_optics(name):
     assert np.all((profile.ground_albedo >= 0.0) & (profile.ground_albedo <= 1.0))
     assert np.all(profile.toa_irradiance > 0.0)
     assert len(set(profile.names)) == len(profile.names)
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in PRESETS_DIR.glob("*.toml")))
+def test_a_preset_s_outline_names_what_loading_it_builds(name, monkeypatch):
+    # the outline reads the same config without building the optics: no Mie computation may
+    # run for it, and every field agrees with the atmosphere that loading builds
+    def no_mie(*args, **kwargs):
+        raise AssertionError("the outline built Mie optics")
+
+    with monkeypatch.context() as patched:
+        patched.setattr("skyscatter.atmosphere.particle_config.particle_optics", no_mie)
+        outline = outline_atmosphere(name)
+    atmosphere = load_atmosphere(name)
+    assert outline.name == atmosphere.name and outline.description == atmosphere.description
+    assert outline.body == atmosphere.planet.body
+    assert outline.constituents == tuple(c.name for c in atmosphere.constituents)
+    assert outline.radius_m == atmosphere.bottom_radius_m
+    assert outline.top_altitude_m == atmosphere.top_altitude_m
+    assert outline.mean_ground_albedo == pytest.approx(
+        np.mean(atmosphere.planet.ground_albedo.values), rel=1e-15)
 
 
 def _half_unit_of_last_digit(text: str) -> float:

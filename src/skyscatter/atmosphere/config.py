@@ -15,7 +15,7 @@ import difflib
 import io
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -60,9 +60,10 @@ from skyscatter.optics.phase import (
 )
 from skyscatter.optics.rayleigh import RayleighOptics, TabulatedScatteringOptics
 from skyscatter.spectrum.star import AU_M, Star
+from skyscatter.spectrum.tabulated import SpectralParameter
 
-__all__ = ["MAX_SCATTERING_ORDERS", "PRESETS_DIR", "list_presets", "load_atmosphere",
-           "parse_atmosphere"]
+__all__ = ["MAX_SCATTERING_ORDERS", "PRESETS_DIR", "AtmosphereOutline", "list_presets",
+           "load_atmosphere", "outline_atmosphere", "parse_atmosphere"]
 
 PRESETS_DIR = Path(__file__).parent / "presets"
 
@@ -77,10 +78,46 @@ def list_presets() -> dict[str, str]:
 
 def load_atmosphere(name_or_path: str | Path) -> Atmosphere:
     """Load a preset by name (`skyscatter presets` lists them) or a TOML file by path."""
-    path = preset_or_file(name_or_path, PRESETS_DIR, kind="preset", file_kind="config file",
+    path = _config_path(name_or_path)
+    return parse_atmosphere(read_toml(path), path)
+
+
+class AtmosphereOutline(NamedTuple):
+    """What an atmosphere config names, read without building its optics
+    (`outline_atmosphere`)."""
+
+    name: str
+    description: str
+    body: str  # "" without an ephemeris
+    constituents: tuple[str, ...]
+    mean_ground_albedo: float
+    radius_m: float
+    top_altitude_m: float
+
+
+def outline_atmosphere(name_or_path: str | Path) -> AtmosphereOutline:
+    """The outline of a preset or TOML file: its names, planet and top, without the optics
+    (the Mie tables of particles take seconds to a minute the first time): for listings.
+    ConfigError for the parts it reads; the rest is checked by `load_atmosphere`."""
+    path = _config_path(name_or_path)
+    raw = read_toml(path)
+    root = ConfigTable(dict(raw), path, "")
+    radius, albedo, body, _ = _parse_planet(root.table("planet"))
+    constituents = ["gas"] if root.table("gas", required=False) is not None else []
+    items = raw.get("constituent", [])
+    constituents += [str(item.get("name", "")) for item in
+                     (items if isinstance(items, list) else []) if isinstance(item, dict)]
+    return AtmosphereOutline(
+        name=root.text("name", path.stem), description=root.text("description", ""),
+        body=body, constituents=tuple(constituents),
+        mean_ground_albedo=float(np.mean(albedo.values)), radius_m=radius,
+        top_altitude_m=_parse_top(root.table("atmosphere")))
+
+
+def _config_path(name_or_path: str | Path) -> Path:
+    return preset_or_file(name_or_path, PRESETS_DIR, kind="preset", file_kind="config file",
                           keys=("preset", "config"),
                           listing="`skyscatter presets` lists them")
-    return parse_atmosphere(read_toml(path), path)
 
 
 PLANET_BODIES = ("earth", "mars")  # [planet] body: bodies with an ephemeris (astro/)
@@ -95,17 +132,9 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
     name = root.text("name", path.stem)
     description = root.text("description", "")
     root.data.pop("sources", None)  # free-form citations, for people
-    planet_table = root.table("planet")
-    radius = planet_table.number("radius_m", ranges.PLANET_RADIUS_M)
-    albedo = planet_table.spectral("ground_albedo", ranges.FRACTION, 0.1)
-    body = planet_table.text("body", "", choices=PLANET_BODIES)
-    planet_mass = (planet_table.number("mass_kg", ranges.PLANET_MASS_KG)
-                   if planet_table.has("mass_kg") else None)  # for [gas]: g = G M / R^2
-    planet_table.finish()
+    radius, albedo, body, planet_mass = _parse_planet(root.table("planet"))
     star = _parse_star(root.table("star"))
-    atmosphere_table = root.table("atmosphere")
-    top = atmosphere_table.number("top_altitude_m", ranges.TOP_ALTITUDE_M)
-    atmosphere_table.finish()
+    top = _parse_top(root.table("atmosphere"))
     orders = DEFAULT_SCATTERING_ORDERS
     tables_table = root.table("tables", required=False)
     if tables_table is not None:
@@ -148,6 +177,24 @@ def parse_atmosphere(raw: dict[str, Any], path: Path) -> Atmosphere:
                             scattering_orders=orders)
     _check_optics(atmosphere, path, keys)
     return atmosphere
+
+
+def _parse_planet(table: ConfigTable) -> tuple[float, SpectralParameter, str, float | None]:
+    """(radius [m], ground albedo, ephemeris body, mass [kg] or None) of the [planet] table."""
+    radius = table.number("radius_m", ranges.PLANET_RADIUS_M)
+    albedo = table.spectral("ground_albedo", ranges.FRACTION, 0.1)
+    body = table.text("body", "", choices=PLANET_BODIES)
+    planet_mass = (table.number("mass_kg", ranges.PLANET_MASS_KG)
+                   if table.has("mass_kg") else None)  # for [gas]: g = G M / R^2
+    table.finish()
+    return radius, albedo, body, planet_mass
+
+
+def _parse_top(table: ConfigTable) -> float:
+    """The top altitude [m] of the [atmosphere] table."""
+    top = table.number("top_altitude_m", ranges.TOP_ALTITUDE_M)
+    table.finish()
+    return top
 
 
 # [gas]: exactly one of these gives the surface density.

@@ -42,7 +42,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from skyscatter.atmosphere.config import list_presets, load_atmosphere
+from skyscatter.atmosphere.config import list_presets, load_atmosphere, outline_atmosphere
 from skyscatter.atmosphere.model import Atmosphere, OpticalProfile, SpectralParameter
 from skyscatter.atmosphere.variants import scaled_constituent
 from skyscatter.disk_cache import cache_directory_override
@@ -134,6 +134,7 @@ class TableService:
         self._log = log or (lambda message: None)
         self._atmospheres: dict[str, Atmosphere] = {}
         self._descriptions = dict(list_presets())
+        self._sources: dict[str, str | Path] = {name: name for name in self._descriptions}
         self.default = "earth"
         if config is not None:
             with cache_directory_override(self.directory):
@@ -141,6 +142,7 @@ class TableService:
             name = Path(str(config)).stem if Path(str(config)).suffix else str(config)
             self._atmospheres[name] = atmosphere
             self._descriptions.setdefault(name, atmosphere.description)
+            self._sources[name] = config
             self.default = name
         self._lock = threading.Lock()
         self._state = threading.Lock()
@@ -164,18 +166,17 @@ class TableService:
 
     def describe(self) -> dict:
         """What the page offers: every atmosphere with its constituents, default albedo, sun
-        size and whether it has an ephemeris (JSON-able)."""
+        size and whether it has an ephemeris (JSON-able). From the configs' outlines: no
+        atmosphere's optics are built for it (the Mie tables of every preset took 20 s to
+        2 minutes the first time)."""
         entries = []
         for name in sorted(self._descriptions):
-            atmosphere = self.atmosphere(name)
-            albedo = atmosphere.planet.ground_albedo.values
+            outline = outline_atmosphere(self._sources[name])
             entries.append({
-                "name": name, "description": self._descriptions[name],
-                "body": atmosphere.planet.body,
-                "constituents": [c.name for c in atmosphere.constituents],
-                "albedo": float(sum(albedo) / len(albedo)),
-                "radius_m": float(atmosphere.bottom_radius_m),
-                "top_altitude_m": float(atmosphere.top_altitude_m),
+                "name": name, "description": self._descriptions[name], "body": outline.body,
+                "constituents": list(outline.constituents),
+                "albedo": outline.mean_ground_albedo, "radius_m": outline.radius_m,
+                "top_altitude_m": outline.top_altitude_m,
             })
         return {"default": self.default, "atmospheres": entries, "max_amount": MAX_AMOUNT,
                 "qualities": list(QUALITIES)}
