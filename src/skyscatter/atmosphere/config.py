@@ -115,6 +115,7 @@ def outline_atmosphere(name_or_path: str | Path) -> AtmosphereOutline:
 
 
 def _config_path(name_or_path: str | Path) -> Path:
+    """The TOML file of a preset name or a path (`preset_or_file`)."""
     return preset_or_file(name_or_path, PRESETS_DIR, kind="preset", file_kind="config file",
                           keys=("preset", "config"),
                           listing="`skyscatter presets` lists them")

@@ -135,6 +135,7 @@ class TableService:
         self._atmospheres: dict[str, Atmosphere] = {}
         self._descriptions = dict(list_presets())
         self._sources: dict[str, str | Path] = {name: name for name in self._descriptions}
+        self._listing: list[dict] | None = None  # `describe`'s entries, read once
         self.default = "earth"
         if config is not None:
             with cache_directory_override(self.directory):
@@ -168,18 +169,19 @@ class TableService:
         """What the page offers: every atmosphere with its constituents, default albedo, sun
         size and whether it has an ephemeris (JSON-able). From the configs' outlines: no
         atmosphere's optics are built for it (the Mie tables of every preset took 20 s to
-        2 minutes the first time)."""
-        entries = []
-        for name in sorted(self._descriptions):
-            outline = outline_atmosphere(self._sources[name])
-            entries.append({
-                "name": name, "description": self._descriptions[name], "body": outline.body,
-                "constituents": list(outline.constituents),
-                "albedo": outline.mean_ground_albedo, "radius_m": outline.radius_m,
-                "top_altitude_m": outline.top_altitude_m,
-            })
-        return {"default": self.default, "atmospheres": entries, "max_amount": MAX_AMOUNT,
-                "qualities": list(QUALITIES)}
+        2 minutes the first time), and read once: the atmospheres are, too."""
+        if self._listing is None:
+            self._listing = []
+            for name in sorted(self._descriptions):
+                outline = outline_atmosphere(self._sources[name])
+                self._listing.append({
+                    "name": name, "description": self._descriptions[name],
+                    "body": outline.body, "constituents": list(outline.constituents),
+                    "albedo": outline.mean_ground_albedo, "radius_m": outline.radius_m,
+                    "top_altitude_m": outline.top_altitude_m,
+                })
+        return {"default": self.default, "atmospheres": self._listing,
+                "max_amount": MAX_AMOUNT, "qualities": list(QUALITIES)}
 
     def parse(self, query: Mapping[str, str]) -> TableRequest:
         """The TableRequest of a page's query {atmosphere, quality, albedo, amount_NAME...};
