@@ -330,6 +330,9 @@ def test_thick_cells_get_the_cubic_source_and_a_thick_layer_the_sun_angle_share(
     overcast = load_atmosphere("earth-overcast").optical_profile(np.array([550.0]))
     share = tables_module.sun_angle_share(overcast, tables_module.radius_warp(overcast))
     assert share == tables_module.THICK_SUN_ANGLE_SHARE
+    # only clear air iterates its orders >= 4 on the coarse grid (CLEAR_COARSE_FROM_ORDER)
+    assert [tables_module.is_clear(p, tables_module.radius_warp(p))
+            for p in (earth, haze, overcast)] == [True, False, False]
     bottom, top = overcast.bottom_radius_m, overcast.top_radius_m
     for s, cells in ((0.0, 3), (share, 11)):
         zeniths = np.degrees(np.arccos([scattering_mu_s_from_u(
