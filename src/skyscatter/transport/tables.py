@@ -624,6 +624,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             if order == coarse_from and (coarse := _coarse_grid(res, grid)) is not None:
                 order_res, order_grid, restrict, prolong = coarse
                 previous = _resampled(previous[..., 0, :], restrict)[..., None, :]
+                delta = None  # the last order on the full grid: its memory goes now
                 sums.coarsen(restrict, prolong)
                 # the last order's statistics on both grids: the series' ratios and the
                 # tail's share compare like with like
@@ -1119,10 +1120,9 @@ class _OrderSums:
 
     def finish(self) -> None:
         if self._coarse_orders is not None:
-            # a radius at a time: the whole batch interpolated back would take as much memory
-            # again as the tables' slot of the batch
+            # a radius at a time (`_resampled`)
             for k in range(self._tables.shape[0]):
-                self._tables[k] += _resampled(self._coarse_orders[k:k + 1], self._prolong)[0]
+                self._tables[k] += _resampled_radius(self._coarse_orders[k], self._prolong)
             self._coarse_orders = None
 
 
@@ -1151,8 +1151,19 @@ def _mu_resampling(n_from: int, n_to: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _resampled(table: np.ndarray, resampling: _Resampling) -> np.ndarray:
-    """A table (n_r, n_mu, n_mu_s, n_nu, n_b) on other mu and nu axes (`_Resampling`)."""
-    for axis, (low, weight) in ((1, resampling.mu), (3, resampling.nu)):
+    """A table (n_r, n_mu, n_mu_s, n_nu, n_b) on other mu and nu axes (`_Resampling`), a
+    radius at a time (the whole table's intermediates would be as large as the table)."""
+    n_r, _, n_mu_s, _, n_b = table.shape
+    result = np.empty((n_r, resampling.mu[0].size, n_mu_s, resampling.nu[0].size, n_b),
+                      dtype=table.dtype)
+    for k in range(n_r):
+        result[k] = _resampled_radius(table[k], resampling)
+    return result
+
+
+def _resampled_radius(table: np.ndarray, resampling: _Resampling) -> np.ndarray:
+    """One radius (n_mu, n_mu_s, n_nu, n_b) of a table on other mu and nu axes."""
+    for axis, (low, weight) in ((0, resampling.mu), (2, resampling.nu)):
         if low.size == table.shape[axis]:
             continue  # same size: the identity
         shape = [1] * table.ndim
