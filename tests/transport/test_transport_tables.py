@@ -541,10 +541,10 @@ def test_second_order_matches_a_brute_force_double_integral(profile, tables_two_
 def test_orders_decrease_geometrically_in_a_thin_atmosphere(profile):
     # Densities x 0.1 and a black ground: each order is the previous one times about the
     # probability of one more scattering, a constant ~ 2 tau (Neumann series of a thin medium).
-    # Measured ratios from order 2 on: 0.048-0.049 (440 nm), 0.021-0.022 (550 nm), 0.009-0.010
-    # (680 nm), within 6 % of each other. Order 1 keeps the Mie forward peak, which the mean
-    # over table cells (slices crowded towards the sun) weighs more: its ratio is 0.042 /
-    # 0.016 / 0.0065, so it is only bounded.
+    # Measured ratios from order 2 on: 0.0485-0.0488 (440 nm), 0.0212-0.0214 (550 nm),
+    # 0.0097-0.0098 (680 nm), within 1.3 % of each other (bound: 10 %). Order 1 keeps the Mie
+    # forward peak, which the mean over table cells (slices crowded towards the sun) weighs
+    # more: its ratio is 0.042 / 0.016 / 0.0065, so it is only bounded.
     # 128 view-zenith cells: the orders from the 4th are iterated on the coarse grid
     # (tables.CLEAR_COARSE_FROM_ORDER), whose statistics must stay comparable with the full's
     thin = dataclasses.replace(profile, density=0.1 * profile.density,
