@@ -12,7 +12,7 @@ from skyscatter.transport.phase_quadrature import (
     source_function,
     sphere_grids,
 )
-from skyscatter.transport.tables import TableResolution
+from skyscatter.transport.tables import TableResolution, coarse_resolution
 
 # A small grid keeps the dense reference cheap; the factorisation does not depend on its size.
 RESOLUTION = TableResolution(scattering_r=4, scattering_mu_s=6, sphere_theta=16, sphere_phi=8,
@@ -146,3 +146,25 @@ def test_particles_absent_from_the_nodes_leave_the_source_the_closed_form_integr
     # as above: HG's samples interpolated linearly in angle, float32 products; the dropped
     # radiances change S by < 1e-34 absolute
     np.testing.assert_allclose(got, expected.transpose(2, 0, 3, 1), rtol=2e-5, atol=1e-30)
+
+
+@pytest.mark.parametrize("sphere", ["full", "coarse"])
+def test_the_sphere_integral_keeps_a_cloud_phase_functions_first_moment(sphere):
+    # For a normalised phase function of asymmetry g and a radiance field linear in the
+    # direction, L(w) = w . d, the integral is closed: int p(v . w) (w . d) dw = g (v . d). It
+    # is the first moment that carries a deck's diffuse light through it (diffusion goes with
+    # 1 - g). On the full grid and on the coarse orders' sphere (tables.COARSE_SPHERE_THETA x
+    # COARSE_SPHERE_PHI), for Henyey-Greenstein g = 0.85 (forward as a cloud droplet's phase
+    # function once its diffraction peak is clipped), the error stays within 0.3 % of g:
+    # 1 - g = 0.15 within 2 %. (Measured: 0.12 % full, 0.29 % coarse, 0.55 % on 24 x 12.)
+    resolution = TableResolution()
+    if sphere == "coarse":
+        resolution = coarse_resolution(resolution)
+        assert resolution.sphere_theta * resolution.sphere_phi < 48 * 24
+    _, _, _, out, incoming, _ = sphere_grids(resolution)
+    g = 0.85
+    quadrature = phase_quadrature(sampled(lambda c: henyey_greenstein(c, g))[None, :, None],
+                                  resolution)
+    d = np.array([np.sin(0.5), 0.0, np.cos(0.5)])  # in the sun's vertical plane: L(w') = L(w)
+    got = quadrature.full_matrices[0].astype(np.float64) @ (incoming @ d)
+    assert np.abs(got - g * (out @ d)).max() < 0.003 * g

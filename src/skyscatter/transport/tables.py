@@ -157,6 +157,13 @@ COARSE_FROM_ORDER = 7
 CLEAR_COARSE_FROM_ORDER = 4
 CLEAR_COARSE_MIN_MU = 128
 COARSE_NU_SLICES = 4
+# ... and on a sphere of COARSE_SPHERE_THETA x COARSE_SPHERE_PHI incoming directions (48 x 24 on
+# the full grid): the sphere integral's matrix products and the incoming radiance's gather
+# scale with it. `earth-overcast`: 69.6 -> 57.2 s CPU; against DISORT the ground's signed
+# median (4 bands) moves +0.21 / +0.04 / -0.16 -> +0.22 / +0.01 / -0.22 % (sun 0 / 30 / 60 deg),
+# inside the deck by at most 0.06 % (benchmarks/compare_disort_inside.py); 24 x 12 is no faster.
+COARSE_SPHERE_THETA = 32
+COARSE_SPHERE_PHI = 16
 # Wavelengths computed together by default: the ray integrals' wavelength-independent part (a
 # third of Earth's time at 16 wavelengths) is paid once a batch; the working memory is ~8 MiB a
 # wavelength besides the tables' 15 (48 wavelengths, 4 orders: CPU 30.8 s in batches of 16,
@@ -524,7 +531,6 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
     peak_transmittance, aureole = _peak_aureole(profile, scaled, scatterer_index, peak_phase,
                                                 smooth_phase, peak, columns,
                                                 res.truncation_angle_deg)
-    theta_in, phi_in, *_ = sphere_grids(res)
     node_altitude = np.array([scattering_r_from_u((k + 0.5) / res.scattering_r, bottom, top,
                                                   res.scattering_r, warp)
                               for k in range(res.scattering_r)]) - bottom
@@ -612,6 +618,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
         if orders == 1 or n_s == 0:  # nothing scatters: no higher orders
             continue
         phases = phase_quadrature(smooth_b, res)
+        theta_in, phi_in, *_ = sphere_grids(res)
         scaled_beta_s = scaled.scattering[scatterer_index][:, batch]
         previous, previous_phase = ((scaled_single, smooth_b) if scaled_pass else
                                     _single_in_place(scattering[..., batch], single, smooth_b))
@@ -629,6 +636,8 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             if order == coarse_from and (coarse := _coarse_grid(res, grid)) is not None:
                 order_res, order_grid, restrict, prolong = coarse
                 previous = _resampled(previous[..., 0, :], restrict)[..., None, :]
+                phases = phase_quadrature(smooth_b, order_res)
+                theta_in, phi_in, *_ = sphere_grids(order_res)
                 delta = None  # the last order on the full grid: its memory goes now
                 sums.coarsen(restrict, prolong)
                 # the last order's statistics on both grids: the series' ratios and the
@@ -1049,18 +1058,31 @@ def _scaled_optics(profile: OpticalProfile, scatterers: np.ndarray, peak: np.nda
 def _coarse_grid(res: TableResolution, grid: _table_build_kernels.TableGrid
                  ) -> tuple[TableResolution, _table_build_kernels.TableGrid, _Resampling,
                             _Resampling] | None:
-    """(resolution, grid, restriction, prolongation) of the grid with half the view-zenith
-    cells of `res` and COARSE_NU_SLICES view-sun slices (`COARSE_FROM_ORDER`,
-    `CLEAR_COARSE_FROM_ORDER`); the last two interpolate from the fine grid to it and back.
-    None when the mu axis is too short to halve."""
+    """(resolution, grid, restriction, prolongation) of the coarse orders' grid
+    (`coarse_resolution`); the last two interpolate from the fine grid to it and back. None
+    when the mu axis is too short to halve."""
+    coarse = coarse_resolution(res)
+    if coarse is None:
+        return None
     n_mu, n_nu = res.scattering_mu, res.scattering_nu
+    coarse_mu, coarse_nu = coarse.scattering_mu, coarse.scattering_nu
+    return (coarse, grid._replace(n_mu=coarse_mu, n_nu=coarse_nu),
+            _Resampling(_mu_resampling(n_mu, coarse_mu), _linear_resampling(n_nu, coarse_nu)),
+            _Resampling(_mu_resampling(coarse_mu, n_mu), _linear_resampling(coarse_nu, n_nu)))
+
+
+def coarse_resolution(res: TableResolution) -> TableResolution | None:
+    """The resolution of the orders from `COARSE_FROM_ORDER` (`CLEAR_COARSE_FROM_ORDER`) on:
+    half the view-zenith cells of `res`, COARSE_NU_SLICES view-sun slices, at most
+    COARSE_SPHERE_THETA x COARSE_SPHERE_PHI incoming directions. None when the mu axis is too
+    short to halve."""
+    n_mu = res.scattering_mu
     if n_mu % 4 or n_mu < 16:
         return None
-    coarse_nu = min(n_nu, COARSE_NU_SLICES)
-    return (replace(res, scattering_mu=n_mu // 2, scattering_nu=coarse_nu),
-            grid._replace(n_mu=n_mu // 2, n_nu=coarse_nu),
-            _Resampling(_mu_resampling(n_mu, n_mu // 2), _linear_resampling(n_nu, coarse_nu)),
-            _Resampling(_mu_resampling(n_mu // 2, n_mu), _linear_resampling(coarse_nu, n_nu)))
+    return replace(res, scattering_mu=n_mu // 2,
+                   scattering_nu=min(res.scattering_nu, COARSE_NU_SLICES),
+                   sphere_theta=min(res.sphere_theta, COARSE_SPHERE_THETA),
+                   sphere_phi=min(res.sphere_phi, COARSE_SPHERE_PHI))
 
 
 class _FirstOrders(NamedTuple):
