@@ -268,7 +268,8 @@ class TableResolution:
                            incoming directions of the scattering density: polar midpoints over
                            [0, pi] and azimuth midpoints over [0, pi], mirrored (Bruneton: 16 x
                            32 over the whole sphere; 48 x 24 halves the largest error of the
-                           second order against a brute-force integral, 3.1 % -> 2.1 %)
+                           second order against a brute-force integral, 3.1 % -> 2.1 %;
+                           the coarse orders take at most 32 x 16: `coarse_resolution`)
     density_theta, density_phi
                            outgoing directions where J is tabulated: regular over [0, pi]
                            including both ends
