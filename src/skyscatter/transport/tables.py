@@ -84,7 +84,12 @@ from skyscatter.transport._table_common_kernels import flat_tables
 from skyscatter.transport.aureole import PeakAureole, peak_aureole
 from skyscatter.transport.beam_spread import BeamSpread, beam_spread
 from skyscatter.transport.order_extrapolation import OrderExtrapolation
-from skyscatter.transport.phase_quadrature import phase_quadrature, source_function, sphere_grids
+from skyscatter.transport.phase_quadrature import (
+    PhaseQuadrature,
+    phase_quadrature,
+    source_function,
+    sphere_grids,
+)
 from skyscatter.transport.phase_truncation import truncate_forward_peak
 from skyscatter.transport.scatterers import sample_phase_functions, scattering_constituents
 from skyscatter.transport.sight_spread import sight_spread_source, view_zenith_angles
@@ -159,7 +164,8 @@ CLEAR_COARSE_MIN_MU = 128
 COARSE_NU_SLICES = 4
 # ... and on a sphere of COARSE_SPHERE_THETA x COARSE_SPHERE_PHI incoming directions (48 x 24 on
 # the full grid): the sphere integral's matrix products and the incoming radiance's gather
-# scale with it. `earth-overcast`: 69.6 -> 57.2 s CPU; against DISORT the ground's signed
+# scale with it. `earth-overcast` 81.6 -> 70.7 s CPU, `earth` 18.7 -> 15.9 s in one run
+# (benchmarks/bench_precompute_media.py); against DISORT the ground's signed
 # median (4 bands) moves +0.21 / +0.04 / -0.16 -> +0.22 / +0.01 / -0.22 % (sun 0 / 30 / 60 deg),
 # inside the deck by at most 0.06 % (benchmarks/compare_disort_inside.py); 24 x 12 is no faster.
 COARSE_SPHERE_THETA = 32
@@ -618,8 +624,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
                      _read_only(irradiance))
         if orders == 1 or n_s == 0:  # nothing scatters: no higher orders
             continue
-        phases = phase_quadrature(smooth_b, res)
-        theta_in, phi_in, *_ = sphere_grids(res)
+        phases, theta_in, phi_in = _sphere_integral(smooth_b, res)
         scaled_beta_s = scaled.scattering[scatterer_index][:, batch]
         previous, previous_phase = ((scaled_single, smooth_b) if scaled_pass else
                                     _single_in_place(scattering[..., batch], single, smooth_b))
@@ -637,8 +642,7 @@ def precompute_tables(profile: OpticalProfile, resolution: TableResolution | Non
             if order == coarse_from and (coarse := _coarse_grid(res, grid)) is not None:
                 order_res, order_grid, restrict, prolong = coarse
                 previous = _resampled(previous[..., 0, :], restrict)[..., None, :]
-                phases = phase_quadrature(smooth_b, order_res)
-                theta_in, phi_in, *_ = sphere_grids(order_res)
+                phases, theta_in, phi_in = _sphere_integral(smooth_b, order_res)
                 delta = None  # the last order on the full grid: its memory goes now
                 sums.coarsen(restrict, prolong)
                 # the last order's statistics on both grids: the series' ratios and the
@@ -1070,6 +1074,14 @@ def _coarse_grid(res: TableResolution, grid: _table_build_kernels.TableGrid
     return (coarse, grid._replace(n_mu=coarse_mu, n_nu=coarse_nu),
             _Resampling(_mu_resampling(n_mu, coarse_mu), _linear_resampling(n_nu, coarse_nu)),
             _Resampling(_mu_resampling(coarse_mu, n_mu), _linear_resampling(coarse_nu, n_nu)))
+
+
+def _sphere_integral(phase: np.ndarray, res: TableResolution
+                     ) -> tuple[PhaseQuadrature, np.ndarray, np.ndarray]:
+    """(phase matrices of `phase` (n_s, n_angle, n_b), the incoming directions' polar and
+    azimuth angles) of the orders' sphere integral on the sphere of `res`."""
+    theta_in, phi_in, *_ = sphere_grids(res)
+    return phase_quadrature(phase, res), theta_in, phi_in
 
 
 def coarse_resolution(res: TableResolution) -> TableResolution | None:
